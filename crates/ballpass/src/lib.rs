@@ -1,0 +1,16 @@
+//! ballpass: finds and characterises the periodic disturbances that balls cause
+//! in linear ball bearings.
+//!
+//! Data flows one way (see `shared/design/ARCHITECTURE.md`):
+//! recording files → [`recording::Recording`] → preprocessing → analyses →
+//! results (serde structs) → reports. This crate never prints, never exits and
+//! never parses argv: it returns values and typed [`Error`]s.
+
+pub mod bearing;
+pub mod error;
+pub mod recording;
+
+pub use error::{Error, Result};
+
+/// Version of ballpass, recorded in every output.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
