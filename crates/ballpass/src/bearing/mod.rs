@@ -166,10 +166,11 @@ mod tests {
             (20.0, 2.46575, 0.40556),
         ] {
             let p = g.predict(v, 3).unwrap();
-            // Relative 1e-5 is the rounding of the printed reference values.
-            assert!((p.f_c_hz - f).abs() / f < 1e-5, "f_c at {v}: {}", p.f_c_hz);
+            // The references are printed to 5 significant digits: half a unit in
+            // the fifth digit is at most 5e-5 relative.
+            assert!((p.f_c_hz - f).abs() / f < 5e-5, "f_c at {v}: {}", p.f_c_hz);
             assert!(
-                (p.tau_c_s - tau).abs() / tau < 1e-5,
+                (p.tau_c_s - tau).abs() / tau < 5e-5,
                 "tau_c at {v}: {}",
                 p.tau_c_s
             );
