@@ -1,5 +1,25 @@
 #![doc = include_str!("../README.md")]
 
+pub mod decimate;
 pub mod error;
+pub mod gradient;
+pub mod iir;
+pub mod lti;
+mod npcomplex;
+pub mod sos;
 
+pub use decimate::{decimate, DecimateSettings, Decimator};
 pub use error::{check_finite, invalid, DspError, Result};
+pub use gradient::{gradient, gradient_with_edge_order, EdgeOrder, Spacing};
+pub use iir::{
+    butter, butter_zpk, cheby1, cheby1_zpk, zpk2sos, ButterSettings, Cheby1Settings, FilterBand,
+    Zpk,
+};
+pub use lti::{bode, freqs, freqz, sosfreqz, unwrap, AnalogResponse, Bode, DigitalResponse};
+/// Complex numbers used in frequency responses and pole-zero lists
+/// (re-exported from `num_complex` via `rustfft`).
+pub use rustfft::num_complex::Complex64;
+pub use sos::{
+    lfilter, lfilter_with_state, lfilter_zi, sosfilt, sosfilt_with_state, sosfilt_zi, sosfiltfilt,
+    FiltFiltSettings, LfilterOutput, PadLen, PadType, Sos, SosOutput, ZeroPhaseFilter,
+};
