@@ -74,3 +74,29 @@ pub fn assert_close(what: &str, a: &[f64], b: &[f64], rtol: f64) {
     let err = max_rel_err(a, b, floor);
     assert!(err <= rtol, "{what}: max relative error {err:e} > {rtol:e}");
 }
+
+/// Asserts `max|a - b| <= rtol * max|b|`: a norm-wise comparison for results
+/// whose rounding error scales with the largest value rather than with each
+/// element (FFT correlation: every lag carries an absolute error of order
+/// `eps * sqrt(sum x^2 sum y^2)`, so small lags far from the peak cannot be
+/// held to an elementwise relative bound).
+#[track_caller]
+pub fn assert_close_scaled(what: &str, a: &[f64], b: &[f64], rtol: f64) {
+    assert_eq!(
+        a.len(),
+        b.len(),
+        "{what}: length {} vs reference {}",
+        a.len(),
+        b.len()
+    );
+    let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let err = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        err <= rtol * scale,
+        "{what}: max error {err:e} > {rtol:e} * max|ref| ({scale:e})"
+    );
+}
