@@ -1,5 +1,10 @@
 #![doc = include_str!("../README.md")]
 
 pub mod error;
+pub mod peaks;
 
 pub use error::{check_finite, invalid, DspError, Result};
+pub use peaks::{
+    find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
+    FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,
+};
