@@ -8,6 +8,7 @@ pub mod gradient;
 pub mod iir;
 pub mod lti;
 mod npcomplex;
+pub mod peaks;
 pub mod sos;
 pub mod spectral;
 pub mod window;
@@ -25,6 +26,10 @@ pub use iir::{
     Zpk,
 };
 pub use lti::{bode, freqs, freqz, sosfreqz, unwrap, AnalogResponse, Bode, DigitalResponse};
+pub use peaks::{
+    find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
+    FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,
+};
 /// Complex numbers used in spectra, frequency responses and pole-zero lists
 /// (re-exported from `num_complex` via `rustfft`).
 pub use rustfft::num_complex::Complex64;
@@ -33,8 +38,8 @@ pub use sos::{
     FiltFiltSettings, LfilterOutput, PadLen, PadType, Sos, SosOutput, ZeroPhaseFilter,
 };
 pub use spectral::{
-    coherence, csd, periodogram, welch, Average, Coherence, Csd, PeriodogramSettings, Psd,
-    Scaling, Welch, WelchSettings,
+    coherence, csd, periodogram, welch, Average, Coherence, Csd, PeriodogramSettings, Psd, Scaling,
+    Welch, WelchSettings,
 };
 pub use window::Window;
 pub use zoom::{polyphase_average_csd, polyphase_average_psd};
