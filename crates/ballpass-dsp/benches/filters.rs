@@ -2,17 +2,18 @@
 //!
 //! SciPy 1.17 for the same work: `tools/bench_scipy_filters.py`.
 //!
-//! Measured once on the shared 2-core build machine (heavily loaded, so
-//! absolute numbers are noisy; ratios from back-to-back runs):
+//! Measured back to back on the shared 2-core build machine under heavy load
+//! (load average ~10, so absolute numbers are noisy; SciPy on a quiet
+//! machine in brackets):
 //!
-//! | kernel                              | ballpass | SciPy 1.17 (loaded / quiet) |
-//! |-------------------------------------|----------|-----------------------------|
-//! | butter(5, 20 Hz) design             | 2.8 us   | 664 us / 277 us             |
-//! | sosfiltfilt, 30 000 samples         | 500 us   | 1122 us / 457 us            |
-//! | decimate q=20 (planned / with design)| 1.10 / 1.27 ms | 2574 us / 879 us     |
+//! | kernel                     | ballpass               | SciPy 1.17           |
+//! |----------------------------|------------------------|----------------------|
+//! | butter(5, 20 Hz) design    | 1.8 us                 | 823 us (277 us)      |
+//! | sosfiltfilt, 30 000 samples| 423 us                 | 1324 us (457 us)     |
+//! | decimate q=20, 30 000      | 684 us planned, 905 us | 2214 us (879 us)     |
 //!
 //! The filtering itself is a serial recurrence (each output sample needs the
-//! previous one), the same loop SciPy runs in Cython, so it is ~2x, not 10x.
+//! previous one), the same loop SciPy runs in Cython, so it is ~3x, not 10x.
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn benches`
 
 use ballpass_dsp::{
