@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 
 pub mod io;
 
-pub use io::{load, write_csv, ChannelSource, Format, LoadOptions};
+pub use io::{load, write_csv, write_mat, ChannelSource, Format, LoadOptions};
 
 /// The three measured channels of the testbed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
