@@ -21,12 +21,16 @@ struct Cli {
 enum Command {
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
+    /// Show what a recording holds before analysing it: duration, rate,
+    /// channels, ranges, clipping, dropouts, load-cell drift.
+    Inspect(Box<cmd::inspect::InspectArgs>),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
+        Command::Inspect(a) => cmd::inspect::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
