@@ -16,7 +16,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::prepare::{prepare, Frame, Prepared, PreparedMarker, PreparedPanel, Shape};
+use super::prepare::{
+    prepare, Frame, LegendSample, Prepared, PreparedMarker, PreparedPanel, Shape,
+};
 use super::spec::{Figure, MarkerStyle, Rgb};
 use crate::error::{Error, Result};
 
@@ -297,10 +299,26 @@ fn draw_panel<DB: DrawingBackend>(
             let anno = chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?;
             anno.label(series.name.clone());
             let len = (22.0 * s) as i32;
-            if series.legend_line {
-                anno.legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], line_style));
-            } else {
-                anno.legend(move |(x, y)| Circle::new((x + len / 2, y), r, color.filled()));
+            let (dash, gap) = ((6.0 * s) as i32, (3.0 * s) as i32);
+            match series.legend {
+                LegendSample::Line => {
+                    anno.legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + len, y)], line_style)
+                    });
+                }
+                LegendSample::Dashed => {
+                    anno.legend(move |(x, y)| {
+                        plotters::element::DashedPathElement::new(
+                            vec![(x, y), (x + len, y)],
+                            dash,
+                            gap,
+                            line_style,
+                        )
+                    });
+                }
+                LegendSample::Point => {
+                    anno.legend(move |(x, y)| Circle::new((x + len / 2, y), r, color.filled()));
+                }
             }
         }
     }

@@ -372,7 +372,10 @@ mod tests {
         assert_eq!(f.panels[1].vlines.len(), 6);
         // 3 * 0.901 in floating point: compare to 1e-12 s, far below a pixel
         let (lo, hi) = f.panels[1].x.range.unwrap();
-        assert!((lo + 2.703).abs() < 1e-12 && (hi - 2.703).abs() < 1e-12, "{lo} {hi}");
+        assert!(
+            (lo + 2.703).abs() < 1e-12 && (hi - 2.703).abs() < 1e-12,
+            "{lo} {hi}"
+        );
     }
 
     #[test]

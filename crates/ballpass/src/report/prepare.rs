@@ -60,6 +60,14 @@ pub(crate) enum Shape {
     Bars(Vec<(f64, f64, f64, f64)>),
 }
 
+/// The little picture in front of a legend entry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LegendSample {
+    Line,
+    Dashed,
+    Point,
+}
+
 /// A series ready to draw.
 #[derive(Debug, Clone)]
 pub(crate) struct PreparedSeries {
@@ -69,8 +77,8 @@ pub(crate) struct PreparedSeries {
     pub color: Rgb,
     pub stroke_px: f64,
     pub shapes: Vec<Shape>,
-    /// The legend sample is a line (else a point).
-    pub legend_line: bool,
+    /// What the legend shows for it.
+    pub legend: LegendSample,
 }
 
 /// A panel ready to draw.
@@ -486,10 +494,11 @@ fn prepare_panel(
             color: colors[i],
             stroke_px,
             shapes,
-            legend_line: matches!(
-                s.style,
-                SeriesStyle::Line | SeriesStyle::DashedLine | SeriesStyle::LinePoints
-            ),
+            legend: match s.style {
+                SeriesStyle::Line | SeriesStyle::LinePoints => LegendSample::Line,
+                SeriesStyle::DashedLine => LegendSample::Dashed,
+                _ => LegendSample::Point,
+            },
         });
     }
 
