@@ -84,6 +84,15 @@ pub enum Error {
         /// The kernel's error.
         source: ballpass_dsp::DspError,
     },
+    /// A figure or report cannot be built: malformed figure data (length
+    /// mismatch, bad range, nothing drawable), a bad id, or drawing failed.
+    #[error("report: {what}: {reason}")]
+    Report {
+        /// Which figure, panel or series (`figure 'corr_ff' panel 2 series 'R'`).
+        what: String,
+        /// What is wrong, with the values.
+        reason: String,
+    },
 }
 
 impl Error {
