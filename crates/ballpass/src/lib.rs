@@ -8,6 +8,7 @@
 
 pub mod bearing;
 pub mod error;
+pub mod model;
 pub mod recording;
 
 pub use error::{Error, Result};
