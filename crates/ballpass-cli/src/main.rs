@@ -24,6 +24,8 @@ enum Command {
     Predict(cmd::predict::PredictArgs),
     /// Signal and stage models of thesis chapter 6 (ERRATA-corrected) as tables.
     Model(cmd::model::ModelArgs),
+    /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
+    Passage(cmd::passage::PassageArgs),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +33,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
         Command::Model(a) => cmd::model::run(&a),
+        Command::Passage(a) => cmd::passage::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

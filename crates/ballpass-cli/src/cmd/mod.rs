@@ -1,4 +1,5 @@
 //! One module per subcommand.
 
 pub mod model;
+pub mod passage;
 pub mod predict;

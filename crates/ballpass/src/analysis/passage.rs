@@ -388,6 +388,21 @@ fn noise_sigma(x: &[f64], lag: usize) -> f64 {
     median(&mut dev) / (0.674_489_750_196_081_7 * std::f64::consts::SQRT_2)
 }
 
+/// Non-robust fallback of [`noise_sigma`]: `rms(x[n+lag] − x[n]) / √2`.
+fn rms_difference_sigma(x: &[f64], lag: usize) -> f64 {
+    let lag = lag.max(1);
+    if x.len() <= lag {
+        return 0.0;
+    }
+    let m = (x.len() - lag) as f64;
+    (x.windows(lag + 1)
+        .map(|w| (w[lag] - w[0]).powi(2))
+        .sum::<f64>()
+        / m
+        / 2.0)
+        .sqrt()
+}
+
 fn median(v: &mut [f64]) -> f64 {
     percentile(v, 50.0)
 }
@@ -605,7 +620,15 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     // A lag of ~1/40 of the expected pulse width keeps the pulses out of the
     // differences while catching noise that is not white sample to sample.
     let lag = ((0.3 * tau_samples) / 40.0).floor().max(1.0) as usize;
-    let sigma = noise_sigma(x, lag);
+    let mut sigma = noise_sigma(x, lag);
+    if sigma == 0.0 {
+        // A quantised or synthetic signal can have a zero MAD; fall back to
+        // the plain rms of the differences at lag 1 and at `lag`.
+        sigma = [1, lag]
+            .iter()
+            .map(|&l| rms_difference_sigma(x, l))
+            .fold(0.0, f64::max);
+    }
     let floor = settings.min_snr * sigma;
     let threshold0 = floor.max(1e-9 * x_range);
     let distance = (settings.min_distance_periods * tau_samples).max(1.0);
