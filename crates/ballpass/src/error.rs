@@ -76,6 +76,14 @@ pub enum Error {
         /// What is wrong, with the value.
         reason: String,
     },
+    /// The optical channel holds no ball passages that can be measured.
+    #[error("{source_name}: no ball passages found in optical_V: {reason}")]
+    NoPassages {
+        /// File or test the recording came from.
+        source_name: String,
+        /// What was found instead, with the threshold.
+        reason: String,
+    },
     /// A kernel of `ballpass-dsp` rejected its input.
     #[error("{context}: {source}")]
     Dsp {
