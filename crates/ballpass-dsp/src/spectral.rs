@@ -11,7 +11,7 @@ use std::sync::Arc;
 use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex;
 
-use crate::detrend::{detrend_unchecked, DetrendType};
+use crate::detrend::{DetrendType, Trend};
 use crate::error::{check_finite, invalid, DspError, Result};
 use crate::window::Window;
 
@@ -205,10 +205,23 @@ impl Engine {
 
     /// Detrended, windowed, zero-padded FFT of the segment at `start`.
     fn segment_fft(&mut self, x: &[f64], start: usize, detrend: DetrendType, into_y: bool) {
-        let seg = &mut self.buf[..self.nperseg];
-        seg.copy_from_slice(&x[start..start + self.nperseg]);
-        detrend_unchecked(seg, detrend);
-        seg.iter_mut().zip(&self.window).for_each(|(v, w)| *v *= w);
+        let seg = &x[start..start + self.nperseg];
+        // One pass: (x - trend) * w, as SciPy's detrend-then-window.
+        let t = Trend::fit(seg, detrend);
+        let out = self.buf[..self.nperseg]
+            .iter_mut()
+            .zip(seg)
+            .zip(&self.window);
+        match detrend {
+            DetrendType::None => out.for_each(|((b, v), w)| *b = v * w),
+            DetrendType::Constant => {
+                let m = t.at(0);
+                out.for_each(|((b, v), w)| *b = (v - m) * w)
+            }
+            DetrendType::Linear => out
+                .enumerate()
+                .for_each(|(i, ((b, v), w))| *b = (v - t.at(i)) * w),
+        }
         self.buf[self.nperseg..].fill(0.0);
         let out = if into_y {
             &mut self.spec_y
