@@ -168,7 +168,10 @@ impl Plan {
 ///
 /// `Correlator` is `Send + Sync` and cheap to clone (plans are shared
 /// `Arc`s); give each thread its own clone. See [`correlate`] for the
-/// formula and conventions.
+/// formula and conventions. In a hot loop prefer
+/// [`Correlator::correlate_into`]: a full-lag result of two 30 000-sample
+/// records is ~1 MB, and fresh pages from the allocator can cost more than
+/// the FFTs themselves.
 ///
 /// ```
 /// use ballpass_dsp::{CorrelateSettings, Correlator, Normalization};
