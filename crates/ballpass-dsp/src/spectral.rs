@@ -810,6 +810,14 @@ mod tests {
     }
 
     #[test]
+    fn coherence_of_mean_removed_single_samples_is_nan() {
+        // One-sample segments detrend to zero: Pxx = Pyy = 0, so 0/0 as in SciPy.
+        let c = coherence(&[1.0], &[2.0], 1.0, &WelchSettings::default()).unwrap();
+        assert_eq!(c.freq_hz, vec![0.0]);
+        assert!(c.cxy[0].is_nan());
+    }
+
+    #[test]
     fn fftfreq_order() {
         let e = Engine::new(&Window::Boxcar, 5, 0, 5).unwrap();
         assert_eq!(e.freqs(5.0, false), vec![0.0, 1.0, 2.0, -2.0, -1.0]);
@@ -880,6 +888,23 @@ mod tests {
         assert!(welch(&x, 0.0, &d()).is_err());
         assert!(welch(&x, f64::NAN, &d()).is_err());
         assert!(welch(&[], 1.0, &d()).is_err());
+        assert!(matches!(
+            welch(&[1.0, f64::NAN, 2.0], 1.0, &d()).unwrap_err(),
+            DspError::NonFinite {
+                what: "x",
+                index: 1,
+                ..
+            }
+        ));
+        assert!(matches!(
+            csd(&x, &[f64::INFINITY], 1.0, &d()).unwrap_err(),
+            DspError::NonFinite {
+                what: "y",
+                index: 0,
+                ..
+            }
+        ));
+        assert!(csd(&x, &x, -2.0, &d()).is_err());
         assert!(coherence(&x, &x[..99], 1.0, &d()).is_err());
         assert!(coherence(
             &x,
