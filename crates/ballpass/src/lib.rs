@@ -9,6 +9,7 @@
 pub mod bearing;
 pub mod error;
 pub mod recording;
+pub mod sim;
 
 pub use error::{Error, Result};
 
