@@ -660,6 +660,55 @@ impl PulseTrain {
     }
 }
 
+/// Rail roughness: an Ornstein–Uhlenbeck process in rail position with
+/// standard deviation `sigma` and correlation length `ell`, generated exactly
+/// at knots `h = ell / ROUGHNESS_KNOTS_PER_LENGTH` apart (`r[i+1] = rho r[i] +
+/// sigma sqrt(1 - rho^2) xi`, `rho = exp(-h / ell)`) and interpolated
+/// linearly in between; knots are drawn lazily as the stage advances.
+struct Roughness {
+    sigma: f64,
+    rho: f64,
+    h_mm: f64,
+    knots: Vec<f64>,
+    rng: Rng,
+}
+
+/// Roughness knots per correlation length (linear interpolation between
+/// them smooths only wavelengths far below the correlation length).
+const ROUGHNESS_KNOTS_PER_LENGTH: f64 = 50.0;
+
+impl Roughness {
+    fn new(sigma: f64, ell_mm: f64, mut rng: Rng) -> Self {
+        let h_mm = ell_mm / ROUGHNESS_KNOTS_PER_LENGTH;
+        let first = sigma * rng.normal();
+        Self {
+            sigma,
+            rho: (-h_mm / ell_mm).exp(),
+            h_mm,
+            knots: vec![first],
+            rng,
+        }
+    }
+
+    /// Value at `d_mm` of rail travel from the start (held at the first knot
+    /// for negative travel).
+    fn value(&mut self, d_mm: f64) -> f64 {
+        if self.sigma == 0.0 {
+            return 0.0;
+        }
+        let u = (d_mm / self.h_mm).max(0.0);
+        let i = u.floor() as usize;
+        let innov = self.sigma * (1.0 - self.rho * self.rho).sqrt();
+        while self.knots.len() < i + 2 {
+            let last = self.knots[self.knots.len() - 1];
+            let next = self.rho * last + innov * self.rng.normal();
+            self.knots.push(next);
+        }
+        let frac = u - i as f64;
+        self.knots[i] + frac * (self.knots[i + 1] - self.knots[i])
+    }
+}
+
 /// First forward crossings of fixed ball-travel positions, as times.
 struct Crossings {
     centres_mm: Vec<f64>,
@@ -810,7 +859,14 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
             }
         })
         .collect();
-    let mut stick_pulses = PulseTrain::new(entries.clone(), stick_amps.clone(), sigma_stick);
+    // Only the entries that carry a spike are evaluated.
+    let (stick_centres, stick_nonzero): (Vec<f64>, Vec<f64>) = entries
+        .iter()
+        .zip(&stick_amps)
+        .filter(|(_, &a)| a > 0.0)
+        .map(|(&e, &a)| (e, a))
+        .unzip();
+    let mut stick_pulses = PulseTrain::new(stick_centres, stick_nonzero, sigma_stick);
     let mut rng_amp = Rng::stream(s.seed, STREAM_OPTICAL_AMPLITUDE);
     let ball_amps: Vec<f64> = (0..g.balls_in_race)
         .map(|_| (opt.pulse_amplitude_v * (1.0 + opt.amplitude_jitter * rng_amp.normal())).max(0.0))
@@ -861,8 +917,11 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let interf_phase0 = std::f64::consts::TAU * rng_interf.uniform();
     let interf_w = std::f64::consts::TAU / opt.interference_period_s;
 
-    let mut rng_rough = Rng::stream(s.seed, STREAM_ROUGHNESS);
-    let mut rough = fr.roughness_n * rng_rough.normal();
+    let mut roughness = Roughness::new(
+        fr.roughness_n,
+        fr.roughness_length_mm,
+        Rng::stream(s.seed, STREAM_ROUGHNESS),
+    );
 
     let (r0, _) = reference(0.0);
     let x_init = r0 + stage.deviation_m();
@@ -911,8 +970,11 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
 
         // Friction at this step (held over it).
         let sb = travel(x);
-        let magnitude =
-            (fr.coulomb_n + rough + friction_pulses.value(sb) + stick_pulses.value(sb)).max(0.0);
+        let magnitude = (fr.coulomb_n
+            + roughness.value((x - x_init) * 1e3)
+            + friction_pulses.value(sb)
+            + stick_pulses.value(sb))
+        .max(0.0);
         let v_eps = v_band_min.max(2.0 * magnitude * dt / m);
         let friction = magnitude * (xdot / v_eps).clamp(-1.0, 1.0);
 
@@ -949,12 +1011,6 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         stage.step(friction, (rdot1 - rdot) / dt);
         let (r1, _) = reference(t + dt);
         let x1 = r1 + stage.deviation_m();
-
-        // Roughness: Ornstein-Uhlenbeck along the rail, exact for the step's travel.
-        if fr.roughness_n > 0.0 {
-            let rho = (-((x1 - x) * 1e3).abs() / fr.roughness_length_mm).exp();
-            rough = rho * rough + fr.roughness_n * (1.0 - rho * rho).sqrt() * rng_rough.normal();
-        }
 
         let t_from = k_rec.map(|kr| kr as f64 * dt);
         let s1 = travel(x1);
