@@ -60,6 +60,14 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A recording is readable but unusable as a whole (e.g. too short).
+    #[error("{source_name}: {reason}")]
+    InvalidRecording {
+        /// File or test the recording came from.
+        source_name: String,
+        /// What is wrong, with the numbers.
+        reason: String,
+    },
     /// A setting or parameter given by the user is out of range.
     #[error("invalid {name}: {reason}")]
     InvalidSetting {

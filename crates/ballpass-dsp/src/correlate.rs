@@ -1,0 +1,402 @@
+//! Full-lag cross- and auto-correlation by FFT, as
+//! [`scipy.signal.correlate(x, y, mode='full', method='fft')`](https://docs.scipy.org/doc/scipy/reference/generated/scipy.signal.correlate.html)
+//! with the lags of
+//! [`scipy.signal.correlation_lags`](https://docs.scipy.org/doc/scipy/reference/generated/scipy.signal.correlation_lags.html).
+
+use std::sync::Arc;
+
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::num_complex::Complex;
+
+use crate::error::{check_finite, DspError, Result};
+
+/// How the raw lag sums are scaled.
+///
+/// With `z[m]` the raw sum (see [`correlate`]) and `N` the common length of
+/// `x` and `y`:
+///
+/// ```text
+/// None:      r[m] = z[m]
+/// Biased:    r[m] = z[m] / N
+/// Unbiased:  r[m] = z[m] / (N - |m|)
+/// Coeff:     r[m] = z[m] / sqrt(sum x^2 * sum y^2)      (= z[m] / sqrt(Rxx[0] Ryy[0]))
+/// ```
+///
+/// These are MATLAB `xcorr`'s `'none'`, `'biased'`, `'unbiased'` and
+/// `'normalized'` (SciPy offers only `None`). `Biased` and `Unbiased` need
+/// `x` and `y` of equal length (`N` is ambiguous otherwise; MATLAB would
+/// zero-pad the shorter one); `None` and `Coeff` accept any lengths.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Normalization {
+    /// Raw sums, as SciPy and MATLAB `xcorr(x, y)`.
+    #[default]
+    None,
+    /// Divide by the length `N` (lengths must be equal).
+    Biased,
+    /// Divide by the number of overlapping samples `N - |m|` (lengths must be equal).
+    Unbiased,
+    /// Divide by `sqrt(Rxx[0] Ryy[0])`, so an autocorrelation is 1 at lag 0.
+    Coeff,
+}
+
+/// Settings of a [`Correlator`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CorrelateSettings {
+    /// Scaling of the lag sums (default: none, as SciPy).
+    pub normalization: Normalization,
+}
+
+/// A full-lag correlation: one value per lag.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Correlation {
+    /// Lags in samples, `-(Ny-1) ..= Nx-1` in steps of one.
+    pub lags: Vec<i64>,
+    /// Correlation at each lag, normalised as requested.
+    pub values: Vec<f64>,
+}
+
+impl Correlation {
+    /// Lags in seconds, `lags[i] / fs_hz`.
+    ///
+    /// With [`correlate`]'s convention, a positive lag `m` pairs `x[n + m]`
+    /// with `y[n]`: if `y` is `x` delayed by `d` samples, the peak is at
+    /// `-d / fs_hz` seconds.
+    pub fn lag_s(&self, fs_hz: f64) -> Vec<f64> {
+        self.lags.iter().map(|&m| m as f64 / fs_hz).collect()
+    }
+
+    /// Value at lag `m` (samples), if `m` is in range.
+    pub fn at_lag(&self, m: i64) -> Option<f64> {
+        let first = *self.lags.first()?;
+        let i = usize::try_from(m - first).ok()?;
+        self.values.get(i).copied()
+    }
+}
+
+/// Lags of a full correlation of lengths `nx` and `ny`: `-(ny-1) ..= nx-1`,
+/// as `scipy.signal.correlation_lags(nx, ny, mode='full')`.
+///
+/// Empty if either length is zero.
+///
+/// ```
+/// assert_eq!(ballpass_dsp::correlation_lags(3, 2), vec![-1, 0, 1, 2]);
+/// ```
+pub fn correlation_lags(nx: usize, ny: usize) -> Vec<i64> {
+    if nx == 0 || ny == 0 {
+        return Vec::new();
+    }
+    (-(ny as i64 - 1)..=(nx as i64 - 1)).collect()
+}
+
+/// Full-lag correlation of `x` and `y` with a one-off [`Correlator`].
+///
+/// ```text
+/// z[m] = sum_n x[n + m] y[n],   m = -(Ny-1) ..= Nx-1
+/// ```
+///
+/// This equals `numpy.correlate(x, y, 'full')`,
+/// `scipy.signal.correlate(x, y)` and MATLAB `xcorr(x, y)` (the thesis'
+/// Eq. 7.1). If `y` is `x` delayed by `d` samples the peak is at `m = -d`.
+/// The sums are computed by FFT (real transforms of a 5-smooth length
+/// `>= Nx + Ny - 1`), so each value carries an absolute rounding error of
+/// order `1e-16 * sqrt(sum x^2 * sum y^2)`, as SciPy's `method='fft'`.
+///
+/// ```
+/// use ballpass_dsp::{correlate, Normalization};
+/// let c = correlate(&[1.0, 2.0, 3.0], &[0.0, 1.0, 0.5], Normalization::None).unwrap();
+/// // numpy.correlate([1, 2, 3], [0, 1, 0.5], 'full') == [0.5, 2, 3.5, 3, 0]
+/// assert_eq!(c.lags, vec![-2, -1, 0, 1, 2]);
+/// let want = [0.5, 2.0, 3.5, 3.0, 0.0];
+/// assert!(c.values.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12));
+/// ```
+///
+/// # Errors
+/// [`DspError::Empty`] or [`DspError::NonFinite`] for `x` or `y`;
+/// [`DspError::LengthMismatch`] for `Biased`/`Unbiased` with unequal
+/// lengths; [`DspError::Numerical`] for `Coeff` when `x` or `y` is all zeros.
+pub fn correlate(x: &[f64], y: &[f64], normalization: Normalization) -> Result<Correlation> {
+    Correlator::new(CorrelateSettings { normalization }).correlate(x, y)
+}
+
+/// Plans and buffers for one FFT length.
+#[derive(Clone)]
+struct Plan {
+    len: usize,
+    forward: Arc<dyn RealToComplex<f64>>,
+    inverse: Arc<dyn ComplexToReal<f64>>,
+    buf: Vec<f64>,
+    spec_x: Vec<Complex<f64>>,
+    spec_y: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+}
+
+impl Plan {
+    fn new(len: usize) -> Plan {
+        let mut planner = RealFftPlanner::<f64>::new();
+        let forward = planner.plan_fft_forward(len);
+        let inverse = planner.plan_fft_inverse(len);
+        let scratch_len = forward.get_scratch_len().max(inverse.get_scratch_len());
+        Plan {
+            len,
+            buf: forward.make_input_vec(),
+            spec_x: forward.make_output_vec(),
+            spec_y: forward.make_output_vec(),
+            scratch: vec![Complex::new(0.0, 0.0); scratch_len],
+            forward,
+            inverse,
+        }
+    }
+
+    /// Zero-padded forward transform of `x` into `spec_x` (or `spec_y`).
+    fn transform(&mut self, x: &[f64], into_y: bool) {
+        self.buf[..x.len()].copy_from_slice(x);
+        self.buf[x.len()..].fill(0.0);
+        let out = if into_y {
+            &mut self.spec_y
+        } else {
+            &mut self.spec_x
+        };
+        self.forward
+            .process_with_scratch(&mut self.buf, out, &mut self.scratch)
+            .expect("buffer lengths come from the plan");
+    }
+}
+
+/// A reusable full-lag correlator: holds realfft plans and buffers for the
+/// last FFT length used, so repeated correlations of equal-length records
+/// plan once.
+///
+/// `Correlator` is `Send + Sync` and cheap to clone (plans are shared
+/// `Arc`s); give each thread its own clone. See [`correlate`] for the
+/// formula and conventions.
+///
+/// ```
+/// use ballpass_dsp::{CorrelateSettings, Correlator, Normalization};
+/// let mut c = Correlator::new(CorrelateSettings { normalization: Normalization::Coeff });
+/// let x = [1.0, -2.0, 0.5, 3.0];
+/// let r = c.autocorrelate(&x).unwrap();
+/// assert!((r.at_lag(0).unwrap() - 1.0).abs() < 1e-12);
+/// ```
+#[derive(Clone)]
+pub struct Correlator {
+    settings: CorrelateSettings,
+    plan: Option<Plan>,
+}
+
+impl std::fmt::Debug for Correlator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Correlator")
+            .field("settings", &self.settings)
+            .field("fft_len", &self.plan.as_ref().map(|p| p.len))
+            .finish()
+    }
+}
+
+impl Correlator {
+    /// A correlator with the given settings; FFTs are planned on first use.
+    pub fn new(settings: CorrelateSettings) -> Correlator {
+        Correlator {
+            settings,
+            plan: None,
+        }
+    }
+
+    /// A correlator already planned for inputs of lengths `nx` and `ny`.
+    pub fn with_lengths(settings: CorrelateSettings, nx: usize, ny: usize) -> Correlator {
+        let mut c = Correlator::new(settings);
+        c.plan_for(nx + ny);
+        c
+    }
+
+    /// The settings this correlator was built with.
+    pub fn settings(&self) -> &CorrelateSettings {
+        &self.settings
+    }
+
+    /// Full-lag cross-correlation `z[m] = sum_n x[n + m] y[n]`, normalised
+    /// per the settings. See [`correlate`].
+    ///
+    /// # Errors
+    /// As [`correlate`].
+    pub fn correlate(&mut self, x: &[f64], y: &[f64]) -> Result<Correlation> {
+        check_finite("x", x)?;
+        check_finite("y", y)?;
+        self.check_lengths(x.len(), y.len())?;
+        let plan = self.plan_for(x.len() + y.len());
+        plan.transform(x, false);
+        plan.transform(y, true);
+        for (a, b) in plan.spec_x.iter_mut().zip(&plan.spec_y) {
+            *a *= b.conj();
+        }
+        let raw = inverse_to_lags(plan, x.len(), y.len());
+        self.normalise(raw, x, y)
+    }
+
+    /// Full-lag autocorrelation `z[m] = sum_n x[n + m] x[n]` (one forward
+    /// FFT instead of two). Equal to `correlate(x, x)`.
+    ///
+    /// # Errors
+    /// As [`correlate`].
+    pub fn autocorrelate(&mut self, x: &[f64]) -> Result<Correlation> {
+        check_finite("x", x)?;
+        let plan = self.plan_for(2 * x.len());
+        plan.transform(x, false);
+        for a in plan.spec_x.iter_mut() {
+            *a = Complex::new(a.norm_sqr(), 0.0);
+        }
+        let raw = inverse_to_lags(plan, x.len(), x.len());
+        self.normalise(raw, x, x)
+    }
+
+    fn check_lengths(&self, nx: usize, ny: usize) -> Result<()> {
+        match self.settings.normalization {
+            Normalization::Biased | Normalization::Unbiased if nx != ny => {
+                Err(DspError::LengthMismatch {
+                    what: "x and y (biased/unbiased correlation)",
+                    expected: nx,
+                    found: ny,
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The plan for full correlations with `nx + ny` total samples.
+    fn plan_for(&mut self, n_total: usize) -> &mut Plan {
+        let len = next_fast_even_len(n_total.saturating_sub(1).max(1));
+        if self.plan.as_ref().map(|p| p.len) != Some(len) {
+            self.plan = Some(Plan::new(len));
+        }
+        self.plan.as_mut().expect("plan was just set")
+    }
+
+    fn normalise(&self, mut values: Vec<f64>, x: &[f64], y: &[f64]) -> Result<Correlation> {
+        let (nx, ny) = (x.len(), y.len());
+        match self.settings.normalization {
+            Normalization::None => {}
+            Normalization::Biased => {
+                let inv = 1.0 / nx as f64;
+                values.iter_mut().for_each(|v| *v *= inv);
+            }
+            Normalization::Unbiased => {
+                for (i, v) in values.iter_mut().enumerate() {
+                    let m = i.abs_diff(ny - 1);
+                    *v /= (nx - m) as f64;
+                }
+            }
+            Normalization::Coeff => {
+                let exx: f64 = x.iter().map(|v| v * v).sum();
+                let eyy: f64 = y.iter().map(|v| v * v).sum();
+                if exx == 0.0 || eyy == 0.0 {
+                    return Err(DspError::Numerical {
+                        what: "coefficient-normalised correlation",
+                        reason: format!(
+                            "{} is all zeros (zero energy), so R[0] cannot normalise it",
+                            if exx == 0.0 { "x" } else { "y" }
+                        ),
+                    });
+                }
+                let inv = 1.0 / (exx * eyy).sqrt();
+                values.iter_mut().for_each(|v| *v *= inv);
+            }
+        }
+        Ok(Correlation {
+            lags: correlation_lags(nx, ny),
+            values,
+        })
+    }
+}
+
+/// Inverse FFT of `plan.spec_x` (a cross-spectrum) and the rearrangement of
+/// the circular result into lags `-(ny-1) ..= nx-1`.
+fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize) -> Vec<f64> {
+    let len = plan.len;
+    // A real signal's DC (and, for even lengths, Nyquist) bins are real;
+    // clear the rounding residue so realfft accepts the spectrum.
+    plan.spec_x[0].im = 0.0;
+    if len % 2 == 0 {
+        let last = plan.spec_x.len() - 1;
+        plan.spec_x[last].im = 0.0;
+    }
+    plan.inverse
+        .process_with_scratch(&mut plan.spec_x, &mut plan.buf, &mut plan.scratch)
+        .expect("buffer lengths come from the plan and DC/Nyquist are real");
+    let scale = 1.0 / len as f64;
+    let mut out = Vec::with_capacity(nx + ny - 1);
+    // Negative lags m = -(ny-1) ..= -1 sit at the end of the circular result.
+    out.extend(plan.buf[len - (ny - 1)..].iter().map(|v| v * scale));
+    out.extend(plan.buf[..nx].iter().map(|v| v * scale));
+    out
+}
+
+/// Smallest even `n >= target` whose only prime factors are 2, 3 and 5
+/// (fast for realfft/RustFFT, like `scipy.fft.next_fast_len(real=True)`).
+pub(crate) fn next_fast_even_len(target: usize) -> usize {
+    let mut n = target.max(2);
+    n += n % 2;
+    loop {
+        let mut m = n;
+        for p in [2, 3, 5] {
+            while m % p == 0 {
+                m /= p;
+            }
+        }
+        if m == 1 {
+            return n;
+        }
+        n += 2;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_len() {
+        assert_eq!(next_fast_even_len(1), 2);
+        assert_eq!(next_fast_even_len(59999), 60000);
+        assert_eq!(next_fast_even_len(7), 8);
+        assert_eq!(next_fast_even_len(13), 16);
+        assert_eq!(next_fast_even_len(31), 32);
+        assert_eq!(next_fast_even_len(33), 36);
+    }
+
+    #[test]
+    fn correlator_is_send_sync() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<Correlator>();
+    }
+
+    #[test]
+    fn delayed_copy_peaks_at_minus_delay() {
+        let x: Vec<f64> = (0..50).map(|i| ((i * 37 % 11) as f64) - 5.0).collect();
+        let d = 3;
+        let y: Vec<f64> = (0..50)
+            .map(|i| if i >= d { x[i - d] } else { 0.0 })
+            .collect();
+        let c = correlate(&x, &y, Normalization::None).unwrap();
+        let imax = (0..c.values.len())
+            .max_by(|&a, &b| c.values[a].total_cmp(&c.values[b]))
+            .unwrap();
+        assert_eq!(c.lags[imax], -(d as i64));
+    }
+
+    #[test]
+    fn errors() {
+        assert!(matches!(
+            correlate(&[], &[1.0], Normalization::None),
+            Err(DspError::Empty { what: "x" })
+        ));
+        assert!(matches!(
+            correlate(&[1.0, 2.0], &[1.0], Normalization::Biased),
+            Err(DspError::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            correlate(&[0.0, 0.0], &[1.0], Normalization::Coeff),
+            Err(DspError::Numerical { .. })
+        ));
+        assert!(correlate(&[1.0, 2.0], &[1.0], Normalization::Coeff).is_ok());
+        assert!(correlate(&[1.0, f64::NAN], &[1.0], Normalization::None).is_err());
+    }
+}
