@@ -21,12 +21,18 @@ struct Cli {
 enum Command {
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
+    /// Simulate a bench recording with the built-in testbed simulator (writes NAME.truth.json beside it).
+    Simulate(cmd::simulate::SimulateArgs),
+    /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
+    SimulateCampaign(cmd::simulate::CampaignArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
+        Command::Simulate(a) => cmd::simulate::run(&a),
+        Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -54,6 +54,9 @@
 //! levels, photodetector DC level and pulse height, acceleration 100 mm/s²,
 //! AC-coupling time constant 1 s, drift amplitude.
 
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
 use serde::{Deserialize, Serialize};
 
 use crate::bearing::{self, check_velocity, Geometry};
@@ -613,6 +616,25 @@ pub struct Truth {
     pub interference_phase_rad: Option<f64>,
     /// All parameters.
     pub settings: SimSettings,
+}
+
+impl Truth {
+    /// Writes the truth as pretty-printed JSON, atomically (temporary file
+    /// beside `path`, then rename).
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn write_json(&self, path: &Path) -> Result<()> {
+        crate::recording::io::write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        })
+    }
+}
+
+/// The truth file that belongs beside a recording: `rec.csv` → `rec.truth.json`.
+pub fn truth_path(recording_path: &Path) -> PathBuf {
+    recording_path.with_extension("truth.json")
 }
 
 /// A train of Gaussian pulses at fixed ball-travel positions, evaluated only
