@@ -29,6 +29,10 @@ enum Command {
     Model(cmd::model::ModelArgs),
     /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
     Passage(cmd::passage::PassageArgs),
+    /// Simulate a bench recording with the built-in testbed simulator (writes NAME.truth.json beside it).
+    Simulate(cmd::simulate::SimulateArgs),
+    /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
+    SimulateCampaign(cmd::simulate::CampaignArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +42,8 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cmd::inspect::run(&a),
         Command::Model(a) => cmd::model::run(&a),
         Command::Passage(a) => cmd::passage::run(&a),
+        Command::Simulate(a) => cmd::simulate::run(&a),
+        Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

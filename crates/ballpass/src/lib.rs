@@ -12,6 +12,7 @@ pub mod error;
 pub mod model;
 pub mod recording;
 pub mod report;
+pub mod sim;
 
 pub use error::{Error, Result};
 

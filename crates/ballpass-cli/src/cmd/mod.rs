@@ -4,3 +4,4 @@ pub mod inspect;
 pub mod model;
 pub mod passage;
 pub mod predict;
+pub mod simulate;
