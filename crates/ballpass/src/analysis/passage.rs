@@ -422,6 +422,11 @@ pub struct PassageAnalysis {
     pub fits: Option<TrainFits>,
     /// The settings used.
     pub settings: PassageSettings,
+    /// Running baseline under the pulses, one value per sample, V: the fits
+    /// and the pulse heights are of `optical − baseline`. Kept for plots,
+    /// not serialised.
+    #[serde(skip)]
+    pub baseline_v: Vec<f64>,
 }
 
 /// Robust noise standard deviation from lag-`lag` differences:
@@ -1044,6 +1049,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         fits,
         passages,
         settings: settings.clone(),
+        baseline_v: baseline,
     })
 }
 
