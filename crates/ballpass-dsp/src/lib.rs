@@ -1,8 +1,16 @@
 #![doc = include_str!("../README.md")]
 
 pub mod correlate;
+pub mod decimate;
 pub mod detrend;
 pub mod error;
+pub mod gradient;
+pub mod iir;
+pub mod lsq;
+pub mod lti;
+mod npcomplex;
+pub mod peaks;
+pub mod sos;
 pub mod spectral;
 pub mod window;
 pub mod zoom;
@@ -10,11 +18,30 @@ pub mod zoom;
 pub use correlate::{
     correlate, correlation_lags, CorrelateSettings, Correlation, Correlator, Normalization,
 };
+pub use decimate::{decimate, DecimateSettings, Decimator};
 pub use detrend::{detrend, detrend_in_place, DetrendType};
 pub use error::{check_finite, invalid, DspError, Result};
+pub use gradient::{gradient, gradient_with_edge_order, EdgeOrder, Spacing};
+pub use iir::{
+    butter, butter_zpk, cheby1, cheby1_zpk, zpk2sos, ButterSettings, Cheby1Settings, FilterBand,
+    Zpk,
+};
+pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
+pub use lti::{bode, freqs, freqz, sosfreqz, unwrap, AnalogResponse, Bode, DigitalResponse};
+pub use peaks::{
+    find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
+    FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,
+};
+/// Complex numbers used in spectra, frequency responses and pole-zero lists
+/// (re-exported from `num_complex` via `rustfft`).
+pub use rustfft::num_complex::Complex64;
+pub use sos::{
+    lfilter, lfilter_with_state, lfilter_zi, sosfilt, sosfilt_with_state, sosfilt_zi, sosfiltfilt,
+    FiltFiltSettings, LfilterOutput, PadLen, PadType, Sos, SosOutput, ZeroPhaseFilter,
+};
 pub use spectral::{
-    coherence, csd, periodogram, welch, Average, Coherence, Complex64, Csd, PeriodogramSettings,
-    Psd, Scaling, Welch, WelchSettings,
+    coherence, csd, periodogram, welch, Average, Coherence, Csd, PeriodogramSettings, Psd, Scaling,
+    Welch, WelchSettings,
 };
 pub use window::Window;
 pub use zoom::{polyphase_average_csd, polyphase_average_psd};

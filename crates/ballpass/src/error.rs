@@ -60,12 +60,28 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A recording is readable but unusable as a whole (e.g. too short).
+    #[error("{source_name}: {reason}")]
+    InvalidRecording {
+        /// File or test the recording came from.
+        source_name: String,
+        /// What is wrong, with the numbers.
+        reason: String,
+    },
     /// A setting or parameter given by the user is out of range.
     #[error("invalid {name}: {reason}")]
     InvalidSetting {
         /// The setting's name as the user knows it (flag or field).
         name: String,
         /// What is wrong, with the value.
+        reason: String,
+    },
+    /// The optical channel holds no ball passages that can be measured.
+    #[error("{source_name}: no ball passages found in optical_V: {reason}")]
+    NoPassages {
+        /// File or test the recording came from.
+        source_name: String,
+        /// What was found instead, with the threshold.
         reason: String,
     },
     /// A kernel of `ballpass-dsp` rejected its input.
@@ -75,6 +91,15 @@ pub enum Error {
         context: String,
         /// The kernel's error.
         source: ballpass_dsp::DspError,
+    },
+    /// A figure or report cannot be built: malformed figure data (length
+    /// mismatch, bad range, nothing drawable), a bad id, or drawing failed.
+    #[error("report: {what}: {reason}")]
+    Report {
+        /// Which figure, panel or series (`figure 'corr_ff' panel 2 series 'R'`).
+        what: String,
+        /// What is wrong, with the values.
+        reason: String,
     },
 }
 

@@ -1,3 +1,6 @@
 //! One module per subcommand.
 
+pub mod inspect;
+pub mod model;
+pub mod passage;
 pub mod predict;

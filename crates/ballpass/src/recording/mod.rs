@@ -1,7 +1,7 @@
 //! The one way data enters an analysis: [`Recording`], validated on the way in.
 //!
-//! Loaders for the bench file formats live in [`io`](crate::recording) submodules
-//! and all produce a [`Recording`].
+//! Loaders for the bench file formats live in [`io`] and all produce a
+//! [`Recording`]; [`io::write_csv`] writes one back.
 
 use std::fmt;
 use std::path::PathBuf;
@@ -9,6 +9,13 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+
+pub mod inspect;
+pub mod io;
+pub mod profile;
+
+pub use io::{load, write_csv, write_mat, ChannelSource, Format, LoadOptions};
+pub use profile::Profile;
 
 /// The three measured channels of the testbed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]

@@ -1,0 +1,256 @@
+//! Frequency responses of linear time-invariant systems: analog
+//! (`freqs`, `bode`) and digital (`freqz`, `sosfreqz`).
+
+use rustfft::num_complex::Complex64;
+
+use crate::error::{check_finite, invalid, Result};
+use crate::npcomplex as nc;
+use crate::sos::Sos;
+
+/// Complex frequency response of an analog system at angular frequencies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalogResponse {
+    /// Angular frequencies in rad/s (as given).
+    pub w_rad_s: Vec<f64>,
+    /// `H(j w)` at each frequency.
+    pub h: Vec<Complex64>,
+}
+
+/// Bode diagram of an analog system.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bode {
+    /// Angular frequencies in rad/s (as given).
+    pub w_rad_s: Vec<f64>,
+    /// `20 log10 |H(j w)|` in dB.
+    pub magnitude_db: Vec<f64>,
+    /// `arg H(j w)` in degrees, unwrapped along the frequency axis
+    /// (`numpy.unwrap`), starting in `(-180, 180]`.
+    pub phase_deg: Vec<f64>,
+}
+
+/// Complex frequency response of a digital filter at frequencies in Hz.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DigitalResponse {
+    /// Frequencies in Hz (as given).
+    pub freq_hz: Vec<f64>,
+    /// `H(exp(j 2 pi f / fs))` at each frequency.
+    pub h: Vec<Complex64>,
+}
+
+fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
+    check_finite(what, p)?;
+    if p.iter().all(|v| *v == 0.0) {
+        return Err(invalid(what, "polynomial is identically zero"));
+    }
+    Ok(())
+}
+
+/// Horner evaluation with NumPy's `polyval` order (highest power first).
+fn polyval(p: &[f64], s: Complex64) -> Complex64 {
+    p.iter().fold(Complex64::new(0.0, 0.0), |y, &c| {
+        y * s + Complex64::new(c, 0.0)
+    })
+}
+
+/// Frequency response of the analog filter `b(s) / a(s)` (coefficients with
+/// the highest power first), matching `scipy.signal.freqs(b, a, worN=w)`.
+///
+/// ```text
+/// H(j w) = (b0 (jw)^M + ... + bM) / (a0 (jw)^N + ... + aN)
+/// ```
+///
+/// ```
+/// // first-order low-pass 1 / (s + 1): -3 dB and -45 degrees at 1 rad/s
+/// let r = ballpass_dsp::freqs(&[1.0], &[1.0, 1.0], &[1.0]).unwrap();
+/// assert!((r.h[0].norm() - 0.5f64.sqrt()).abs() < 1e-15);
+/// ```
+///
+/// # Errors
+/// [`crate::DspError::Empty`] / [`crate::DspError::NonFinite`] for bad inputs;
+/// [`crate::DspError::InvalidSetting`] if `a` or `b` is identically zero.
+pub fn freqs(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<AnalogResponse> {
+    check_poly("b", b)?;
+    check_poly("a", a)?;
+    check_finite("w_rad_s", w_rad_s)?;
+    let h = w_rad_s
+        .iter()
+        .map(|&w| {
+            let s = Complex64::new(0.0, w);
+            nc::div(polyval(b, s), polyval(a, s))
+        })
+        .collect();
+    Ok(AnalogResponse {
+        w_rad_s: w_rad_s.to_vec(),
+        h,
+    })
+}
+
+/// `numpy.unwrap` with period `2 pi`: adds multiples of `2 pi` so that
+/// consecutive values differ by at most `pi`.
+pub fn unwrap(p: &[f64]) -> Vec<f64> {
+    use std::f64::consts::PI;
+    let period = 2.0 * PI;
+    let (lo, hi) = (-PI, PI);
+    let mut out = Vec::with_capacity(p.len());
+    let mut correction = 0.0;
+    for (i, &v) in p.iter().enumerate() {
+        if i > 0 {
+            let dd = v - p[i - 1];
+            let mut ddmod = py_mod(dd - lo, period) + lo;
+            if ddmod == lo && dd > 0.0 {
+                ddmod = hi;
+            }
+            let mut ph = ddmod - dd;
+            if dd.abs() < PI {
+                ph = 0.0;
+            }
+            correction += ph;
+            out.push(v + correction);
+        } else {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// Python/NumPy floating `%`: the result has the sign of the divisor.
+fn py_mod(a: f64, b: f64) -> f64 {
+    let m = a % b;
+    if m != 0.0 {
+        if (b < 0.0) != (m < 0.0) {
+            m + b
+        } else {
+            m
+        }
+    } else {
+        0.0f64.copysign(b)
+    }
+}
+
+/// Bode magnitude and phase of the analog filter `b(s) / a(s)`, matching
+/// `scipy.signal.bode((b, a), w=w_rad_s)`.
+///
+/// ```text
+/// magnitude_db = 20 log10 |H(j w)|
+/// phase_deg    = unwrap(atan2(Im H, Re H)) * 180 / pi
+/// ```
+///
+/// SciPy evaluates a `(b, a)` tuple through its poles and zeros; this
+/// evaluates the polynomials directly (the results agree to rounding for
+/// well-conditioned polynomials).
+///
+/// # Errors
+/// As [`freqs`].
+pub fn bode(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Bode> {
+    let r = freqs(b, a, w_rad_s)?;
+    let magnitude_db = r.h.iter().map(|h| 20.0 * nc::abs(*h).log10()).collect();
+    let wrapped: Vec<f64> = r.h.iter().map(|h| h.im.atan2(h.re)).collect();
+    let phase_deg = unwrap(&wrapped)
+        .into_iter()
+        .map(|p| p * 180.0 / std::f64::consts::PI)
+        .collect();
+    Ok(Bode {
+        w_rad_s: r.w_rad_s,
+        magnitude_db,
+        phase_deg,
+    })
+}
+
+fn check_freqs(freq_hz: &[f64], fs_hz: f64) -> Result<()> {
+    if !(fs_hz.is_finite() && fs_hz > 0.0) {
+        return Err(invalid(
+            "fs_hz",
+            format!("must be finite and > 0, got {fs_hz}"),
+        ));
+    }
+    check_finite("freq_hz", freq_hz)
+}
+
+/// `b(z^-1) / a(z^-1)` at `z^-1 = exp(-j 2 pi f / fs)` (NumPy `polyval`
+/// from the lowest power, as SciPy's `freqz`).
+fn freqz_at(b: &[f64], a: &[f64], f: f64, fs_hz: f64) -> Complex64 {
+    let w = 2.0 * std::f64::consts::PI * f / fs_hz;
+    let zm1 = nc::exp(Complex64::new(0.0, -w));
+    let ev = |c: &[f64]| {
+        let mut acc = Complex64::new(c[c.len() - 1], 0.0);
+        for &ci in c.iter().rev().skip(1) {
+            acc = Complex64::new(ci, 0.0) + acc * zm1;
+        }
+        acc
+    };
+    nc::div(ev(b), ev(a))
+}
+
+/// Frequency response of the digital filter `b(z) / a(z)` (coefficients of
+/// `z^0, z^-1, ...`), matching `scipy.signal.freqz(b, a, worN=freq_hz, fs=fs_hz)`.
+///
+/// ```text
+/// H(f) = sum_k b[k] e^{-j 2 pi f k / fs} / sum_k a[k] e^{-j 2 pi f k / fs}
+/// ```
+///
+/// # Errors
+/// [`crate::DspError::Empty`] / [`crate::DspError::NonFinite`] for bad inputs;
+/// [`crate::DspError::InvalidSetting`] for a zero denominator or a bad `fs_hz`.
+pub fn freqz(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<DigitalResponse> {
+    check_poly("b", b)?;
+    check_poly("a", a)?;
+    check_freqs(freq_hz, fs_hz)?;
+    Ok(DigitalResponse {
+        freq_hz: freq_hz.to_vec(),
+        h: freq_hz.iter().map(|&f| freqz_at(b, a, f, fs_hz)).collect(),
+    })
+}
+
+/// Frequency response of second-order sections, the product of the
+/// sections' [`freqz`], matching
+/// `scipy.signal.freqz_sos(sos, worN=freq_hz, fs=fs_hz)` (formerly `sosfreqz`).
+///
+/// ```
+/// use ballpass_dsp::{butter, sosfreqz, FilterBand};
+/// let sos = butter(5, FilterBand::LowPass { cutoff_hz: 20.0 }, 1000.0).unwrap();
+/// let r = sosfreqz(&sos, &[20.0], 1000.0).unwrap();
+/// let db = 20.0 * r.h[0].norm().log10();
+/// assert!((db + 3.0103).abs() < 1e-3); // -3 dB at the cutoff
+/// ```
+///
+/// # Errors
+/// As [`freqz`].
+pub fn sosfreqz(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<DigitalResponse> {
+    check_freqs(freq_hz, fs_hz)?;
+    let h = freq_hz
+        .iter()
+        .map(|&f| {
+            sos.sections()
+                .iter()
+                .fold(Complex64::new(1.0, 0.0), |acc, s| {
+                    acc * freqz_at(&s[..3], &s[3..], f, fs_hz)
+                })
+        })
+        .collect();
+    Ok(DigitalResponse {
+        freq_hz: freq_hz.to_vec(),
+        h,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unwrap_removes_jumps() {
+        let p = [3.0, -3.0, 3.1];
+        let u = unwrap(&p);
+        assert!((u[1] - (-3.0 + 2.0 * std::f64::consts::PI)).abs() < 1e-15);
+        assert_eq!(u[2], 3.1);
+    }
+
+    #[test]
+    fn validates() {
+        assert!(freqs(&[1.0], &[0.0], &[1.0]).is_err());
+        assert!(freqs(&[1.0], &[1.0, 1.0], &[f64::NAN]).is_err());
+        assert!(freqz(&[1.0], &[1.0], &[1.0], 0.0).is_err());
+        let e: crate::DspError = freqs(&[], &[1.0], &[1.0]).unwrap_err();
+        assert!(matches!(e, crate::DspError::Empty { .. }));
+    }
+}

@@ -1,0 +1,1226 @@
+//! Peak finding, prominences and widths, matching `scipy.signal.find_peaks`,
+//! `peak_prominences` and `peak_widths` (SciPy 1.17).
+//!
+//! A *peak* is one or more samples of equal value with a strictly smaller
+//! sample on each side; the first and last samples are never peaks. A flat
+//! peak (plateau) is reported at its middle index, rounded down:
+//!
+//! ```text
+//! peak = (left_edge + right_edge) / 2        (integer division)
+//! ```
+//!
+//! [`find_peaks`] applies its criteria in SciPy's order, each one to the
+//! peaks left by the previous ones: plateau size, height, threshold,
+//! distance, prominence, width. A property is computed (and returned) only
+//! when its criterion is given; a [`Bound::any`] computes it without removing
+//! peaks, as SciPy's `(None, None)`.
+//!
+//! Differences from SciPy, all on inputs where SciPy's answer is undefined
+//! or an accident of the platform:
+//! - a NaN or infinite sample is an `Err` (SciPy: "may return unexpected
+//!   results");
+//! - with `distance`, peaks of *exactly equal* height closer than `distance`
+//!   are ranked by position, the later one first (NumPy's `kind="stable"`
+//!   argsort). SciPy uses NumPy's default argsort, whose order of ties is not
+//!   stable and differs between CPUs (SIMD sorting networks);
+//! - a NaN bound, a non-finite `distance`, `wlen` or `rel_height` is an
+//!   `Err`, and settings are checked even when the criterion that uses them
+//!   is off.
+//!
+//! ```
+//! use ballpass_dsp::{find_peaks, Bound, FindPeaksSettings};
+//! let x = [0.0, 1.0, 0.0, 3.0, 1.0, 3.0, 0.0, 4.0, 0.0];
+//! let settings = FindPeaksSettings { prominence: Some(Bound::at_least(2.5)), ..Default::default() };
+//! let peaks = find_peaks(&x, &settings)?;
+//! assert_eq!(peaks.indices, [3, 5, 7]);
+//! assert_eq!(peaks.properties.prominences, Some(vec![3.0, 3.0, 4.0]));
+//! # Ok::<(), ballpass_dsp::DspError>(())
+//! ```
+
+use crate::error::{invalid, DspError, Result};
+
+/// An interval `[min, max]` a peak property must lie in; either end may be
+/// open (`None`). SciPy's `(min, max)` tuple, or a bare number for `min`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Bound {
+    /// Smallest accepted value (inclusive), or no lower limit.
+    pub min: Option<f64>,
+    /// Largest accepted value (inclusive), or no upper limit.
+    pub max: Option<f64>,
+}
+
+impl Bound {
+    /// No limit: the property is computed and returned, no peak is removed
+    /// (SciPy's `(None, None)`).
+    pub const fn any() -> Self {
+        Bound {
+            min: None,
+            max: None,
+        }
+    }
+
+    /// `value >= min`.
+    pub const fn at_least(min: f64) -> Self {
+        Bound {
+            min: Some(min),
+            max: None,
+        }
+    }
+
+    /// `value <= max`.
+    pub const fn at_most(max: f64) -> Self {
+        Bound {
+            min: None,
+            max: Some(max),
+        }
+    }
+
+    /// `min <= value <= max`.
+    pub const fn between(min: f64, max: f64) -> Self {
+        Bound {
+            min: Some(min),
+            max: Some(max),
+        }
+    }
+
+    /// Whether `value` lies in the bound (SciPy's `_select_by_property`).
+    pub fn contains(&self, value: f64) -> bool {
+        self.min.is_none_or(|m| m <= value) && self.max.is_none_or(|m| value <= m)
+    }
+
+    fn validate(&self, name: &'static str) -> Result<()> {
+        for end in [self.min, self.max].into_iter().flatten() {
+            if end.is_nan() {
+                return Err(invalid(name, "bound is NaN"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Settings of [`find_peaks`]; every criterion is off by default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FindPeaksSettings {
+    /// Required peak height `x[peak]`.
+    pub height: Option<Bound>,
+    /// Required vertical distance to both neighbouring samples: `min` is
+    /// compared with the smaller of `x[p] - x[p-1]` and `x[p] - x[p+1]`,
+    /// `max` with the larger.
+    pub threshold: Option<Bound>,
+    /// Minimal horizontal distance in samples (>= 1, rounded up) between
+    /// peaks; lower peaks are removed first.
+    pub distance: Option<f64>,
+    /// Required prominence (see [`peak_prominences`]).
+    pub prominence: Option<Bound>,
+    /// Required width in samples (see [`peak_widths`]).
+    pub width: Option<Bound>,
+    /// Window length in samples for the prominence search (> 1, rounded up
+    /// to an integer, then the window is `2 * (wlen / 2) + 1` samples
+    /// centred on the peak); `None` searches the whole signal.
+    pub wlen: Option<f64>,
+    /// Height at which widths are measured, as a fraction of the prominence
+    /// below the peak (>= 0). Default 0.5.
+    pub rel_height: f64,
+    /// Required number of samples in the flat top of a peak.
+    pub plateau_size: Option<Bound>,
+}
+
+impl Default for FindPeaksSettings {
+    fn default() -> Self {
+        FindPeaksSettings {
+            height: None,
+            threshold: None,
+            distance: None,
+            prominence: None,
+            width: None,
+            wlen: None,
+            rel_height: 0.5,
+            plateau_size: None,
+        }
+    }
+}
+
+/// Properties of the peaks returned by [`find_peaks`], one entry per peak.
+/// A field is `Some` only when the criterion that computes it was given.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PeakProperties {
+    /// `x[peak]`; with `height`.
+    pub peak_heights: Option<Vec<f64>>,
+    /// `x[peak] - x[peak - 1]`; with `threshold`.
+    pub left_thresholds: Option<Vec<f64>>,
+    /// `x[peak] - x[peak + 1]`; with `threshold`.
+    pub right_thresholds: Option<Vec<f64>>,
+    /// Prominences; with `prominence` or `width`.
+    pub prominences: Option<Vec<f64>>,
+    /// Left bases (sample indices); with `prominence` or `width`.
+    pub left_bases: Option<Vec<usize>>,
+    /// Right bases (sample indices); with `prominence` or `width`.
+    pub right_bases: Option<Vec<usize>>,
+    /// Widths in samples; with `width`.
+    pub widths: Option<Vec<f64>>,
+    /// Heights at which the widths were measured; with `width`.
+    pub width_heights: Option<Vec<f64>>,
+    /// Interpolated left intersection positions (samples); with `width`.
+    pub left_ips: Option<Vec<f64>>,
+    /// Interpolated right intersection positions (samples); with `width`.
+    pub right_ips: Option<Vec<f64>>,
+    /// Samples in the flat top, `right_edge - left_edge + 1`; with `plateau_size`.
+    pub plateau_sizes: Option<Vec<usize>>,
+    /// First sample of the flat top; with `plateau_size`.
+    pub left_edges: Option<Vec<usize>>,
+    /// Last sample of the flat top; with `plateau_size`.
+    pub right_edges: Option<Vec<usize>>,
+}
+
+impl PeakProperties {
+    fn retain(&mut self, keep: &[bool]) {
+        fn f<T: Copy>(v: &mut Option<Vec<T>>, keep: &[bool]) {
+            if let Some(v) = v {
+                retain_mask(v, keep);
+            }
+        }
+        f(&mut self.peak_heights, keep);
+        f(&mut self.left_thresholds, keep);
+        f(&mut self.right_thresholds, keep);
+        f(&mut self.prominences, keep);
+        f(&mut self.left_bases, keep);
+        f(&mut self.right_bases, keep);
+        f(&mut self.widths, keep);
+        f(&mut self.width_heights, keep);
+        f(&mut self.left_ips, keep);
+        f(&mut self.right_ips, keep);
+        f(&mut self.plateau_sizes, keep);
+        f(&mut self.left_edges, keep);
+        f(&mut self.right_edges, keep);
+    }
+}
+
+/// Peaks found by [`find_peaks`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Peaks {
+    /// Sample indices of the peaks, increasing.
+    pub indices: Vec<usize>,
+    /// Their properties, in the same order.
+    pub properties: PeakProperties,
+}
+
+/// Result of [`peak_prominences`], one entry per peak.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Prominences {
+    /// `x[peak] - max(x[left_base], x[right_base])`, >= 0.
+    pub prominences: Vec<f64>,
+    /// Index of the minimum between the peak and the nearest higher sample
+    /// (or window edge) on the left; the one nearest the peak on ties.
+    pub left_bases: Vec<usize>,
+    /// The same on the right.
+    pub right_bases: Vec<usize>,
+}
+
+/// Result of [`peak_widths`], one entry per peak.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Widths {
+    /// `right_ips - left_ips`, in samples.
+    pub widths: Vec<f64>,
+    /// `x[peak] - prominence * rel_height`.
+    pub width_heights: Vec<f64>,
+    /// Interpolated position where the signal crosses `width_heights` left
+    /// of the peak (or the left base), in samples.
+    pub left_ips: Vec<f64>,
+    /// The same on the right.
+    pub right_ips: Vec<f64>,
+}
+
+/// Settings of [`peak_widths`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PeakWidthsSettings {
+    /// Height at which the width is measured, as a fraction of the
+    /// prominence below the peak (>= 0): 0.5 is the width at half
+    /// prominence, 1.0 at the lowest contour line. Default 0.5.
+    pub rel_height: f64,
+    /// Window length for the prominence search, as
+    /// [`FindPeaksSettings::wlen`].
+    pub wlen: Option<f64>,
+}
+
+impl Default for PeakWidthsSettings {
+    fn default() -> Self {
+        PeakWidthsSettings {
+            rel_height: 0.5,
+            wlen: None,
+        }
+    }
+}
+
+fn retain_mask<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
+    debug_assert_eq!(v.len(), keep.len());
+    let mut k = keep.iter();
+    v.retain(|_| *k.next().unwrap_or(&false));
+}
+
+/// Rejects NaN and infinite samples; an empty signal is allowed.
+fn check_signal(x: &[f64]) -> Result<()> {
+    match x.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(DspError::NonFinite {
+            what: "x",
+            index,
+            value: x[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// `wlen` as SciPy's `_arg_wlen_as_expected`: `None` → no window, else
+/// `ceil(wlen)` which must be > 1. Returns the half window `wlen // 2`.
+fn half_window(wlen: Option<f64>) -> Result<Option<usize>> {
+    match wlen {
+        None => Ok(None),
+        Some(w) if w.is_finite() && w > 1.0 => {
+            // Saturating: any window longer than the signal is the whole signal.
+            let w = w.ceil().min(usize::MAX as f64) as usize;
+            Ok(Some(w / 2))
+        }
+        Some(w) => Err(invalid(
+            "wlen",
+            format!("must be a finite number larger than 1, was {w}"),
+        )),
+    }
+}
+
+fn check_rel_height(rel_height: f64) -> Result<()> {
+    if rel_height.is_finite() && rel_height >= 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(
+            "rel_height",
+            format!("must be finite and >= 0, was {rel_height}"),
+        ))
+    }
+}
+
+fn check_peaks(x: &[f64], peaks: &[usize]) -> Result<()> {
+    match peaks.iter().find(|&&p| p >= x.len()) {
+        Some(&p) => Err(invalid(
+            "peaks",
+            format!("peak {p} is not a valid index for x of length {}", x.len()),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Local maxima as SciPy's `_local_maxima_1d`: the midpoints, and
+/// `(position in midpoints, left_edge, right_edge)` for the flat ones (a
+/// strict maximum is its own edges).
+///
+/// Every sample is tested on its own (SciPy skips the samples right of a
+/// maximum, none of which can start one, so the results are equal): 64
+/// samples at a time into bit masks of strict maxima and plateau starts,
+/// branch-free, which matters on noise where a third of the samples are
+/// maxima; only plateau starts take SciPy's look-ahead.
+fn local_maxima(x: &[f64]) -> (Vec<usize>, Vec<(usize, usize, usize)>) {
+    let n = x.len();
+    if n < 3 {
+        return (Vec::new(), Vec::new());
+    }
+    let i_max = n - 1;
+    let mut mids = Vec::with_capacity(n / 2 + 1);
+    let mut flats = Vec::new();
+    let mut base = 1;
+    while base < i_max {
+        let end = (base + 64).min(i_max);
+        let (mut strict, mut flat) = (0u64, 0u64);
+        for (j, w) in x[base - 1..=end].windows(3).enumerate() {
+            let up = w[0] < w[1];
+            strict |= u64::from(up & (w[1] > w[2])) << j;
+            flat |= u64::from(up & (w[1] == w[2])) << j;
+        }
+        let mut bits = strict | flat;
+        while bits != 0 {
+            let j = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let i = base + j;
+            if (flat >> j) & 1 == 0 {
+                mids.push(i);
+            } else {
+                let b = x[i];
+                let mut ahead = i + 1;
+                while ahead < i_max && x[ahead] == b {
+                    ahead += 1;
+                }
+                if x[ahead] < b {
+                    flats.push((mids.len(), i, ahead - 1));
+                    mids.push((i + ahead - 1) / 2);
+                }
+            }
+        }
+        base = end;
+    }
+    (mids, flats)
+}
+
+/// `priority[a]` ranks above `priority[b]`: higher, or equal and later
+/// (NumPy `argsort(kind="stable")` walked from the end).
+#[inline]
+fn ranks_above(priority: &[f64], a: usize, b: usize) -> bool {
+    priority[a] > priority[b] || (priority[a] == priority[b] && a > b)
+}
+
+/// SciPy's `_select_by_peak_distance`: walk the peaks from the highest
+/// priority down; each one still kept removes its neighbours closer than
+/// `distance` samples.
+fn greedy_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec<bool> {
+    let n = peaks.len();
+    let mut keep = vec![true; n];
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_unstable_by(|&a, &b| priority[a].total_cmp(&priority[b]).then_with(|| a.cmp(&b)));
+    for &j in order.iter().rev() {
+        if !keep[j] {
+            continue;
+        }
+        let mut k = j;
+        while k > 0 && peaks[j] - peaks[k - 1] < distance {
+            keep[k - 1] = false;
+            k -= 1;
+        }
+        let mut k = j + 1;
+        while k < n && peaks[k] - peaks[j] < distance {
+            keep[k] = false;
+            k += 1;
+        }
+    }
+    keep
+}
+
+/// Mask of the peaks kept by the distance criterion, equal to
+/// [`greedy_distance`] but without sorting every peak.
+///
+/// A peak that ranks above every other peak closer than `distance` is kept
+/// by the greedy walk, and removes all those neighbours (found in O(k) with
+/// two sliding-window maxima). The peaks left undecided are farther than
+/// `distance` from every such peak, so only undecided peaks can remove each
+/// other: the greedy walk on them alone decides them as on the full set.
+fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec<bool> {
+    let k = peaks.len();
+    if distance <= 1 || k < 2 {
+        return vec![true; k];
+    }
+    // dominated[j]: some peak closer than `distance` ranks above j.
+    let mut dominated = vec![false; k];
+    let mut queue: Vec<usize> = Vec::with_capacity(64);
+    let mut head = 0;
+    for j in 0..k {
+        while head < queue.len() && peaks[j] - peaks[queue[head]] >= distance {
+            head += 1;
+        }
+        if head < queue.len() && ranks_above(priority, queue[head], j) {
+            dominated[j] = true;
+        }
+        while queue.len() > head && !ranks_above(priority, queue[queue.len() - 1], j) {
+            queue.pop();
+        }
+        queue.push(j);
+    }
+    queue.clear();
+    head = 0;
+    for j in (0..k).rev() {
+        while head < queue.len() && peaks[queue[head]] - peaks[j] >= distance {
+            head += 1;
+        }
+        if head < queue.len() && ranks_above(priority, queue[head], j) {
+            dominated[j] = true;
+        }
+        while queue.len() > head && !ranks_above(priority, queue[queue.len() - 1], j) {
+            queue.pop();
+        }
+        queue.push(j);
+    }
+    // 0 = undecided, 1 = kept, 2 = removed
+    let mut state = vec![0u8; k];
+    for j in 0..k {
+        if dominated[j] {
+            continue;
+        }
+        state[j] = 1;
+        let mut i = j;
+        while i > 0 && peaks[j] - peaks[i - 1] < distance {
+            state[i - 1] = 2;
+            i -= 1;
+        }
+        let mut i = j + 1;
+        while i < k && peaks[i] - peaks[j] < distance {
+            state[i] = 2;
+            i += 1;
+        }
+    }
+    let rest: Vec<usize> = (0..k).filter(|&j| state[j] == 0).collect();
+
+    if !rest.is_empty() {
+        let p: Vec<usize> = rest.iter().map(|&j| peaks[j]).collect();
+        let h: Vec<f64> = rest.iter().map(|&j| priority[j]).collect();
+        for (&j, kept) in rest.iter().zip(greedy_distance(&p, &h, distance)) {
+            state[j] = if kept { 1 } else { 2 };
+        }
+    }
+    state.iter().map(|&s| s == 1).collect()
+}
+
+/// Finds peaks of `x` that satisfy the criteria in `settings`, as
+/// `scipy.signal.find_peaks`.
+///
+/// The criteria apply in this order, each to the peaks that survived the
+/// previous ones (SciPy's order): `plateau_size`, `height`, `threshold`,
+/// `distance`, `prominence`, `width`. Prominences (and bases) are computed
+/// when `prominence` or `width` is given, after the distance criterion.
+///
+/// ```text
+/// threshold:   min <= min(x[p]-x[p-1], x[p]-x[p+1]),  max(...) <= max
+/// distance:    keep the highest peak, drop every peak closer than
+///              ceil(distance) samples to it, repeat with the next highest kept
+/// ```
+///
+/// An empty (or shorter than 3 samples) signal has no peaks; this is not an
+/// error (SciPy returns empty arrays).
+///
+/// # Errors
+/// [`DspError::NonFinite`] if `x` holds a NaN or infinity;
+/// [`DspError::InvalidSetting`] for `distance < 1` or non-finite, `wlen <= 1`
+/// or non-finite, `rel_height < 0` or non-finite, or a NaN in a bound.
+pub fn find_peaks(x: &[f64], settings: &FindPeaksSettings) -> Result<Peaks> {
+    check_signal(x)?;
+    let distance = match settings.distance {
+        None => None,
+        Some(d) if d.is_finite() && d >= 1.0 => Some(d.ceil().min(usize::MAX as f64) as usize),
+        Some(d) => {
+            return Err(invalid(
+                "distance",
+                format!("must be a finite number >= 1, was {d}"),
+            ))
+        }
+    };
+    let half = half_window(settings.wlen)?;
+    check_rel_height(settings.rel_height)?;
+    for (name, bound) in [
+        ("height", settings.height),
+        ("threshold", settings.threshold),
+        ("prominence", settings.prominence),
+        ("width", settings.width),
+        ("plateau_size", settings.plateau_size),
+    ] {
+        if let Some(b) = bound {
+            b.validate(name)?;
+        }
+    }
+
+    let (mut peaks, flats) = local_maxima(x);
+    let mut props = PeakProperties::default();
+    let mut keep: Vec<bool> = Vec::new();
+
+    if let Some(bound) = settings.plateau_size {
+        let (mut left_edges, mut right_edges) = (peaks.clone(), peaks.clone());
+        for &(k, l, r) in &flats {
+            left_edges[k] = l;
+            right_edges[k] = r;
+        }
+        let sizes: Vec<usize> = left_edges
+            .iter()
+            .zip(&right_edges)
+            .map(|(l, r)| r - l + 1)
+            .collect();
+        keep.clear();
+        keep.extend(sizes.iter().map(|&s| bound.contains(s as f64)));
+        props.plateau_sizes = Some(sizes);
+        props.left_edges = Some(left_edges);
+        props.right_edges = Some(right_edges);
+        apply(&mut peaks, &mut props, &keep);
+    }
+
+    if let Some(bound) = settings.height {
+        let heights: Vec<f64> = peaks.iter().map(|&p| x[p]).collect();
+        keep.clear();
+        keep.extend(heights.iter().map(|&h| bound.contains(h)));
+        props.peak_heights = Some(heights);
+        apply(&mut peaks, &mut props, &keep);
+    }
+
+    if let Some(bound) = settings.threshold {
+        let left: Vec<f64> = peaks.iter().map(|&p| x[p] - x[p - 1]).collect();
+        let right: Vec<f64> = peaks.iter().map(|&p| x[p] - x[p + 1]).collect();
+        keep.clear();
+        keep.extend(left.iter().zip(&right).map(|(&l, &r)| {
+            bound.min.is_none_or(|m| m <= l.min(r)) && bound.max.is_none_or(|m| l.max(r) <= m)
+        }));
+        props.left_thresholds = Some(left);
+        props.right_thresholds = Some(right);
+        apply(&mut peaks, &mut props, &keep);
+    }
+
+    if let Some(distance) = distance {
+        let heights: Vec<f64> = peaks.iter().map(|&p| x[p]).collect();
+        let keep = select_by_distance(&peaks, &heights, distance);
+        apply(&mut peaks, &mut props, &keep);
+    }
+
+    if settings.prominence.is_some() || settings.width.is_some() {
+        let prom = prominences_unchecked(x, &peaks, half);
+        props.prominences = Some(prom.prominences);
+        props.left_bases = Some(prom.left_bases);
+        props.right_bases = Some(prom.right_bases);
+    }
+
+    if let (Some(bound), Some(prom)) = (settings.prominence, &props.prominences) {
+        keep.clear();
+        keep.extend(prom.iter().map(|&p| bound.contains(p)));
+        apply(&mut peaks, &mut props, &keep);
+    }
+
+    if let (Some(bound), Some(prom), Some(lb), Some(rb)) = (
+        settings.width,
+        &props.prominences,
+        &props.left_bases,
+        &props.right_bases,
+    ) {
+        let w = widths_unchecked(x, &peaks, settings.rel_height, prom, lb, rb);
+        keep.clear();
+        keep.extend(w.widths.iter().map(|&v| bound.contains(v)));
+        props.widths = Some(w.widths);
+        props.width_heights = Some(w.width_heights);
+        props.left_ips = Some(w.left_ips);
+        props.right_ips = Some(w.right_ips);
+        apply(&mut peaks, &mut props, &keep);
+    }
+
+    Ok(Peaks {
+        indices: peaks,
+        properties: props,
+    })
+}
+
+fn apply(peaks: &mut Vec<usize>, props: &mut PeakProperties, keep: &[bool]) {
+    if keep.iter().all(|&k| k) {
+        return;
+    }
+    retain_mask(peaks, keep);
+    props.retain(keep);
+}
+
+/// Prominence of each peak, as `scipy.signal.peak_prominences`.
+///
+/// From each peak a horizontal line is extended left and right until it
+/// meets a strictly higher sample or the window edge; the lowest sample on
+/// each side (the one nearest the peak on ties) is that side's base:
+///
+/// ```text
+/// prominence = x[peak] - max(x[left_base], x[right_base])
+/// window     = [peak - wlen/2, peak + wlen/2] ∩ [0, n-1],  wlen = ceil(wlen)
+/// ```
+///
+/// `peaks` need not be local maxima, sorted or unique (a sample that is not
+/// a maximum gets prominence 0 and itself as bases, SciPy warns). SciPy
+/// scans sample by sample up to the next higher sample, O(n) per peak on a
+/// periodic signal; here each search steps over blocks of 16, 256, ...
+/// samples (O(n) to build, O(log n) per peak) visiting them in SciPy's
+/// order, so the results are identical.
+///
+/// ```
+/// use ballpass_dsp::peak_prominences;
+/// let x = [0.0, 1.0, 0.0, 3.0, 1.0, 3.0, 0.0, 4.0, 0.0];
+/// let p = peak_prominences(&x, &[5], None)?;
+/// assert_eq!((p.prominences[0], p.left_bases[0], p.right_bases[0]), (3.0, 2, 6));
+/// let p = peak_prominences(&x, &[5], Some(3.1))?;
+/// assert_eq!((p.prominences[0], p.left_bases[0], p.right_bases[0]), (2.0, 4, 6));
+/// # Ok::<(), ballpass_dsp::DspError>(())
+/// ```
+///
+/// # Errors
+/// [`DspError::NonFinite`] for a NaN or infinity in `x`;
+/// [`DspError::InvalidSetting`] for a peak index `>= x.len()` or
+/// `wlen <= 1` (or non-finite).
+pub fn peak_prominences(x: &[f64], peaks: &[usize], wlen: Option<f64>) -> Result<Prominences> {
+    check_signal(x)?;
+    check_peaks(x, peaks)?;
+    let half = half_window(wlen)?;
+    Ok(prominences_unchecked(x, peaks, half))
+}
+
+/// Prominences with validated input; `half` is `wlen // 2`.
+fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Prominences {
+    let k = peaks.len();
+    let mut out = Prominences {
+        prominences: Vec::with_capacity(k),
+        left_bases: Vec::with_capacity(k),
+        right_bases: Vec::with_capacity(k),
+    };
+    if k == 0 {
+        return out;
+    }
+    let n = x.len();
+    let h = half.unwrap_or(n).min(n);
+    let window = |p: usize| (p.saturating_sub(h), (p + h).min(n - 1));
+    if k.saturating_mul(2 * h + 1) < n {
+        // Short windows: SciPy's scans are cheaper than building the tree.
+        for &p in peaks {
+            let (lo, hi) = window(p);
+            let (lmin, lb) = scan_left(x, p, lo);
+            let (rmin, rb) = scan_right(x, p, hi);
+            out.prominences.push(x[p] - lmin.max(rmin));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
+        }
+    } else {
+        let tree = MinMaxTree::new(x);
+        for &p in peaks {
+            let (lo, hi) = window(p);
+            let (lmin, lb) = tree.base_left(p, lo);
+            let (rmin, rb) = tree.base_right(p, hi);
+            out.prominences.push(x[p] - lmin.max(rmin));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
+        }
+    }
+    out
+}
+
+/// SciPy's left base scan over `[lo, p]`: minimum (nearest `p` on ties) of
+/// the samples before the first one higher than `x[p]`.
+fn scan_left(x: &[f64], p: usize, lo: usize) -> (f64, usize) {
+    let xp = x[p];
+    let (mut vmin, mut base) = (xp, p);
+    for i in (lo..=p).rev() {
+        let v = x[i];
+        if v > xp {
+            break;
+        }
+        if v < vmin {
+            vmin = v;
+            base = i;
+        }
+    }
+    (vmin, base)
+}
+
+/// SciPy's right base scan over `[p, hi]`.
+fn scan_right(x: &[f64], p: usize, hi: usize) -> (f64, usize) {
+    let xp = x[p];
+    let (mut vmin, mut base) = (xp, p);
+    for (i, &v) in x.iter().enumerate().take(hi + 1).skip(p) {
+        if v > xp {
+            break;
+        }
+        if v < vmin {
+            vmin = v;
+            base = i;
+        }
+    }
+    (vmin, base)
+}
+
+/// log2 of the branching factor of [`MinMaxTree`].
+const TREE_SHIFT: usize = 4;
+/// Branching factor of [`MinMaxTree`]: units of 16, 256, 4096... samples.
+const TREE_B: usize = 1 << TREE_SHIFT;
+
+/// Maximum and minimum of `x` over units of `B^l` samples (level `l >= 1`;
+/// level 0 is `x` itself), so that the base searches step over whole units
+/// that hold no sample above the peak. Each search costs O(B log_B n)
+/// instead of SciPy's O(distance to the next higher sample), and visits the
+/// samples in SciPy's order with the same strict `<`, so bases and ties are
+/// identical.
+struct MinMaxTree<'a> {
+    x: &'a [f64],
+    /// `levels[l - 1] = (max, min)` per unit of level `l`.
+    levels: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+impl<'a> MinMaxTree<'a> {
+    fn new(x: &'a [f64]) -> Self {
+        fn reduce(mx: &[f64], mn: &[f64]) -> (Vec<f64>, Vec<f64>) {
+            let fmax = |c: &[f64]| c.iter().fold(c[0], |m, &v| if v > m { v } else { m });
+            let fmin = |c: &[f64]| c.iter().fold(c[0], |m, &v| if v < m { v } else { m });
+            (
+                mx.chunks(TREE_B).map(fmax).collect(),
+                mn.chunks(TREE_B).map(fmin).collect(),
+            )
+        }
+        let mut levels: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        if x.len() > TREE_B {
+            levels.push(reduce(x, x));
+            while let Some((mx, mn)) = levels.last().filter(|(mx, _)| mx.len() > TREE_B) {
+                let next = reduce(mx, mn);
+                levels.push(next);
+            }
+        }
+        MinMaxTree { x, levels }
+    }
+
+    #[inline]
+    fn count(&self, l: usize) -> usize {
+        if l == 0 {
+            self.x.len()
+        } else {
+            self.levels[l - 1].0.len()
+        }
+    }
+
+    #[inline]
+    fn max(&self, l: usize, u: usize) -> f64 {
+        if l == 0 {
+            self.x[u]
+        } else {
+            self.levels[l - 1].0[u]
+        }
+    }
+
+    #[inline]
+    fn min(&self, l: usize, u: usize) -> f64 {
+        if l == 0 {
+            self.x[u]
+        } else {
+            self.levels[l - 1].1[u]
+        }
+    }
+
+    /// First and last sample of unit `u` of level `l`.
+    #[inline]
+    fn span(&self, l: usize, u: usize) -> (usize, usize) {
+        let start = u << (TREE_SHIFT * l);
+        let end = ((u + 1) << (TREE_SHIFT * l)).min(self.x.len()) - 1;
+        (start, end)
+    }
+
+    /// [`scan_left`] over `[lo, p]`.
+    fn base_left(&self, p: usize, lo: usize) -> (f64, usize) {
+        let xp = self.x[p];
+        let mut vmin = xp;
+        let mut hit = (0, p);
+        let top = self.levels.len();
+        // Ascend: samples [span(l, u).0, p] are done; take units leftwards,
+        // moving up a level whenever u starts its parent.
+        let (mut l, mut u) = (0, p);
+        let mut stop = loop {
+            if self.span(l, u).0 <= lo {
+                break None;
+            }
+            if u % TREE_B == 0 && l < top {
+                u /= TREE_B;
+                l += 1;
+                continue;
+            }
+            let c = u - 1;
+            if self.span(l, c).0 < lo || self.max(l, c) > xp {
+                break Some((l, c));
+            }
+            let m = self.min(l, c);
+            if m < vmin {
+                vmin = m;
+                hit = (l, c);
+            }
+            u = c;
+        };
+        // Descend into the unit holding the higher sample or `lo`.
+        'outer: while let Some((l, c)) = stop {
+            if l == 0 {
+                break;
+            }
+            let cl = l - 1;
+            let first = c * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            for ch in (first..=last).rev() {
+                let (start, end) = self.span(cl, ch);
+                if end < lo {
+                    break 'outer;
+                }
+                if start < lo || self.max(cl, ch) > xp {
+                    stop = Some((cl, ch));
+                    continue 'outer;
+                }
+                let m = self.min(cl, ch);
+                if m < vmin {
+                    vmin = m;
+                    hit = (cl, ch);
+                }
+            }
+            break;
+        }
+        // The base is the rightmost sample equal to vmin in the unit hit.
+        let (mut l, mut u) = hit;
+        while l > 0 {
+            let cl = l - 1;
+            let first = u * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            u = (first..=last)
+                .rev()
+                .find(|&ch| self.min(cl, ch) == vmin)
+                .expect("a unit's minimum is one of its children's");
+            l = cl;
+        }
+        (vmin, u)
+    }
+
+    /// [`scan_right`] over `[p, hi]`, the mirror image of [`Self::base_left`].
+    fn base_right(&self, p: usize, hi: usize) -> (f64, usize) {
+        let xp = self.x[p];
+        let mut vmin = xp;
+        let mut hit = (0, p);
+        let top = self.levels.len();
+        let (mut l, mut u) = (0, p);
+        let mut stop = loop {
+            if self.span(l, u).1 >= hi {
+                break None;
+            }
+            if (u + 1) % TREE_B == 0 && l < top {
+                u /= TREE_B;
+                l += 1;
+                continue;
+            }
+            let c = u + 1;
+            if self.span(l, c).1 > hi || self.max(l, c) > xp {
+                break Some((l, c));
+            }
+            let m = self.min(l, c);
+            if m < vmin {
+                vmin = m;
+                hit = (l, c);
+            }
+            u = c;
+        };
+        'outer: while let Some((l, c)) = stop {
+            if l == 0 {
+                break;
+            }
+            let cl = l - 1;
+            let first = c * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            for ch in first..=last {
+                let (start, end) = self.span(cl, ch);
+                if start > hi {
+                    break 'outer;
+                }
+                if end > hi || self.max(cl, ch) > xp {
+                    stop = Some((cl, ch));
+                    continue 'outer;
+                }
+                let m = self.min(cl, ch);
+                if m < vmin {
+                    vmin = m;
+                    hit = (cl, ch);
+                }
+            }
+            break;
+        }
+        let (mut l, mut u) = hit;
+        while l > 0 {
+            let cl = l - 1;
+            let first = u * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            u = (first..=last)
+                .find(|&ch| self.min(cl, ch) == vmin)
+                .expect("a unit's minimum is one of its children's");
+            l = cl;
+        }
+        (vmin, u)
+    }
+}
+
+/// Width of each peak at `rel_height` of its prominence, as
+/// `scipy.signal.peak_widths`; prominences are computed with
+/// `settings.wlen` (see [`peak_prominences`]).
+///
+/// ```text
+/// width_height = x[peak] - prominence * rel_height
+/// left_ip      = i + (width_height - x[i]) / (x[i+1] - x[i])
+///                (i: first sample left of the peak not above width_height,
+///                 or the left base; no interpolation at the base or if
+///                 x[i] == width_height)
+/// right_ip     = mirror image;   width = right_ip - left_ip   (samples)
+/// ```
+///
+/// ```
+/// use ballpass_dsp::{peak_widths, PeakWidthsSettings};
+/// let x = [0.0, 1.0, 2.0, 1.0, 0.0];
+/// let w = peak_widths(&x, &[2], &PeakWidthsSettings::default())?;
+/// assert_eq!((w.widths[0], w.width_heights[0], w.left_ips[0], w.right_ips[0]), (2.0, 1.0, 1.0, 3.0));
+/// # Ok::<(), ballpass_dsp::DspError>(())
+/// ```
+///
+/// # Errors
+/// As [`peak_prominences`], and [`DspError::InvalidSetting`] for
+/// `rel_height < 0` or non-finite.
+pub fn peak_widths(x: &[f64], peaks: &[usize], settings: &PeakWidthsSettings) -> Result<Widths> {
+    check_rel_height(settings.rel_height)?;
+    let prom = peak_prominences(x, peaks, settings.wlen)?;
+    Ok(widths_unchecked(
+        x,
+        peaks,
+        settings.rel_height,
+        &prom.prominences,
+        &prom.left_bases,
+        &prom.right_bases,
+    ))
+}
+
+/// [`peak_widths`] with prominence data computed beforehand (SciPy's
+/// `prominence_data` argument), e.g. from [`find_peaks`].
+///
+/// # Errors
+/// [`DspError::NonFinite`] for a NaN or infinity in `x`;
+/// [`DspError::LengthMismatch`] if the arrays of `prominences` are not as
+/// long as `peaks`; [`DspError::InvalidSetting`] unless
+/// `0 <= left_base <= peak <= right_base < x.len()` and the prominence is
+/// finite and >= 0 for every peak (SciPy reads out of bounds on a negative
+/// prominence at the signal's edge), or for `rel_height < 0` or non-finite.
+pub fn peak_widths_with_prominences(
+    x: &[f64],
+    peaks: &[usize],
+    rel_height: f64,
+    prominences: &Prominences,
+) -> Result<Widths> {
+    check_signal(x)?;
+    check_rel_height(rel_height)?;
+    for (what, len) in [
+        ("peaks and prominences", prominences.prominences.len()),
+        ("peaks and left_bases", prominences.left_bases.len()),
+        ("peaks and right_bases", prominences.right_bases.len()),
+    ] {
+        if len != peaks.len() {
+            return Err(DspError::LengthMismatch {
+                what,
+                expected: peaks.len(),
+                found: len,
+            });
+        }
+    }
+    for (i, &p) in peaks.iter().enumerate() {
+        let (lb, rb, pr) = (
+            prominences.left_bases[i],
+            prominences.right_bases[i],
+            prominences.prominences[i],
+        );
+        if !(lb <= p && p <= rb && rb < x.len()) {
+            return Err(invalid(
+                "prominences",
+                format!(
+                    "bases ({lb}, {rb}) are invalid for peak {p} in x of length {}",
+                    x.len()
+                ),
+            ));
+        }
+        if !(pr.is_finite() && pr >= 0.0) {
+            return Err(invalid(
+                "prominences",
+                format!("prominence {pr} of peak {p} is not finite and >= 0"),
+            ));
+        }
+    }
+    Ok(widths_unchecked(
+        x,
+        peaks,
+        rel_height,
+        &prominences.prominences,
+        &prominences.left_bases,
+        &prominences.right_bases,
+    ))
+}
+
+/// SciPy's `_peak_widths` on validated input (bases bracket the peak,
+/// prominence >= 0, so `x[peak] >= height` and the neighbours read exist).
+fn widths_unchecked(
+    x: &[f64],
+    peaks: &[usize],
+    rel_height: f64,
+    prominences: &[f64],
+    left_bases: &[usize],
+    right_bases: &[usize],
+) -> Widths {
+    let k = peaks.len();
+    let mut out = Widths {
+        widths: Vec::with_capacity(k),
+        width_heights: Vec::with_capacity(k),
+        left_ips: Vec::with_capacity(k),
+        right_ips: Vec::with_capacity(k),
+    };
+    for (j, &peak) in peaks.iter().enumerate() {
+        let (i_min, i_max) = (left_bases[j], right_bases[j]);
+        let height = x[peak] - prominences[j] * rel_height;
+
+        let mut i = peak;
+        while i_min < i && height < x[i] {
+            i -= 1;
+        }
+        let mut left_ip = i as f64;
+        if x[i] < height && x[i + 1] != x[i] {
+            left_ip += (height - x[i]) / (x[i + 1] - x[i]);
+        }
+
+        let mut i = peak;
+        while i < i_max && height < x[i] {
+            i += 1;
+        }
+        let mut right_ip = i as f64;
+        if x[i] < height && x[i - 1] != x[i] {
+            right_ip -= (height - x[i]) / (x[i - 1] - x[i]);
+        }
+
+        out.widths.push(right_ip - left_ip);
+        out.width_heights.push(height);
+        out.left_ips.push(left_ip);
+        out.right_ips.push(right_ip);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SciPy's scan, the reference for the tree search.
+    fn naive(x: &[f64], peaks: &[usize], half: usize) -> Prominences {
+        let mut out = Prominences::default();
+        for &p in peaks {
+            let (l, lb) = scan_left(x, p, p.saturating_sub(half));
+            let (r, rb) = scan_right(x, p, (p + half).min(x.len() - 1));
+            out.prominences.push(x[p] - l.max(r));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
+        }
+        out
+    }
+
+    fn lcg_levels(s: &mut u64, len: usize, levels: u64) -> Vec<f64> {
+        (0..len)
+            .map(|_| {
+                *s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((*s >> 33) % levels) as f64
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tree_search_matches_scipy_scan_with_ties_and_windows() {
+        // Small integer alphabets => many equal values (the hard case for
+        // ties); lengths across several tree levels; a random walk for long
+        // searches.
+        let mut s = 12345u64;
+        for len in (1..80).chain([255, 256, 257, 1000, 4097, 5000]) {
+            for levels in [2, 4, 1000] {
+                let mut x = lcg_levels(&mut s, len, levels);
+                if levels == 1000 {
+                    for i in 1..len {
+                        x[i] = x[i - 1] + x[i] - 499.5;
+                    }
+                }
+                // every index (or a stride), unsorted, with a duplicate
+                let step = 1 + len / 300;
+                let mut peaks: Vec<usize> = (0..len).rev().step_by(step).collect();
+                peaks.push(len / 2);
+                for half in [len, 1, 7, 100] {
+                    let tree = MinMaxTree::new(&x);
+                    let mut fast = Prominences::default();
+                    for &p in &peaks {
+                        let (l, lb) = tree.base_left(p, p.saturating_sub(half));
+                        let (r, rb) = tree.base_right(p, (p + half).min(len - 1));
+                        fast.prominences.push(x[p] - l.max(r));
+                        fast.left_bases.push(lb);
+                        fast.right_bases.push(rb);
+                    }
+                    assert_eq!(
+                        fast,
+                        naive(&x, &peaks, half),
+                        "len {len} levels {levels} half {half}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn distance_selection_matches_the_greedy_walk() {
+        let mut s = 777u64;
+        for len in [3, 10, 50, 300, 3000] {
+            for levels in [2, 5, 1000] {
+                let x = lcg_levels(&mut s, len, levels);
+                let (peaks, _) = local_maxima(&x);
+                let h: Vec<f64> = peaks.iter().map(|&p| x[p]).collect();
+                for d in [1, 2, 3, 5, 17, 100, 10_000] {
+                    assert_eq!(
+                        select_by_distance(&peaks, &h, d),
+                        greedy_distance(&peaks, &h, d),
+                        "len {len} levels {levels} d {d}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn flat_peaks_report_middle_rounded_down_and_edges() {
+        let x = [0.0, 1.0, 1.0, 0.0, 2.0, 2.0, 2.0, 0.0, 3.0, 3.0];
+        let x2 = [0.0, 2.0, 1.0, 1.0, 3.0, 0.0];
+        assert_eq!(local_maxima(&x), (vec![1, 5], vec![(0, 1, 2), (1, 4, 6)]));
+        assert_eq!(local_maxima(&x2), (vec![1, 4], vec![]));
+    }
+
+    #[test]
+    fn distance_ties_keep_the_later_peak() {
+        let x = [0.0, 1.0, 0.0, 1.0, 0.0];
+        let s = FindPeaksSettings {
+            distance: Some(3.0),
+            ..Default::default()
+        };
+        assert_eq!(find_peaks(&x, &s).unwrap().indices, [3]);
+    }
+
+    #[test]
+    fn bad_settings_are_errors() {
+        let x = [0.0, 1.0, 0.0];
+        let bad = [
+            FindPeaksSettings {
+                distance: Some(0.5),
+                ..Default::default()
+            },
+            FindPeaksSettings {
+                wlen: Some(1.0),
+                ..Default::default()
+            },
+            FindPeaksSettings {
+                rel_height: -0.1,
+                ..Default::default()
+            },
+            FindPeaksSettings {
+                height: Some(Bound::at_least(f64::NAN)),
+                ..Default::default()
+            },
+        ];
+        for s in bad {
+            assert!(matches!(
+                find_peaks(&x, &s),
+                Err(DspError::InvalidSetting { .. })
+            ));
+        }
+        assert!(matches!(
+            find_peaks(&[0.0, f64::NAN, 0.0], &FindPeaksSettings::default()),
+            Err(DspError::NonFinite { index: 1, .. })
+        ));
+        assert!(peak_prominences(&x, &[3], None).is_err());
+        let prom = Prominences {
+            prominences: vec![-1.0],
+            left_bases: vec![0],
+            right_bases: vec![2],
+        };
+        assert!(peak_widths_with_prominences(&x, &[2], 0.5, &prom).is_err());
+    }
+
+    #[test]
+    fn empty_and_tiny_signals_have_no_peaks() {
+        let s = FindPeaksSettings {
+            prominence: Some(Bound::any()),
+            width: Some(Bound::any()),
+            ..Default::default()
+        };
+        for x in [&[][..], &[1.0], &[1.0, 2.0]] {
+            let p = find_peaks(x, &s).unwrap();
+            assert!(p.indices.is_empty());
+            assert_eq!(p.properties.widths, Some(vec![]));
+        }
+    }
+}

@@ -1,0 +1,385 @@
+//! Delimited text (CSV, TSV) with a header row.
+//!
+//! - The first line that is neither blank nor a `#` comment is the header;
+//!   later `#` lines and blank lines are skipped. A UTF-8 byte-order mark
+//!   (as Excel writes) is ignored.
+//! - Column names match ignoring case and surrounding spaces: `time_s`,
+//!   `friction_N`, `position_mm`, `optical_V`, or the names in
+//!   [`LoadOptions`]. Other columns are ignored.
+//! - The delimiter is [`LoadOptions::delimiter`], a tab for [`Format::Tsv`],
+//!   else whichever of `,` `;` tab occurs most in the header line.
+//! - Every row must have as many fields as the header, and every cell of a
+//!   used column must be a finite number (`1.5`, `-2e-3`, `inf` is rejected).
+//!
+//! Errors name the file, the 1-based line and the column.
+
+use std::path::Path;
+
+use super::{Format, LoadOptions, Locator, RawColumn, RawTable};
+use crate::error::{Error, Result};
+use crate::recording::Channel;
+
+/// Canonical name of the time column.
+pub const TIME_COLUMN: &str = "time_s";
+
+/// The header and first data rows of a text file, for `inspect` and messages.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Header {
+    /// Column names as written (trimmed).
+    pub columns: Vec<String>,
+    /// Delimiter used.
+    pub delimiter: u8,
+    /// 1-based line of the header.
+    pub line: u64,
+}
+
+/// Parses a text recording held in memory.
+pub(crate) fn parse(
+    path: &Path,
+    bytes: &[u8],
+    format: Format,
+    opts: &LoadOptions,
+) -> Result<RawTable> {
+    let (mut rdr, header) = open(path, bytes, format, opts.delimiter)?;
+    let delimiter = header.delimiter;
+    let mut record = ::csv::ByteRecord::new();
+    let csv_err = |e: ::csv::Error| csv_error(path, e);
+    let plan = Plan::new(path, &header, opts)?;
+
+    let n_est = bytes.len() / (header.columns.len() * 8 + 1);
+    let mut time_vals: Vec<f64> = Vec::with_capacity(if plan.time.is_some() { n_est } else { 0 });
+    let mut chan_vals: Vec<Vec<f64>> = plan
+        .channels
+        .iter()
+        .map(|_| Vec::with_capacity(n_est))
+        .collect();
+    let mut lines: Vec<u64> = Vec::with_capacity(n_est);
+    let mut time_decimals: i32 = i32::MIN;
+    let ncols = header.columns.len();
+    while rdr.read_byte_record(&mut record).map_err(csv_err)? {
+        let line = record.position().map(|p| p.line()).unwrap_or(0);
+        if record.len() != ncols {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                line: line as usize,
+                column: None,
+                reason: format!(
+                    "{} field(s), but the header (line {}) has {ncols}; rows must all have \
+                     as many fields as the header",
+                    record.len(),
+                    header.line
+                ),
+            });
+        }
+        let cell_err = |idx: usize, reason: String| Error::Parse {
+            path: path.to_path_buf(),
+            line: line as usize,
+            column: Some(header.columns[idx].clone()),
+            reason,
+        };
+        if let Some(ti) = plan.time {
+            let cell = record[ti].trim_ascii();
+            time_vals.push(parse_number(cell, delimiter).map_err(|r| cell_err(ti, r))?);
+            time_decimals = time_decimals.max(decimals(cell));
+        }
+        for (k, &(_, idx)) in plan.channels.iter().enumerate() {
+            let cell = record[idx].trim_ascii();
+            chan_vals[k].push(parse_number(cell, delimiter).map_err(|r| cell_err(idx, r))?);
+        }
+        lines.push(line);
+    }
+    if lines.is_empty() {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            reason: format!(
+                "header (line {}) but no data rows; expected one row of numbers per sample",
+                header.line
+            ),
+        });
+    }
+    let time = plan.time.map(|ti| RawColumn {
+        name: header.columns[ti].clone(),
+        values: time_vals,
+        resolution: if time_decimals == i32::MIN {
+            0.0
+        } else {
+            0.5 * 10f64.powi(-time_decimals.clamp(-300, 300))
+        },
+    });
+    let channels = plan
+        .channels
+        .iter()
+        .zip(chan_vals)
+        .map(|(&(c, idx), values)| {
+            (
+                c,
+                RawColumn {
+                    name: header.columns[idx].clone(),
+                    values,
+                    resolution: 0.0,
+                },
+            )
+        })
+        .collect();
+    Ok(RawTable {
+        time,
+        channels,
+        locator: Locator::Lines(lines),
+    })
+}
+
+/// Reads the header of a text recording (for `inspect` and error hints).
+///
+/// # Errors
+/// As [`super::load`] for an empty or binary file or a malformed first row.
+pub fn read_header(
+    path: &Path,
+    bytes: &[u8],
+    format: Format,
+    delimiter: Option<u8>,
+) -> Result<Header> {
+    open(path, bytes, format, delimiter).map(|(_, h)| h)
+}
+
+/// Checks that `bytes` is text, picks the delimiter, and reads the header row.
+fn open<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+    format: Format,
+    delimiter: Option<u8>,
+) -> Result<(::csv::Reader<&'a [u8]>, Header)> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    check_text(path, bytes)?;
+    let delimiter = delimiter.unwrap_or_else(|| match format {
+        Format::Tsv => b'\t',
+        _ => sniff_delimiter(bytes),
+    });
+    let mut rdr = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .comment(Some(b'#'))
+        .delimiter(delimiter)
+        .from_reader(bytes);
+    let mut record = ::csv::ByteRecord::new();
+    if !rdr
+        .read_byte_record(&mut record)
+        .map_err(|e| csv_error(path, e))?
+    {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            reason: "no header row (the file holds only comments or blank lines); expected \
+                     a header such as time_s,friction_N,position_mm,optical_V"
+                .into(),
+        });
+    }
+    let header = Header {
+        columns: record
+            .iter()
+            .map(|f| String::from_utf8_lossy(f.trim_ascii()).into_owned())
+            .collect(),
+        delimiter,
+        line: record.position().map(|p| p.line()).unwrap_or(1),
+    };
+    Ok((rdr, header))
+}
+
+fn csv_error(path: &Path, e: ::csv::Error) -> Error {
+    let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+    Error::Parse {
+        path: path.to_path_buf(),
+        line,
+        column: None,
+        reason: e.to_string(),
+    }
+}
+
+/// Which header column feeds what.
+struct Plan {
+    time: Option<usize>,
+    channels: Vec<(Channel, usize)>,
+}
+
+impl Plan {
+    fn new(path: &Path, header: &Header, opts: &LoadOptions) -> Result<Self> {
+        let find = |name: &str| -> Result<Option<usize>> {
+            let mut hits = header
+                .columns
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.eq_ignore_ascii_case(name.trim()))
+                .map(|(i, _)| i);
+            let first = hits.next();
+            if first.is_some() && hits.next().is_some() {
+                return Err(Error::Parse {
+                    path: path.to_path_buf(),
+                    line: header.line as usize,
+                    column: Some(name.to_string()),
+                    reason: "column name appears more than once in the header".into(),
+                });
+            }
+            Ok(first)
+        };
+        let missing = |what: &str, name: &str| Error::Parse {
+            path: path.to_path_buf(),
+            line: header.line as usize,
+            column: None,
+            reason: format!(
+                "no column '{name}' for {what}; the header has: {}",
+                header.columns.join(", ")
+            ),
+        };
+        let time = match (&opts.time, opts.ignore_time) {
+            (_, true) => None,
+            (Some(name), false) => Some(find(name)?.ok_or_else(|| missing("time", name))?),
+            (None, false) => find(TIME_COLUMN)?,
+        };
+        let mut channels = Vec::new();
+        for c in Channel::ALL {
+            match &opts.source(c).name {
+                Some(name) => {
+                    let idx = find(name)?.ok_or_else(|| missing(c.column_name(), name))?;
+                    channels.push((c, idx));
+                }
+                None => {
+                    if let Some(idx) = find(c.column_name())? {
+                        channels.push((c, idx));
+                    }
+                }
+            }
+        }
+        if channels.is_empty() {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                line: header.line as usize,
+                column: None,
+                reason: format!(
+                    "no channel column found; expected friction_N, position_mm or optical_V \
+                     (or a mapped name); the header has: {}",
+                    header.columns.join(", ")
+                ),
+            });
+        }
+        for (k, &(c, idx)) in channels.iter().enumerate() {
+            let clash = channels[..k]
+                .iter()
+                .find(|&&(_, j)| j == idx)
+                .map(|&(o, _)| o.column_name())
+                .or_else(|| (time == Some(idx)).then_some("time"));
+            if let Some(other) = clash {
+                return Err(Error::setting(
+                    format!("{} column", c.short_name()),
+                    format!(
+                        "column '{}' is already used for {other}",
+                        header.columns[idx]
+                    ),
+                ));
+            }
+        }
+        Ok(Self { time, channels })
+    }
+}
+
+/// Rejects binary files early, saying what they look like.
+fn check_text(path: &Path, bytes: &[u8]) -> Result<()> {
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            reason: "file is empty; expected a header row such as \
+                     time_s,friction_N,position_mm,optical_V and rows of numbers"
+                .into(),
+        });
+    }
+    let head = &bytes[..bytes.len().min(4096)];
+    if head.starts_with(b"MATLAB") {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            reason: "this is a MATLAB MAT-file, not text: name it .mat or read it as format mat"
+                .into(),
+        });
+    }
+    if head.starts_with(b"\x89HDF\r\n\x1a\n") || head.contains(&0) {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            reason: "binary file, not delimited text; expected a CSV/TSV header row".into(),
+        });
+    }
+    Ok(())
+}
+
+/// The most frequent of `,` `;` tab in the header line (`,` when none).
+fn sniff_delimiter(bytes: &[u8]) -> u8 {
+    let header = bytes
+        .split(|&b| b == b'\n')
+        .map(<[u8]>::trim_ascii)
+        .find(|l| !l.is_empty() && !l.starts_with(b"#"))
+        .unwrap_or(b"");
+    let count = |d: u8| header.iter().filter(|&&b| b == d).count();
+    [b',', b'\t', b';']
+        .into_iter()
+        .max_by_key(|&d| (count(d), d == b','))
+        .filter(|&d| count(d) > 0)
+        .unwrap_or(b',')
+}
+
+/// Parses one cell as a finite `f64`.
+fn parse_number(cell: &[u8], delimiter: u8) -> std::result::Result<f64, String> {
+    if cell.is_empty() {
+        return Err("empty cell; expected a number".into());
+    }
+    let text = std::str::from_utf8(cell)
+        .map_err(|_| format!("'{}' is not a number", String::from_utf8_lossy(cell)))?;
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(_) => Err(format!("'{text}' is not a finite number")),
+        Err(_) => {
+            let hint = if delimiter != b',' && text.contains(',') {
+                " (decimal commas are not supported: use '.' as decimal point)"
+            } else {
+                ""
+            };
+            Err(format!("'{text}' is not a number{hint}"))
+        }
+    }
+}
+
+/// Digits after the decimal point of a printed number, minus its exponent
+/// (`0.0125` → 4, `1.25e-2` → 4, `12` → 0, `1e3` → -3).
+fn decimals(cell: &[u8]) -> i32 {
+    let (mantissa, exp) = match cell.iter().position(|&b| b == b'e' || b == b'E') {
+        Some(p) => (
+            &cell[..p],
+            std::str::from_utf8(&cell[p + 1..])
+                .ok()
+                .and_then(|s| s.parse::<i32>().ok())
+                .unwrap_or(0),
+        ),
+        None => (cell, 0),
+    };
+    let frac = match mantissa.iter().position(|&b| b == b'.') {
+        Some(p) => (mantissa.len() - p - 1) as i32,
+        None => 0,
+    };
+    frac.saturating_sub(exp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimals_count_printed_precision() {
+        assert_eq!(decimals(b"0.0125"), 4);
+        assert_eq!(decimals(b"1.25e-2"), 4);
+        assert_eq!(decimals(b"12"), 0);
+        assert_eq!(decimals(b"1e3"), -3);
+        assert_eq!(decimals(b"-3.5E+1"), 0);
+    }
+
+    #[test]
+    fn delimiter_is_sniffed_from_the_header_line() {
+        assert_eq!(sniff_delimiter(b"# c,o,m\na\tb\tc\n1\t2\t3\n"), b'\t');
+        assert_eq!(sniff_delimiter(b"a;b;c\n1,5;2;3\n"), b';');
+        assert_eq!(sniff_delimiter(b"a,b\n"), b',');
+        assert_eq!(sniff_delimiter(b"a\n1\n"), b',');
+    }
+}

@@ -1,0 +1,264 @@
+//! Sampling rate from a time column, and the uniform-sampling check.
+//!
+//! A time column `t[0..n]` is accepted when every step `t[i] - t[i-1]` is
+//! positive and close to the median step `h`:
+//!
+//! ```text
+//! |t[i] - t[i-1] - h| <= tol * h + min(2 r, h / 2)       (tol = 1e-3 by default)
+//! r = (half a unit of the last printed digit of the time column) + 4 eps max|t|
+//! ```
+//!
+//! The `2 r` term lets through the rounding of a printed time (3 kHz printed
+//! with 4 decimals steps by 0.0003 and 0.0004); it is capped at half a step so
+//! that a missing sample (a step of `2 h`) is always caught.
+//!
+//! The rate is then taken from the whole span, which is more accurate than the
+//! median step by a factor `n - 1`:
+//!
+//! ```text
+//! fs = (n - 1) / (t[n-1] - t[0])
+//! ```
+//!
+//! snapped to the decimal with the fewest significant digits whose span
+//! `(n - 1) / fs` is within `2 r` of the observed span: a column printed from
+//! `i / 1000` gives exactly `1000.0`, not `999.9999999999999`.
+
+/// Default largest relative deviation of one step from the median step.
+pub const DEFAULT_STEP_TOLERANCE: f64 = 1e-3;
+
+/// What a valid time column gives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Timebase {
+    /// Sampling rate, Hz.
+    pub fs_hz: f64,
+    /// Time of the first sample, s.
+    pub start_time_s: f64,
+    /// Median step, s.
+    pub median_step_s: f64,
+}
+
+/// Where a time column is wrong and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeError {
+    /// 0-based index of the offending sample.
+    pub index: usize,
+    /// What was found and what was expected.
+    pub reason: String,
+}
+
+fn err(index: usize, reason: String) -> TimeError {
+    TimeError { index, reason }
+}
+
+fn rounding(times: &[f64], resolution: f64) -> f64 {
+    let tmax = times.iter().fold(0.0_f64, |m, t| m.max(t.abs()));
+    resolution.max(0.0) + 4.0 * f64::EPSILON * tmax
+}
+
+/// Checks that `times` is uniformly sampled and derives the rate.
+///
+/// `resolution` is half a unit of the last printed digit of the times
+/// (0 for binary data); `step_tolerance` is relative to the median step.
+///
+/// # Errors
+/// A [`TimeError`] at the first sample whose step is not positive (duplicate
+/// or decreasing time) or deviates from the median step beyond tolerance,
+/// or at sample 0 for fewer than two times or a non-finite one.
+pub fn derive(times: &[f64], resolution: f64, step_tolerance: f64) -> Result<Timebase, TimeError> {
+    let n = times.len();
+    if n < 2 {
+        return Err(err(
+            0,
+            format!("{n} time stamp(s); at least 2 are needed to know the sampling rate"),
+        ));
+    }
+    if let Some(i) = times.iter().position(|t| !t.is_finite()) {
+        return Err(err(i, format!("time {} is not a finite number", times[i])));
+    }
+    let r = rounding(times, resolution);
+    let mut steps = Vec::with_capacity(n - 1);
+    for i in 1..n {
+        let d = times[i] - times[i - 1];
+        if d == 0.0 {
+            return Err(err(
+                i,
+                format!(
+                    "duplicate time stamp {} (same as the row before); expected increasing time{}",
+                    times[i],
+                    coarse_hint(r, times)
+                ),
+            ));
+        }
+        if d < 0.0 {
+            return Err(err(
+                i,
+                format!(
+                    "time goes backwards from {} to {}; expected increasing time",
+                    times[i - 1],
+                    times[i]
+                ),
+            ));
+        }
+        steps.push(d);
+    }
+    let mid = steps.len() / 2;
+    let h = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let tol = step_tolerance * h + (2.0 * r).min(0.5 * h);
+    for i in 1..n {
+        let d = times[i] - times[i - 1];
+        if (d - h).abs() > tol {
+            let k = (d / h).round();
+            let hint = if k >= 2.0 && (d - k * h).abs() <= tol {
+                format!(" ({} sample(s) missing?)", k - 1.0)
+            } else {
+                String::new()
+            };
+            return Err(err(
+                i,
+                format!(
+                    "time step {d} s (from {} to {}) differs from the median step {h} s \
+                     by more than {tol:.3e} s: sampling is not uniform{hint}",
+                    times[i - 1],
+                    times[i]
+                ),
+            ));
+        }
+    }
+    let span = times[n - 1] - times[0];
+    let steps_n = (n - 1) as f64;
+    let fs_raw = steps_n / span;
+    let fs_hz = snap(fs_raw, |fs| (steps_n / fs - span).abs() <= 2.0 * r);
+    Ok(Timebase {
+        fs_hz,
+        start_time_s: times[0],
+        median_step_s: h,
+    })
+}
+
+/// Checks a given rate against a uniform time column: over the whole span the
+/// two may differ by less than one sample.
+///
+/// # Errors
+/// A [`TimeError`] at the last sample saying both rates.
+pub fn check_given_rate(times: &[f64], resolution: f64, fs_hz: f64) -> Result<(), TimeError> {
+    let n = times.len();
+    if n < 2 {
+        return Ok(());
+    }
+    let span = times[n - 1] - times[0];
+    let expected = (n - 1) as f64 / fs_hz;
+    let r = rounding(times, resolution);
+    let apart = (expected - span).abs() * fs_hz;
+    if (expected - span).abs() > 2.0 * r + 0.5 / fs_hz {
+        return Err(err(
+            n - 1,
+            format!(
+                "given sampling rate {fs_hz} Hz disagrees with the time column, which spans \
+                 {span} s over {} steps ({} Hz): {apart:.1} samples apart by the end",
+                n - 1,
+                (n - 1) as f64 / span
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn coarse_hint(r: f64, times: &[f64]) -> String {
+    let n = times.len();
+    let h = (times[n - 1] - times[0]) / (n - 1) as f64;
+    if 2.0 * r >= 0.5 * h.abs() {
+        " (the time column seems printed with too few digits for its rate: give the \
+         sampling rate and ignore the time column)"
+            .into()
+    } else {
+        String::new()
+    }
+}
+
+/// The decimal with the fewest significant digits near `x` that `ok` accepts;
+/// `x` itself when none with up to 17 digits is.
+fn snap(x: f64, ok: impl Fn(f64) -> bool) -> f64 {
+    for digits in 1..=17 {
+        let s = format!("{:.*e}", digits - 1, x);
+        if let Ok(c) = s.parse::<f64>() {
+            if c > 0.0 && ok(c) {
+                return c;
+            }
+        }
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize, t0: f64, fs: f64) -> Vec<f64> {
+        (0..n).map(|i| t0 + i as f64 / fs).collect()
+    }
+
+    #[test]
+    fn exact_grid_gives_exact_rate() {
+        for (fs, t0) in [(1000.0, 0.0), (1234.5, 12.5), (2500.0, -3.0), (1.0, 0.0)] {
+            let b = derive(&grid(30_000, t0, fs), 0.0, DEFAULT_STEP_TOLERANCE).unwrap();
+            assert_eq!(b.fs_hz.to_bits(), fs.to_bits(), "fs {fs}");
+            assert_eq!(b.start_time_s, t0);
+        }
+    }
+
+    #[test]
+    fn printed_rounding_is_tolerated_but_a_missing_sample_is_not() {
+        // 3 kHz printed with 4 decimals: steps of 0.0003 and 0.0004.
+        let t: Vec<f64> = grid(3000, 0.0, 3000.0)
+            .iter()
+            .map(|x| (x * 1e4).round() / 1e4)
+            .collect();
+        let b = derive(&t, 0.5e-4, DEFAULT_STEP_TOLERANCE).unwrap();
+        // The span is 0.9997 printed (0.99966... true): the rate is known to
+        // within 2 r / span = 1e-4 relative, and 3000 is the shortest decimal there.
+        assert_eq!(b.fs_hz, 3000.0);
+        // 1 kHz printed with 3 decimals, sample 500 missing.
+        let mut t: Vec<f64> = grid(1000, 0.0, 1000.0);
+        t.remove(500);
+        let e = derive(&t, 0.5e-3, DEFAULT_STEP_TOLERANCE).unwrap_err();
+        assert_eq!(e.index, 500);
+        assert!(e.reason.contains("1 sample(s) missing"), "{}", e.reason);
+    }
+
+    #[test]
+    fn duplicate_and_decreasing_times_name_the_sample() {
+        let mut t = grid(100, 0.0, 1000.0);
+        t[40] = t[39];
+        let e = derive(&t, 0.0, DEFAULT_STEP_TOLERANCE).unwrap_err();
+        assert_eq!(e.index, 40);
+        assert!(e.reason.contains("duplicate"), "{}", e.reason);
+        let mut t = grid(100, 0.0, 1000.0);
+        t.swap(60, 61);
+        let e = derive(&t, 0.0, DEFAULT_STEP_TOLERANCE).unwrap_err();
+        assert_eq!(e.index, 61);
+        assert!(e.reason.contains("backwards"), "{}", e.reason);
+    }
+
+    #[test]
+    fn jitter_beyond_tolerance_is_rejected() {
+        let mut t = grid(100, 0.0, 1000.0);
+        // 2e-3 of a step off: over the 1e-3 tolerance, far above float rounding.
+        t[70] += 2e-6;
+        let e = derive(&t, 0.0, DEFAULT_STEP_TOLERANCE).unwrap_err();
+        assert_eq!(e.index, 70);
+        // 0.5e-3 of a step: within tolerance.
+        let mut t = grid(100, 0.0, 1000.0);
+        t[70] += 0.5e-6;
+        assert!(derive(&t, 0.0, DEFAULT_STEP_TOLERANCE).is_ok());
+    }
+
+    #[test]
+    fn given_rate_must_agree_within_a_sample() {
+        let t = grid(30_000, 0.0, 1000.0);
+        assert!(check_given_rate(&t, 0.0, 1000.0).is_ok());
+        // 1000.01 Hz drifts 0.3 samples over 30 s: accepted.
+        assert!(check_given_rate(&t, 0.0, 1000.01).is_ok());
+        let e = check_given_rate(&t, 0.0, 1001.0).unwrap_err();
+        assert!(e.reason.contains("1001 Hz"), "{}", e.reason);
+    }
+}
