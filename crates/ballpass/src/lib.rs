@@ -6,6 +6,7 @@
 //! results (serde structs) → reports. This crate never prints, never exits and
 //! never parses argv: it returns values and typed [`Error`]s.
 
+pub mod analysis;
 pub mod bearing;
 pub mod error;
 pub mod recording;
