@@ -21,12 +21,15 @@ struct Cli {
 enum Command {
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
+    /// Correlations, spectra, measured period, phases and harmonics of recordings.
+    Analyze(cmd::analyze::AnalyzeArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
+        Command::Analyze(a) => cmd::analyze::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
