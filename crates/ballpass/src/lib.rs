@@ -7,6 +7,7 @@
 //! never parses argv: it returns values and typed [`Error`]s.
 
 pub mod bearing;
+pub mod campaign;
 pub mod error;
 pub mod recording;
 
