@@ -6,10 +6,14 @@
 //! results (serde structs) → reports. This crate never prints, never exits and
 //! never parses argv: it returns values and typed [`Error`]s.
 
+pub mod analysis;
 pub mod bearing;
 pub mod campaign;
 pub mod error;
+pub mod model;
 pub mod recording;
+pub mod report;
+pub mod sim;
 
 pub use error::{Error, Result};
 

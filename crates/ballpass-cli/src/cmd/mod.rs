@@ -1,3 +1,7 @@
 //! One module per subcommand.
 
+pub mod inspect;
+pub mod model;
+pub mod passage;
 pub mod predict;
+pub mod simulate;
