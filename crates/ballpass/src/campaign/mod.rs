@@ -3,7 +3,10 @@
 
 pub mod batch;
 pub mod manifest;
+pub mod record;
 pub mod stats;
+pub mod sticking;
+pub mod sweep;
 
 pub use batch::{run_batch, BatchOutcome, RecordOutcome};
 pub use manifest::{from_directory, manifest_csv, read_manifest, Manifest, ManifestEntry};
