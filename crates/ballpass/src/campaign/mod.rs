@@ -2,6 +2,7 @@
 //! turned into campaign answers (thesis Figs. 29, 52, 53 and chapter 8).
 
 pub mod batch;
+pub mod diagnose;
 pub mod manifest;
 pub mod record;
 pub mod stats;

@@ -304,7 +304,7 @@ fn stage_trend(ve: &[(f64, f64)], f_pred: &[(f64, f64)]) -> Option<StageTrend> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     pub(crate) fn record(v: f64, repeat: u32) -> RecordResult {
