@@ -33,6 +33,8 @@ enum Command {
     Simulate(cmd::simulate::SimulateArgs),
     /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
     SimulateCampaign(cmd::simulate::CampaignArgs),
+    /// Correlations, spectra, measured period, phases and harmonics of recordings.
+    Analyze(cmd::analyze::AnalyzeArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +46,7 @@ fn main() -> ExitCode {
         Command::Passage(a) => cmd::passage::run(&a),
         Command::Simulate(a) => cmd::simulate::run(&a),
         Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
+        Command::Analyze(a) => cmd::analyze::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
