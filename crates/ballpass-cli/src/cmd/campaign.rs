@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
-use ballpass::campaign::figures::{diagnosis_parts, sweep_parts, ReportParts};
+use ballpass::campaign::figures::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
 use ballpass::campaign::manifest::OrderedVelocity;
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
@@ -516,7 +516,7 @@ fn friction_examples(
     d: &ballpass::campaign::diagnose::Diagnosis,
     entries: &[ManifestEntry],
     a: &CampaignArgs,
-) -> Result<Vec<(String, Vec<f64>, Vec<f64>)>> {
+) -> Result<Vec<FrictionTrace>> {
     let (Some(worst), Some(best)) = (d.bearings.first(), d.bearings.last()) else {
         return Ok(Vec::new());
     };

@@ -241,9 +241,20 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
     Ok(parts)
 }
 
+/// A raw friction trace shown in a diagnosis report.
+#[derive(Debug, Clone)]
+pub struct FrictionTrace {
+    /// Legend/panel title (bearing and verdict).
+    pub name: String,
+    /// Sample times, s.
+    pub t_s: Vec<f64>,
+    /// Friction force, N.
+    pub friction_n: Vec<f64>,
+}
+
 /// Sections and figures of a bearing diagnosis.
 ///
-/// `friction_examples`: optional raw friction traces `(bearing, t_s, f_n)`
+/// `friction_examples`: optional raw friction traces
 /// of the best and worst bearing (thesis Fig. 66).
 ///
 /// # Errors
@@ -251,7 +262,7 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
 pub fn diagnosis_parts(
     d: &Diagnosis,
     f_c_hz: Option<f64>,
-    friction_examples: &[(String, Vec<f64>, Vec<f64>)],
+    friction_examples: &[FrictionTrace],
     prefix: &str,
 ) -> Result<ReportParts> {
     let mut parts = ReportParts::default();
