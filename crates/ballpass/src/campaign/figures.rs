@@ -368,11 +368,14 @@ pub fn diagnosis_parts(
             format!("{prefix}friction_examples"),
             "Friction force of the best and the worst bearing (thesis Fig. 66)",
         );
-        for (name, t, f) in friction_examples {
+        for tr in friction_examples {
             let mut p = Panel::new(Axis::linear("Time", "s"), Axis::linear("Friction", "N"))
-                .titled(name.clone());
-            p.series
-                .push(Series::line(name.clone(), t.clone(), f.clone()));
+                .titled(tr.name.clone());
+            p.series.push(Series::line(
+                tr.name.clone(),
+                tr.t_s.clone(),
+                tr.friction_n.clone(),
+            ));
             p.legend = Some(false);
             fig = fig.with_panel(p);
         }
