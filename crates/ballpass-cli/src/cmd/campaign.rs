@@ -527,11 +527,11 @@ fn friction_examples(
             if let Ok(rec) = ballpass::recording::load(&e.path, &load) {
                 if let Some(f) = rec.channel(ballpass::recording::Channel::Friction) {
                     let t: Vec<f64> = (0..f.len()).map(|i| rec.time_s(i)).collect();
-                    out.push((
-                        format!("{} ({})", b.bearing, b.verdict.name()),
-                        t,
-                        f.to_vec(),
-                    ));
+                    out.push(FrictionTrace {
+                        name: format!("{} ({})", b.bearing, b.verdict.name()),
+                        t_s: t,
+                        friction_n: f.to_vec(),
+                    });
                 }
             }
         }
