@@ -22,6 +22,10 @@ struct Cli {
 enum Command {
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
+    /// Velocity sweep over a campaign: velocity-error trend, tau_c and tau_p against velocity, d_avg.
+    Sweep(Box<cmd::campaign::CampaignArgs>),
+    /// Bearing diagnosis over a batch: friction spectra, harmonics, sticking events, verdicts.
+    Diagnose(Box<cmd::campaign::DiagnoseArgs>),
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
@@ -41,6 +45,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
+        Command::Sweep(a) => cmd::campaign::run_sweep(&a),
+        Command::Diagnose(a) => cmd::campaign::run_diagnose(&a),
         Command::Inspect(a) => cmd::inspect::run(&a),
         Command::Model(a) => cmd::model::run(&a),
         Command::Passage(a) => cmd::passage::run(&a),

@@ -8,6 +8,7 @@
 
 pub mod analysis;
 pub mod bearing;
+pub mod campaign;
 pub mod error;
 pub mod model;
 pub mod recording;

@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod analyze;
+pub mod campaign;
 pub mod inspect;
 pub mod model;
 pub mod passage;
