@@ -205,6 +205,41 @@ pub fn entry_for(path: &Path, bearing: &str, velocity_mm_s: f64, repeat: u32) ->
     }
 }
 
+/// The manifest entry of a planned simulation (`path` is the plan's relative
+/// path with `.csv`).
+pub fn entry_of_simulation(c: &crate::sim::campaign::CampaignEntry) -> ManifestEntry {
+    ManifestEntry {
+        path: format!("{}.csv", c.path).into(),
+        bearing: c.bearing.clone(),
+        velocity_mm_s: c.velocity_mm_s,
+        repeat: c.repeat,
+        condition: Some(c.condition.name().to_string()),
+        notes: None,
+    }
+}
+
+/// Simulates one planned record in memory and processes it, as if its file
+/// had been loaded (the built-in data of `ballpass demo` and the oracle of
+/// the campaign tests).
+///
+/// # Errors
+/// The simulator's or the analysis' errors.
+pub fn process_simulation(
+    c: &crate::sim::campaign::CampaignEntry,
+    fallback: Geometry,
+    settings: &CampaignSettings,
+) -> Result<(Recording, RecordResult)> {
+    let sim = crate::sim::simulate(&c.settings)?;
+    let entry = entry_of_simulation(c);
+    let result = process_recording(
+        &sim.recording,
+        &entry,
+        geometry_for(&c.bearing, fallback),
+        settings,
+    )?;
+    Ok((sim.recording, result))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,39 +289,4 @@ mod tests {
         assert!(s.times_s.len() >= 10, "{} spikes", s.times_s.len());
         assert!(s.timing_fraction.unwrap() >= 0.7, "{:?}", s.timing_fraction);
     }
-}
-
-/// The manifest entry of a planned simulation (`path` is the plan's relative
-/// path with `.csv`).
-pub fn entry_of_simulation(c: &crate::sim::campaign::CampaignEntry) -> ManifestEntry {
-    ManifestEntry {
-        path: format!("{}.csv", c.path).into(),
-        bearing: c.bearing.clone(),
-        velocity_mm_s: c.velocity_mm_s,
-        repeat: c.repeat,
-        condition: Some(c.condition.name().to_string()),
-        notes: None,
-    }
-}
-
-/// Simulates one planned record in memory and processes it, as if its file
-/// had been loaded (the built-in data of `ballpass demo` and the oracle of
-/// the campaign tests).
-///
-/// # Errors
-/// The simulator's or the analysis' errors.
-pub fn process_simulation(
-    c: &crate::sim::campaign::CampaignEntry,
-    fallback: Geometry,
-    settings: &CampaignSettings,
-) -> Result<(Recording, RecordResult)> {
-    let sim = crate::sim::simulate(&c.settings)?;
-    let entry = entry_of_simulation(c);
-    let result = process_recording(
-        &sim.recording,
-        &entry,
-        geometry_for(&c.bearing, fallback),
-        settings,
-    )?;
-    Ok((sim.recording, result))
 }
