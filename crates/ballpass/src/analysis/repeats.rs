@@ -247,8 +247,8 @@ fn average_into(acc: &mut [f64], v: &[f64]) {
 }
 
 fn average_correlations(all: &[Correlations]) -> Correlations {
-    let mut out = all[0].clone();
     let r = all.len() as f64;
+    let mut out = all[0].clone();
     for c in &all[1..] {
         for ((_, acc), (_, v)) in out.series.iter_mut().zip(&c.series) {
             average_into(acc, v);
