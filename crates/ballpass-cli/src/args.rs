@@ -1,56 +1,288 @@
 //! Shared argument groups and parsers.
 
+use std::path::PathBuf;
+
 use anyhow::{bail, Context, Result};
 use ballpass::bearing::{self, Geometry};
-use clap::Args;
+use ballpass::recording::profile::{parse_delimiter, GeometryOverride};
+use ballpass::recording::{Format, LoadOptions, Profile};
+use clap::{Args, ValueEnum};
+
+/// Catalog key used when neither a flag nor a profile names a bearing.
+pub const DEFAULT_BEARING: &str = "sr25w";
 
 /// Which bearing: a catalog key or a custom geometry.
 #[derive(Debug, Clone, Args)]
 pub struct BearingArgs {
-    /// Bearing from the catalog (see `ballpass predict --list-bearings`).
-    #[arg(long, default_value = "sr25w")]
-    pub bearing: String,
+    /// Bearing from the catalog (see `ballpass predict --list-bearings`)
+    /// [default: the profile's, else sr25w].
+    #[arg(long)]
+    pub bearing: Option<String>,
     /// Custom geometry: ball diameter d, mm (overrides the catalog entry's).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_hyphen_values = true)]
     pub ball_diameter: Option<f64>,
     /// Custom geometry: total free space in the race d_ext, mm.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_hyphen_values = true)]
     pub free_space: Option<f64>,
     /// Custom geometry: number of balls in the race N_B.
-    #[arg(long, value_name = "N")]
-    pub balls: Option<u32>,
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub balls: Option<i64>,
 }
 
 impl BearingArgs {
-    /// The geometry selected, catalog entry with any flag overriding its field.
+    /// The geometry selected, catalog entry (default sr25w) with any flag
+    /// overriding its field.
     pub fn geometry(&self) -> Result<(String, Geometry)> {
-        let entry = bearing::lookup(&self.bearing).with_context(|| {
-            let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
-            format!(
-                "unknown bearing '{}' (catalog: {})",
-                self.bearing,
-                keys.join(", ")
-            )
-        })?;
-        let mut g = entry.geometry;
-        let custom =
-            self.ball_diameter.is_some() || self.free_space.is_some() || self.balls.is_some();
-        if let Some(d) = self.ball_diameter {
-            g.ball_diameter_mm = d;
-        }
-        if let Some(d) = self.free_space {
-            g.free_space_mm = d;
-        }
-        if let Some(n) = self.balls {
-            g.balls_in_race = n;
-        }
-        g.validate()?;
-        let name = if custom {
-            format!("{} (custom geometry)", entry.name)
+        self.resolve(None)
+    }
+
+    /// As [`BearingArgs::geometry`], but without `--bearing` the `fallback`
+    /// (a profile's bearing) is the base before the sr25w default.
+    pub fn resolve(&self, fallback: Option<(String, Geometry)>) -> Result<(String, Geometry)> {
+        let (name, base) = match (&self.bearing, fallback) {
+            (Some(key), _) => catalog(key)?,
+            (None, Some(f)) => f,
+            (None, None) => catalog(DEFAULT_BEARING)?,
+        };
+        let balls = match self.balls {
+            None => None,
+            Some(n) => Some(u32::try_from(n).ok().filter(|&n| n > 0).with_context(|| {
+                format!("invalid balls in race: must be a whole number from 1, got {n}")
+            })?),
+        };
+        let over = GeometryOverride {
+            ball_diameter_mm: self.ball_diameter,
+            free_space_mm: self.free_space,
+            balls_in_race: balls,
+        };
+        let g = over.apply(base)?;
+        let name = if over.is_empty() || name.ends_with("(custom geometry)") {
+            name
         } else {
-            entry.name.to_string()
+            format!("{name} (custom geometry)")
         };
         Ok((name, g))
+    }
+}
+
+fn catalog(key: &str) -> Result<(String, Geometry)> {
+    let entry = bearing::lookup(key).with_context(|| {
+        let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
+        format!("unknown bearing '{key}' (catalog: {})", keys.join(", "))
+    })?;
+    Ok((entry.name.to_string(), entry.geometry))
+}
+
+/// File format on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    /// Delimited text, delimiter detected.
+    Csv,
+    /// Tab-separated text.
+    Tsv,
+    /// MATLAB MAT-file (v5/v7).
+    Mat,
+}
+
+impl From<FormatArg> for Format {
+    fn from(f: FormatArg) -> Self {
+        match f {
+            FormatArg::Csv => Format::Csv,
+            FormatArg::Tsv => Format::Tsv,
+            FormatArg::Mat => Format::Mat,
+        }
+    }
+}
+
+/// How to read recording files: the flags every command that loads
+/// recordings flattens in. Flags override the `--profile`'s values, which
+/// override the defaults.
+#[derive(Debug, Clone, Args)]
+pub struct LoadArgs {
+    /// Bench profile (TOML): column names, scales, rate, bearing of one bench.
+    #[arg(long, value_name = "FILE", help_heading = "Input")]
+    pub profile: Option<PathBuf>,
+    /// File format [default: from the file name].
+    #[arg(long, value_enum, help_heading = "Input")]
+    pub format: Option<FormatArg>,
+    /// Delimiter of text files: one character, or tab, comma, semicolon, space
+    /// [default: detected from the header].
+    #[arg(long, value_name = "CHAR", help_heading = "Input")]
+    pub delimiter: Option<String>,
+    /// Sampling rate, Hz: needed without a time column, checked against one.
+    #[arg(
+        long,
+        value_name = "HZ",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub fs: Option<f64>,
+    /// Time column / variable, s [default: time_s].
+    #[arg(long, value_name = "NAME", help_heading = "Input")]
+    pub time_col: Option<String>,
+    /// Ignore the time column and use --fs.
+    #[arg(long, help_heading = "Input")]
+    pub ignore_time: bool,
+    /// Friction column / variable / ControlDesk signal [default: friction_N].
+    #[arg(long, value_name = "NAME", help_heading = "Input")]
+    pub friction_col: Option<String>,
+    /// Position column / variable / signal [default: position_mm].
+    #[arg(long, value_name = "NAME", help_heading = "Input")]
+    pub position_col: Option<String>,
+    /// Optical sensor column / variable / signal [default: optical_V].
+    #[arg(long, value_name = "NAME", help_heading = "Input")]
+    pub optical_col: Option<String>,
+    /// Friction = raw * scale + offset, N.
+    #[arg(
+        long,
+        value_name = "X",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub friction_scale: Option<f64>,
+    /// Added to the scaled friction, N.
+    #[arg(
+        long,
+        value_name = "N",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub friction_offset: Option<f64>,
+    /// Position = raw * scale + offset, mm (encoder counts of 0.1 um: 1e-4).
+    #[arg(
+        long,
+        value_name = "X",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub position_scale: Option<f64>,
+    /// Added to the scaled position, mm.
+    #[arg(
+        long,
+        value_name = "MM",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub position_offset: Option<f64>,
+    /// Optical = raw * scale + offset, V.
+    #[arg(
+        long,
+        value_name = "X",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub optical_scale: Option<f64>,
+    /// Added to the scaled optical signal, V.
+    #[arg(
+        long,
+        value_name = "V",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub optical_offset: Option<f64>,
+    /// Tracking velocity of the test, mm/s.
+    #[arg(
+        long,
+        short = 'v',
+        value_name = "MM/S",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub velocity: Option<f64>,
+    /// Test identifier [default: the file name without extension].
+    #[arg(long, value_name = "ID", help_heading = "Input")]
+    pub test_id: Option<String>,
+    /// Fewest ball-pass periods a recording must span [default: 3].
+    #[arg(
+        long,
+        value_name = "N",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub min_periods: Option<f64>,
+    #[command(flatten)]
+    pub bearing: BearingArgs,
+}
+
+impl LoadArgs {
+    /// The profile named by `--profile`, if any.
+    pub fn profile(&self) -> Result<Option<Profile>> {
+        self.profile
+            .as_deref()
+            .map(Profile::read)
+            .transpose()
+            .map_err(Into::into)
+    }
+
+    /// Load options: defaults, then the profile, then the flags; with the
+    /// bearing resolved (flag, profile, sr25w) and the settings validated.
+    pub fn options(&self) -> Result<LoadOptions> {
+        let profile = self.profile()?;
+        let mut o = match &profile {
+            Some(p) => p.load_options()?,
+            None => LoadOptions::default(),
+        };
+        if let Some(f) = self.format {
+            o.format = Some(f.into());
+        }
+        if let Some(d) = &self.delimiter {
+            o.delimiter = Some(parse_delimiter(d)?);
+        }
+        if self.fs.is_some() {
+            o.fs_hz = self.fs;
+        }
+        if self.time_col.is_some() {
+            o.time = self.time_col.clone();
+        }
+        o.ignore_time |= self.ignore_time;
+        for (src, col, scale, offset) in [
+            (
+                &mut o.friction,
+                &self.friction_col,
+                self.friction_scale,
+                self.friction_offset,
+            ),
+            (
+                &mut o.position,
+                &self.position_col,
+                self.position_scale,
+                self.position_offset,
+            ),
+            (
+                &mut o.optical,
+                &self.optical_col,
+                self.optical_scale,
+                self.optical_offset,
+            ),
+        ] {
+            if col.is_some() {
+                src.name = col.clone();
+            }
+            if let Some(s) = scale {
+                src.scale = s;
+            }
+            if let Some(x) = offset {
+                src.offset = x;
+            }
+        }
+        if self.velocity.is_some() {
+            o.velocity_mm_s = self.velocity;
+        }
+        if self.test_id.is_some() {
+            o.test_id = self.test_id.clone();
+        }
+        if let Some(m) = self.min_periods {
+            o.min_periods = m;
+        }
+        let fallback = match (&o.bearing, o.geometry) {
+            (Some(name), Some(g)) => Some((name.clone(), g)),
+            _ => None,
+        };
+        let (name, g) = self.bearing.resolve(fallback)?;
+        o.bearing = Some(name);
+        o.geometry = Some(g);
+        o.validate()?;
+        Ok(o)
     }
 }
 

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 mod args;
 mod cmd;
+mod output;
 
 /// Finds and characterises the periodic disturbances that balls cause in
 /// linear ball bearings.
@@ -23,6 +24,17 @@ enum Command {
     Predict(cmd::predict::PredictArgs),
     /// Correlations, spectra, measured period, phases and harmonics of recordings.
     Analyze(cmd::analyze::AnalyzeArgs),
+    /// Show what a recording holds before analysing it: duration, rate,
+    /// channels, ranges, clipping, dropouts, load-cell drift.
+    Inspect(Box<cmd::inspect::InspectArgs>),
+    /// Signal and stage models of thesis chapter 6 (ERRATA-corrected) as tables.
+    Model(cmd::model::ModelArgs),
+    /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
+    Passage(cmd::passage::PassageArgs),
+    /// Simulate a bench recording with the built-in testbed simulator (writes NAME.truth.json beside it).
+    Simulate(cmd::simulate::SimulateArgs),
+    /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
+    SimulateCampaign(cmd::simulate::CampaignArgs),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +42,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
         Command::Analyze(a) => cmd::analyze::run(&a),
+        Command::Inspect(a) => cmd::inspect::run(&a),
+        Command::Model(a) => cmd::model::run(&a),
+        Command::Passage(a) => cmd::passage::run(&a),
+        Command::Simulate(a) => cmd::simulate::run(&a),
+        Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

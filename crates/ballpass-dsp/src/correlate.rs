@@ -168,7 +168,10 @@ impl Plan {
 ///
 /// `Correlator` is `Send + Sync` and cheap to clone (plans are shared
 /// `Arc`s); give each thread its own clone. See [`correlate`] for the
-/// formula and conventions.
+/// formula and conventions. In a hot loop prefer
+/// [`Correlator::correlate_into`]: a full-lag result of two 30 000-sample
+/// records is ~1 MB, and fresh pages from the allocator can cost more than
+/// the FFTs themselves.
 ///
 /// ```
 /// use ballpass_dsp::{CorrelateSettings, Correlator, Normalization};
@@ -219,6 +222,20 @@ impl Correlator {
     /// # Errors
     /// As [`correlate`].
     pub fn correlate(&mut self, x: &[f64], y: &[f64]) -> Result<Correlation> {
+        let mut out = Correlation {
+            lags: Vec::new(),
+            values: Vec::new(),
+        };
+        self.correlate_into(x, y, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Correlator::correlate`] writing into `out`, whose vectors are
+    /// reused (no allocation once they are large enough).
+    ///
+    /// # Errors
+    /// As [`correlate`]; `out` is unspecified on error.
+    pub fn correlate_into(&mut self, x: &[f64], y: &[f64], out: &mut Correlation) -> Result<()> {
         check_finite("x", x)?;
         check_finite("y", y)?;
         self.check_lengths(x.len(), y.len())?;
@@ -228,8 +245,8 @@ impl Correlator {
         for (a, b) in plan.spec_x.iter_mut().zip(&plan.spec_y) {
             *a *= b.conj();
         }
-        let raw = inverse_to_lags(plan, x.len(), y.len());
-        self.normalise(raw, x, y)
+        inverse_to_lags(plan, x.len(), y.len(), &mut out.values);
+        self.finish(out, x, y)
     }
 
     /// Full-lag autocorrelation `z[m] = sum_n x[n + m] x[n]` (one forward
@@ -238,14 +255,27 @@ impl Correlator {
     /// # Errors
     /// As [`correlate`].
     pub fn autocorrelate(&mut self, x: &[f64]) -> Result<Correlation> {
+        let mut out = Correlation {
+            lags: Vec::new(),
+            values: Vec::new(),
+        };
+        self.autocorrelate_into(x, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Correlator::autocorrelate`] writing into `out` (buffers reused).
+    ///
+    /// # Errors
+    /// As [`correlate`]; `out` is unspecified on error.
+    pub fn autocorrelate_into(&mut self, x: &[f64], out: &mut Correlation) -> Result<()> {
         check_finite("x", x)?;
         let plan = self.plan_for(2 * x.len());
         plan.transform(x, false);
         for a in plan.spec_x.iter_mut() {
             *a = Complex::new(a.norm_sqr(), 0.0);
         }
-        let raw = inverse_to_lags(plan, x.len(), x.len());
-        self.normalise(raw, x, x)
+        inverse_to_lags(plan, x.len(), x.len(), &mut out.values);
+        self.finish(out, x, x)
     }
 
     /// Full-lag correlations `z[m] = sum_n s_a[n + m] s_b[n]` of several
@@ -309,7 +339,7 @@ impl Correlator {
                 plan.spec_x.clone()
             })
             .collect();
-        let mut raws = Vec::with_capacity(pairs.len());
+        let mut results = Vec::with_capacity(pairs.len());
         for &(a, b) in pairs {
             let plan = self.plan.as_mut().expect("planned above");
             if a == b {
@@ -321,13 +351,15 @@ impl Correlator {
                     *o = x * y.conj();
                 }
             }
-            raws.push(inverse_to_lags(plan, n, n));
+            let mut out = Correlation {
+                lags: Vec::new(),
+                values: Vec::new(),
+            };
+            inverse_to_lags(plan, n, n, &mut out.values);
+            self.finish(&mut out, signals[a], signals[b])?;
+            results.push(out);
         }
-        pairs
-            .iter()
-            .zip(raws)
-            .map(|(&(a, b), raw)| self.normalise(raw, signals[a], signals[b]))
-            .collect()
+        Ok(results)
     }
 
     fn check_lengths(&self, nx: usize, ny: usize) -> Result<()> {
@@ -352,8 +384,10 @@ impl Correlator {
         self.plan.as_mut().expect("plan was just set")
     }
 
-    fn normalise(&self, mut values: Vec<f64>, x: &[f64], y: &[f64]) -> Result<Correlation> {
+    /// Applies the normalisation to `out.values` and fills `out.lags`.
+    fn finish(&self, out: &mut Correlation, x: &[f64], y: &[f64]) -> Result<()> {
         let (nx, ny) = (x.len(), y.len());
+        let values = &mut out.values;
         match self.settings.normalization {
             Normalization::None => {}
             Normalization::Biased => {
@@ -382,16 +416,16 @@ impl Correlator {
                 values.iter_mut().for_each(|v| *v *= inv);
             }
         }
-        Ok(Correlation {
-            lags: correlation_lags(nx, ny),
-            values,
-        })
+        let first = -(ny as i64 - 1);
+        out.lags.clear();
+        out.lags.extend(first..=(nx as i64 - 1));
+        Ok(())
     }
 }
 
 /// Inverse FFT of `plan.spec_x` (a cross-spectrum) and the rearrangement of
 /// the circular result into lags `-(ny-1) ..= nx-1`.
-fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize) -> Vec<f64> {
+fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize, out: &mut Vec<f64>) {
     let len = plan.len;
     // A real signal's DC (and, for even lengths, Nyquist) bins are real;
     // clear the rounding residue so realfft accepts the spectrum.
@@ -404,11 +438,11 @@ fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize) -> Vec<f64> {
         .process_with_scratch(&mut plan.spec_x, &mut plan.buf, &mut plan.scratch)
         .expect("buffer lengths come from the plan and DC/Nyquist are real");
     let scale = 1.0 / len as f64;
-    let mut out = Vec::with_capacity(nx + ny - 1);
+    out.clear();
+    out.reserve(nx + ny - 1);
     // Negative lags m = -(ny-1) ..= -1 sit at the end of the circular result.
     out.extend(plan.buf[len - (ny - 1)..].iter().map(|v| v * scale));
     out.extend(plan.buf[..nx].iter().map(|v| v * scale));
-    out
 }
 
 /// Smallest even `n >= target` whose only prime factors are 2, 3 and 5

@@ -66,33 +66,99 @@ pub fn detrend_in_place(x: &mut [f64], kind: DetrendType) -> Result<()> {
 
 /// [`detrend_in_place`] without validation, for segments already checked.
 pub(crate) fn detrend_unchecked(x: &mut [f64], kind: DetrendType) {
-    let n = x.len();
-    if n == 0 {
-        return;
-    }
-    match kind {
-        DetrendType::None => {}
-        DetrendType::Constant => {
-            let mean = x.iter().sum::<f64>() / n as f64;
-            x.iter_mut().for_each(|v| *v -= mean);
+    let t = Trend::fit(x, kind);
+    x.iter_mut().enumerate().for_each(|(i, v)| *v -= t.at(i));
+}
+
+/// A fitted trend `offset + slope * (n - center)`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Trend {
+    offset: f64,
+    slope: f64,
+    center: f64,
+}
+
+impl Trend {
+    /// Least-squares constant or line through `x` (zero for `None` or an
+    /// empty `x`).
+    pub(crate) fn fit(x: &[f64], kind: DetrendType) -> Trend {
+        let n = x.len();
+        let zero = Trend {
+            offset: 0.0,
+            slope: 0.0,
+            center: 0.0,
+        };
+        if n == 0 || kind == DetrendType::None {
+            return zero;
         }
-        DetrendType::Linear => {
-            let mean = x.iter().sum::<f64>() / n as f64;
-            if n == 1 {
-                x[0] -= mean;
-                return;
+        let mean = pairwise_sum(x) / n as f64;
+        if kind == DetrendType::Constant || n == 1 {
+            return Trend {
+                offset: mean,
+                ..zero
+            };
+        }
+        let c = (n - 1) as f64 / 2.0;
+        let sxt = centered_moment(x, c);
+        // sum_{i} (i - c)^2 = N (N^2 - 1) / 12
+        let nf = n as f64;
+        let stt = nf * (nf * nf - 1.0) / 12.0;
+        Trend {
+            offset: mean,
+            slope: sxt / stt,
+            center: c,
+        }
+    }
+
+    /// The trend's value at index `i`.
+    #[inline]
+    pub(crate) fn at(&self, i: usize) -> f64 {
+        self.offset + self.slope * (i as f64 - self.center)
+    }
+}
+
+/// Sum with eight interleaved accumulators in blocks of 128, split
+/// pairwise above that (numpy's `pairwise_sum` scheme): rounding error
+/// grows like `log2(N)` and the loop vectorises.
+pub(crate) fn pairwise_sum(x: &[f64]) -> f64 {
+    if x.len() <= 128 {
+        let mut acc = [0.0f64; 8];
+        let chunks = x.chunks_exact(8);
+        let rem = chunks.remainder();
+        for c in chunks {
+            for (a, v) in acc.iter_mut().zip(c) {
+                *a += v;
             }
-            let c = (n - 1) as f64 / 2.0;
-            let sxt: f64 = x.iter().enumerate().map(|(i, v)| (i as f64 - c) * v).sum();
-            // sum_{i} (i - c)^2 = N (N^2 - 1) / 12
-            let nf = n as f64;
-            let stt = nf * (nf * nf - 1.0) / 12.0;
-            let slope = sxt / stt;
-            x.iter_mut()
-                .enumerate()
-                .for_each(|(i, v)| *v -= mean + slope * (i as f64 - c));
+        }
+        let mut s =
+            ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+        for v in rem {
+            s += v;
+        }
+        s
+    } else {
+        let mut half = x.len() / 2;
+        half -= half % 8;
+        pairwise_sum(&x[..half]) + pairwise_sum(&x[half..])
+    }
+}
+
+/// `sum_i (i - c) x[i]`, vectorisable (eight accumulators).
+fn centered_moment(x: &[f64], c: f64) -> f64 {
+    let mut acc = [0.0f64; 8];
+    let chunks = x.chunks_exact(8);
+    let rem_start = x.len() - chunks.remainder().len();
+    for (j, ch) in chunks.enumerate() {
+        let base = (8 * j) as f64 - c;
+        for (k, (a, v)) in acc.iter_mut().zip(ch).enumerate() {
+            *a += (base + k as f64) * v;
         }
     }
+    let mut s = acc.iter().sum::<f64>();
+    for (i, v) in x.iter().enumerate().skip(rem_start) {
+        s += (i as f64 - c) * v;
+    }
+    s
 }
 
 #[cfg(test)]
@@ -112,6 +178,21 @@ mod tests {
         let m = 1.0 / 5.0;
         for (yi, bi) in y.iter().zip(b) {
             assert!((yi - (bi - m)).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn pairwise_sum_is_exact_on_integers() {
+        for n in [0usize, 1, 7, 8, 9, 127, 128, 129, 1000, 4097] {
+            let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
+            assert_eq!(
+                pairwise_sum(&x),
+                (n * n.saturating_sub(1) / 2) as f64,
+                "n={n}"
+            );
+            let c = 3.5;
+            let want: f64 = (0..n).map(|i| (i as f64 - c) * i as f64).sum();
+            assert_eq!(centered_moment(&x, c), want, "n={n}");
         }
     }
 

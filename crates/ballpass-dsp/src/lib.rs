@@ -6,6 +6,7 @@ pub mod detrend;
 pub mod error;
 pub mod gradient;
 pub mod iir;
+pub mod lsq;
 pub mod lti;
 mod npcomplex;
 pub mod peaks;
@@ -25,6 +26,7 @@ pub use iir::{
     butter, butter_zpk, cheby1, cheby1_zpk, zpk2sos, ButterSettings, Cheby1Settings, FilterBand,
     Zpk,
 };
+pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
 pub use lti::{bode, freqs, freqz, sosfreqz, unwrap, AnalogResponse, Bode, DigitalResponse};
 pub use peaks::{
     find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,

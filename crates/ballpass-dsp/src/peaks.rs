@@ -307,43 +307,71 @@ fn check_peaks(x: &[f64], peaks: &[usize]) -> Result<()> {
     }
 }
 
-/// Local maxima as SciPy's `_local_maxima_1d`: `(midpoints, left_edges,
-/// right_edges)`.
-fn local_maxima(x: &[f64]) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
-    let mut mid = Vec::new();
-    let mut left = Vec::new();
-    let mut right = Vec::new();
-    if x.len() < 3 {
-        return (mid, left, right);
+/// Local maxima as SciPy's `_local_maxima_1d`: the midpoints, and
+/// `(position in midpoints, left_edge, right_edge)` for the flat ones (a
+/// strict maximum is its own edges).
+///
+/// Every sample is tested on its own (SciPy skips the samples right of a
+/// maximum, none of which can start one, so the results are equal): 64
+/// samples at a time into bit masks of strict maxima and plateau starts,
+/// branch-free, which matters on noise where a third of the samples are
+/// maxima; only plateau starts take SciPy's look-ahead.
+fn local_maxima(x: &[f64]) -> (Vec<usize>, Vec<(usize, usize, usize)>) {
+    let n = x.len();
+    if n < 3 {
+        return (Vec::new(), Vec::new());
     }
-    let i_max = x.len() - 1;
-    let mut i = 1;
-    while i < i_max {
-        if x[i - 1] < x[i] {
-            let mut ahead = i + 1;
-            while ahead < i_max && x[ahead] == x[i] {
-                ahead += 1;
-            }
-            if x[ahead] < x[i] {
-                left.push(i);
-                right.push(ahead - 1);
-                mid.push((i + ahead - 1) / 2);
-                i = ahead;
+    let i_max = n - 1;
+    let mut mids = Vec::with_capacity(n / 2 + 1);
+    let mut flats = Vec::new();
+    let mut base = 1;
+    while base < i_max {
+        let end = (base + 64).min(i_max);
+        let (mut strict, mut flat) = (0u64, 0u64);
+        for (j, w) in x[base - 1..=end].windows(3).enumerate() {
+            let up = w[0] < w[1];
+            strict |= u64::from(up & (w[1] > w[2])) << j;
+            flat |= u64::from(up & (w[1] == w[2])) << j;
+        }
+        let mut bits = strict | flat;
+        while bits != 0 {
+            let j = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let i = base + j;
+            if (flat >> j) & 1 == 0 {
+                mids.push(i);
+            } else {
+                let b = x[i];
+                let mut ahead = i + 1;
+                while ahead < i_max && x[ahead] == b {
+                    ahead += 1;
+                }
+                if x[ahead] < b {
+                    flats.push((mids.len(), i, ahead - 1));
+                    mids.push((i + ahead - 1) / 2);
+                }
             }
         }
-        i += 1;
+        base = end;
     }
-    (mid, left, right)
+    (mids, flats)
 }
 
-/// Mask of the peaks kept by the distance criterion (SciPy's
-/// `_select_by_peak_distance`), highest first, ties: later position first.
-fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec<bool> {
+/// `priority[a]` ranks above `priority[b]`: higher, or equal and later
+/// (NumPy `argsort(kind="stable")` walked from the end).
+#[inline]
+fn ranks_above(priority: &[f64], a: usize, b: usize) -> bool {
+    priority[a] > priority[b] || (priority[a] == priority[b] && a > b)
+}
+
+/// SciPy's `_select_by_peak_distance`: walk the peaks from the highest
+/// priority down; each one still kept removes its neighbours closer than
+/// `distance` samples.
+fn greedy_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec<bool> {
     let n = peaks.len();
     let mut keep = vec![true; n];
     let mut order: Vec<usize> = (0..n).collect();
-    // Stable ascending sort, walked from the end: NumPy argsort(kind="stable").
-    order.sort_by(|&a, &b| priority[a].total_cmp(&priority[b]));
+    order.sort_unstable_by(|&a, &b| priority[a].total_cmp(&priority[b]).then_with(|| a.cmp(&b)));
     for &j in order.iter().rev() {
         if !keep[j] {
             continue;
@@ -360,6 +388,79 @@ fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec
         }
     }
     keep
+}
+
+/// Mask of the peaks kept by the distance criterion, equal to
+/// [`greedy_distance`] but without sorting every peak.
+///
+/// A peak that ranks above every other peak closer than `distance` is kept
+/// by the greedy walk, and removes all those neighbours (found in O(k) with
+/// two sliding-window maxima). The peaks left undecided are farther than
+/// `distance` from every such peak, so only undecided peaks can remove each
+/// other: the greedy walk on them alone decides them as on the full set.
+fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec<bool> {
+    let k = peaks.len();
+    if distance <= 1 || k < 2 {
+        return vec![true; k];
+    }
+    // dominated[j]: some peak closer than `distance` ranks above j.
+    let mut dominated = vec![false; k];
+    let mut queue: Vec<usize> = Vec::with_capacity(64);
+    let mut head = 0;
+    for j in 0..k {
+        while head < queue.len() && peaks[j] - peaks[queue[head]] >= distance {
+            head += 1;
+        }
+        if head < queue.len() && ranks_above(priority, queue[head], j) {
+            dominated[j] = true;
+        }
+        while queue.len() > head && !ranks_above(priority, queue[queue.len() - 1], j) {
+            queue.pop();
+        }
+        queue.push(j);
+    }
+    queue.clear();
+    head = 0;
+    for j in (0..k).rev() {
+        while head < queue.len() && peaks[queue[head]] - peaks[j] >= distance {
+            head += 1;
+        }
+        if head < queue.len() && ranks_above(priority, queue[head], j) {
+            dominated[j] = true;
+        }
+        while queue.len() > head && !ranks_above(priority, queue[queue.len() - 1], j) {
+            queue.pop();
+        }
+        queue.push(j);
+    }
+    // 0 = undecided, 1 = kept, 2 = removed
+    let mut state = vec![0u8; k];
+    for j in 0..k {
+        if dominated[j] {
+            continue;
+        }
+        state[j] = 1;
+        let mut i = j;
+        while i > 0 && peaks[j] - peaks[i - 1] < distance {
+            state[i - 1] = 2;
+            i -= 1;
+        }
+        let mut i = j + 1;
+        while i < k && peaks[i] - peaks[j] < distance {
+            state[i] = 2;
+            i += 1;
+        }
+    }
+    let rest: Vec<usize> = (0..k).filter(|&j| state[j] == 0).collect();
+
+    if !rest.is_empty() {
+        let p: Vec<usize> = rest.iter().map(|&j| peaks[j]).collect();
+        let h: Vec<f64> = rest.iter().map(|&j| priority[j]).collect();
+        for (&j, kept) in rest.iter().zip(greedy_distance(&p, &h, distance)) {
+            state[j] = if kept { 1 } else { 2 };
+        }
+    }
+    state.iter().map(|&s| s == 1).collect()
 }
 
 /// Finds peaks of `x` that satisfy the criteria in `settings`, as
@@ -409,11 +510,16 @@ pub fn find_peaks(x: &[f64], settings: &FindPeaksSettings) -> Result<Peaks> {
         }
     }
 
-    let (mut peaks, left_edges, right_edges) = local_maxima(x);
+    let (mut peaks, flats) = local_maxima(x);
     let mut props = PeakProperties::default();
     let mut keep: Vec<bool> = Vec::new();
 
     if let Some(bound) = settings.plateau_size {
+        let (mut left_edges, mut right_edges) = (peaks.clone(), peaks.clone());
+        for &(k, l, r) in &flats {
+            left_edges[k] = l;
+            right_edges[k] = r;
+        }
         let sizes: Vec<usize> = left_edges
             .iter()
             .zip(&right_edges)
@@ -508,9 +614,11 @@ fn apply(peaks: &mut Vec<usize>, props: &mut PeakProperties, keep: &[bool]) {
 /// ```
 ///
 /// `peaks` need not be local maxima, sorted or unique (a sample that is not
-/// a maximum gets prominence 0 and itself as bases, SciPy warns). Runs in
-/// O(n + k log k) without a window (one monotonic-stack sweep per side
-/// instead of SciPy's per-peak scan, same results), O(k · wlen) with one.
+/// a maximum gets prominence 0 and itself as bases, SciPy warns). SciPy
+/// scans sample by sample up to the next higher sample, O(n) per peak on a
+/// periodic signal; here each search steps over blocks of 16, 256, ...
+/// samples (O(n) to build, O(log n) per peak) visiting them in SciPy's
+/// order, so the results are identical.
 ///
 /// ```
 /// use ballpass_dsp::peak_prominences;
@@ -545,26 +653,27 @@ fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Pro
         return out;
     }
     let n = x.len();
-    match half {
-        Some(h) if h < n => {
-            for &p in peaks {
-                let lo = p.saturating_sub(h);
-                let hi = (p + h).min(n - 1);
-                let (lmin, lb) = scan_left(x, p, lo);
-                let (rmin, rb) = scan_right(x, p, hi);
-                out.prominences.push(x[p] - lmin.max(rmin));
-                out.left_bases.push(lb);
-                out.right_bases.push(rb);
-            }
+    let h = half.unwrap_or(n).min(n);
+    let window = |p: usize| (p.saturating_sub(h), (p + h).min(n - 1));
+    if k.saturating_mul(2 * h + 1) < n {
+        // Short windows: SciPy's scans are cheaper than building the tree.
+        for &p in peaks {
+            let (lo, hi) = window(p);
+            let (lmin, lb) = scan_left(x, p, lo);
+            let (rmin, rb) = scan_right(x, p, hi);
+            out.prominences.push(x[p] - lmin.max(rmin));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
         }
-        _ => {
-            let (lmin, lb) = sweep_left(x, peaks);
-            let (rmin, rb) = sweep_right(x, peaks);
-            for (i, &p) in peaks.iter().enumerate() {
-                out.prominences.push(x[p] - lmin[i].max(rmin[i]));
-            }
-            out.left_bases = lb;
-            out.right_bases = rb;
+    } else {
+        let tree = MinMaxTree::new(x);
+        for &p in peaks {
+            let (lo, hi) = window(p);
+            let (lmin, lb) = tree.base_left(p, lo);
+            let (rmin, rb) = tree.base_right(p, hi);
+            out.prominences.push(x[p] - lmin.max(rmin));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
         }
     }
     out
@@ -572,12 +681,10 @@ fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Pro
 
 /// SciPy's left base scan over `[lo, p]`: minimum (nearest `p` on ties) of
 /// the samples before the first one higher than `x[p]`.
-#[inline]
 fn scan_left(x: &[f64], p: usize, lo: usize) -> (f64, usize) {
     let xp = x[p];
     let (mut vmin, mut base) = (xp, p);
-    let mut i = p;
-    loop {
+    for i in (lo..=p).rev() {
         let v = x[i];
         if v > xp {
             break;
@@ -586,16 +693,11 @@ fn scan_left(x: &[f64], p: usize, lo: usize) -> (f64, usize) {
             vmin = v;
             base = i;
         }
-        if i == lo {
-            break;
-        }
-        i -= 1;
     }
     (vmin, base)
 }
 
 /// SciPy's right base scan over `[p, hi]`.
-#[inline]
 fn scan_right(x: &[f64], p: usize, hi: usize) -> (f64, usize) {
     let xp = x[p];
     let (mut vmin, mut base) = (xp, p);
@@ -611,96 +713,211 @@ fn scan_right(x: &[f64], p: usize, hi: usize) -> (f64, usize) {
     (vmin, base)
 }
 
-/// One stack entry: a sample and the minimum of the samples between the
-/// previous entry (exclusive) and it (inclusive).
-#[derive(Clone, Copy)]
-struct Seg {
-    value: f64,
-    min: f64,
-    argmin: usize,
+/// log2 of the branching factor of [`MinMaxTree`].
+const TREE_SHIFT: usize = 4;
+/// Branching factor of [`MinMaxTree`]: units of 16, 256, 4096... samples.
+const TREE_B: usize = 1 << TREE_SHIFT;
+
+/// Maximum and minimum of `x` over units of `B^l` samples (level `l >= 1`;
+/// level 0 is `x` itself), so that the base searches step over whole units
+/// that hold no sample above the peak. Each search costs O(B log_B n)
+/// instead of SciPy's O(distance to the next higher sample), and visits the
+/// samples in SciPy's order with the same strict `<`, so bases and ties are
+/// identical.
+struct MinMaxTree<'a> {
+    x: &'a [f64],
+    /// `levels[l - 1] = (max, min)` per unit of level `l`.
+    levels: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
-/// Positions of `peaks` sorted increasingly (original order kept on ties).
-fn sorted_order(peaks: &[usize]) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..peaks.len()).collect();
-    if peaks.windows(2).any(|w| w[0] > w[1]) {
-        order.sort_by_key(|&i| peaks[i]);
+impl<'a> MinMaxTree<'a> {
+    fn new(x: &'a [f64]) -> Self {
+        fn reduce(mx: &[f64], mn: &[f64]) -> (Vec<f64>, Vec<f64>) {
+            let fmax = |c: &[f64]| c.iter().fold(c[0], |m, &v| if v > m { v } else { m });
+            let fmin = |c: &[f64]| c.iter().fold(c[0], |m, &v| if v < m { v } else { m });
+            (
+                mx.chunks(TREE_B).map(fmax).collect(),
+                mn.chunks(TREE_B).map(fmin).collect(),
+            )
+        }
+        let mut levels: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        if x.len() > TREE_B {
+            levels.push(reduce(x, x));
+            while let Some((mx, mn)) = levels.last().filter(|(mx, _)| mx.len() > TREE_B) {
+                let next = reduce(mx, mn);
+                levels.push(next);
+            }
+        }
+        MinMaxTree { x, levels }
     }
-    order
-}
 
-/// Left bases for all peaks in one sweep. For each sample `i`, after popping
-/// every stack entry not higher than `x[i]`, the stack top is the nearest
-/// strictly higher sample on the left, and the popped segments plus `i`
-/// cover exactly SciPy's scanned interval; their minimum (the rightmost on
-/// ties, merging right to left with a strict `<`) is the base.
-fn sweep_left(x: &[f64], peaks: &[usize]) -> (Vec<f64>, Vec<usize>) {
-    let order = sorted_order(peaks);
-    let mut mins = vec![0.0; peaks.len()];
-    let mut bases = vec![0; peaks.len()];
-    let last = peaks[order[order.len() - 1]];
-    let mut stack: Vec<Seg> = Vec::with_capacity(64);
-    let mut q = 0;
-    for (i, &v) in x.iter().enumerate().take(last + 1) {
-        let mut seg = Seg {
-            value: v,
-            min: v,
-            argmin: i,
+    #[inline]
+    fn count(&self, l: usize) -> usize {
+        if l == 0 {
+            self.x.len()
+        } else {
+            self.levels[l - 1].0.len()
+        }
+    }
+
+    #[inline]
+    fn max(&self, l: usize, u: usize) -> f64 {
+        if l == 0 {
+            self.x[u]
+        } else {
+            self.levels[l - 1].0[u]
+        }
+    }
+
+    #[inline]
+    fn min(&self, l: usize, u: usize) -> f64 {
+        if l == 0 {
+            self.x[u]
+        } else {
+            self.levels[l - 1].1[u]
+        }
+    }
+
+    /// First and last sample of unit `u` of level `l`.
+    #[inline]
+    fn span(&self, l: usize, u: usize) -> (usize, usize) {
+        let start = u << (TREE_SHIFT * l);
+        let end = ((u + 1) << (TREE_SHIFT * l)).min(self.x.len()) - 1;
+        (start, end)
+    }
+
+    /// [`scan_left`] over `[lo, p]`.
+    fn base_left(&self, p: usize, lo: usize) -> (f64, usize) {
+        let xp = self.x[p];
+        let mut vmin = xp;
+        let mut hit = (0, p);
+        let top = self.levels.len();
+        // Ascend: samples [span(l, u).0, p] are done; take units leftwards,
+        // moving up a level whenever u starts its parent.
+        let (mut l, mut u) = (0, p);
+        let mut stop = loop {
+            if self.span(l, u).0 <= lo {
+                break None;
+            }
+            if u % TREE_B == 0 && l < top {
+                u /= TREE_B;
+                l += 1;
+                continue;
+            }
+            let c = u - 1;
+            if self.span(l, c).0 < lo || self.max(l, c) > xp {
+                break Some((l, c));
+            }
+            let m = self.min(l, c);
+            if m < vmin {
+                vmin = m;
+                hit = (l, c);
+            }
+            u = c;
         };
-        while let Some(top) = stack.last() {
-            if top.value > v {
+        // Descend into the unit holding the higher sample or `lo`.
+        'outer: while let Some((l, c)) = stop {
+            if l == 0 {
                 break;
             }
-            if top.min < seg.min {
-                seg.min = top.min;
-                seg.argmin = top.argmin;
+            let cl = l - 1;
+            let first = c * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            for ch in (first..=last).rev() {
+                let (start, end) = self.span(cl, ch);
+                if end < lo {
+                    break 'outer;
+                }
+                if start < lo || self.max(cl, ch) > xp {
+                    stop = Some((cl, ch));
+                    continue 'outer;
+                }
+                let m = self.min(cl, ch);
+                if m < vmin {
+                    vmin = m;
+                    hit = (cl, ch);
+                }
             }
-            stack.pop();
+            break;
         }
-        stack.push(seg);
-        while q < order.len() && peaks[order[q]] == i {
-            mins[order[q]] = seg.min;
-            bases[order[q]] = seg.argmin;
-            q += 1;
+        // The base is the rightmost sample equal to vmin in the unit hit.
+        let (mut l, mut u) = hit;
+        while l > 0 {
+            let cl = l - 1;
+            let first = u * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            u = (first..=last)
+                .rev()
+                .find(|&ch| self.min(cl, ch) == vmin)
+                .expect("a unit's minimum is one of its children's");
+            l = cl;
         }
+        (vmin, u)
     }
-    (mins, bases)
-}
 
-/// Right bases for all peaks in one sweep from the end (mirror of
-/// [`sweep_left`]; ties go to the leftmost, i.e. nearest, minimum).
-fn sweep_right(x: &[f64], peaks: &[usize]) -> (Vec<f64>, Vec<usize>) {
-    let order = sorted_order(peaks);
-    let mut mins = vec![0.0; peaks.len()];
-    let mut bases = vec![0; peaks.len()];
-    let first = peaks[order[0]];
-    let mut stack: Vec<Seg> = Vec::with_capacity(64);
-    let mut q = order.len();
-    for i in (first..x.len()).rev() {
-        let v = x[i];
-        let mut seg = Seg {
-            value: v,
-            min: v,
-            argmin: i,
+    /// [`scan_right`] over `[p, hi]`, the mirror image of [`Self::base_left`].
+    fn base_right(&self, p: usize, hi: usize) -> (f64, usize) {
+        let xp = self.x[p];
+        let mut vmin = xp;
+        let mut hit = (0, p);
+        let top = self.levels.len();
+        let (mut l, mut u) = (0, p);
+        let mut stop = loop {
+            if self.span(l, u).1 >= hi {
+                break None;
+            }
+            if (u + 1) % TREE_B == 0 && l < top {
+                u /= TREE_B;
+                l += 1;
+                continue;
+            }
+            let c = u + 1;
+            if self.span(l, c).1 > hi || self.max(l, c) > xp {
+                break Some((l, c));
+            }
+            let m = self.min(l, c);
+            if m < vmin {
+                vmin = m;
+                hit = (l, c);
+            }
+            u = c;
         };
-        while let Some(top) = stack.last() {
-            if top.value > v {
+        'outer: while let Some((l, c)) = stop {
+            if l == 0 {
                 break;
             }
-            if top.min < seg.min {
-                seg.min = top.min;
-                seg.argmin = top.argmin;
+            let cl = l - 1;
+            let first = c * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            for ch in first..=last {
+                let (start, end) = self.span(cl, ch);
+                if start > hi {
+                    break 'outer;
+                }
+                if end > hi || self.max(cl, ch) > xp {
+                    stop = Some((cl, ch));
+                    continue 'outer;
+                }
+                let m = self.min(cl, ch);
+                if m < vmin {
+                    vmin = m;
+                    hit = (cl, ch);
+                }
             }
-            stack.pop();
+            break;
         }
-        stack.push(seg);
-        while q > 0 && peaks[order[q - 1]] == i {
-            mins[order[q - 1]] = seg.min;
-            bases[order[q - 1]] = seg.argmin;
-            q -= 1;
+        let (mut l, mut u) = hit;
+        while l > 0 {
+            let cl = l - 1;
+            let first = u * TREE_B;
+            let last = (first + TREE_B).min(self.count(cl)) - 1;
+            u = (first..=last)
+                .find(|&ch| self.min(cl, ch) == vmin)
+                .expect("a unit's minimum is one of its children's");
+            l = cl;
         }
+        (vmin, u)
     }
-    (mins, bases)
 }
 
 /// Width of each peak at `rel_height` of its prominence, as
@@ -854,12 +1071,12 @@ fn widths_unchecked(
 mod tests {
     use super::*;
 
-    /// Naive SciPy scan, the reference for the stack sweeps.
-    fn naive(x: &[f64], peaks: &[usize]) -> Prominences {
+    /// SciPy's scan, the reference for the tree search.
+    fn naive(x: &[f64], peaks: &[usize], half: usize) -> Prominences {
         let mut out = Prominences::default();
         for &p in peaks {
-            let (l, lb) = scan_left(x, p, 0);
-            let (r, rb) = scan_right(x, p, x.len() - 1);
+            let (l, lb) = scan_left(x, p, p.saturating_sub(half));
+            let (r, rb) = scan_right(x, p, (p + half).min(x.len() - 1));
             out.prominences.push(x[p] - l.max(r));
             out.left_bases.push(lb);
             out.right_bases.push(rb);
@@ -867,32 +1084,80 @@ mod tests {
         out
     }
 
+    fn lcg_levels(s: &mut u64, len: usize, levels: u64) -> Vec<f64> {
+        (0..len)
+            .map(|_| {
+                *s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((*s >> 33) % levels) as f64
+            })
+            .collect()
+    }
+
     #[test]
-    fn sweep_matches_naive_scan_on_integer_signals_with_ties() {
-        // Small integer alphabet => many equal values, the hard case for ties.
+    fn tree_search_matches_scipy_scan_with_ties_and_windows() {
+        // Small integer alphabets => many equal values (the hard case for
+        // ties); lengths across several tree levels; a random walk for long
+        // searches.
         let mut s = 12345u64;
-        for len in 1..60 {
-            let x: Vec<f64> = (0..len)
-                .map(|_| {
-                    s = s
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    ((s >> 33) % 4) as f64
-                })
-                .collect();
-            // every index, unsorted and with a duplicate
-            let mut peaks: Vec<usize> = (0..len).rev().collect();
-            peaks.push(len / 2);
-            let fast = prominences_unchecked(&x, &peaks, None);
-            assert_eq!(fast, naive(&x, &peaks), "x = {x:?}");
+        for len in (1..80).chain([255, 256, 257, 1000, 4097, 5000]) {
+            for levels in [2, 4, 1000] {
+                let mut x = lcg_levels(&mut s, len, levels);
+                if levels == 1000 {
+                    for i in 1..len {
+                        x[i] = x[i - 1] + x[i] - 499.5;
+                    }
+                }
+                // every index (or a stride), unsorted, with a duplicate
+                let step = 1 + len / 300;
+                let mut peaks: Vec<usize> = (0..len).rev().step_by(step).collect();
+                peaks.push(len / 2);
+                for half in [len, 1, 7, 100] {
+                    let tree = MinMaxTree::new(&x);
+                    let mut fast = Prominences::default();
+                    for &p in &peaks {
+                        let (l, lb) = tree.base_left(p, p.saturating_sub(half));
+                        let (r, rb) = tree.base_right(p, (p + half).min(len - 1));
+                        fast.prominences.push(x[p] - l.max(r));
+                        fast.left_bases.push(lb);
+                        fast.right_bases.push(rb);
+                    }
+                    assert_eq!(
+                        fast,
+                        naive(&x, &peaks, half),
+                        "len {len} levels {levels} half {half}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn distance_selection_matches_the_greedy_walk() {
+        let mut s = 777u64;
+        for len in [3, 10, 50, 300, 3000] {
+            for levels in [2, 5, 1000] {
+                let x = lcg_levels(&mut s, len, levels);
+                let (peaks, _) = local_maxima(&x);
+                let h: Vec<f64> = peaks.iter().map(|&p| x[p]).collect();
+                for d in [1, 2, 3, 5, 17, 100, 10_000] {
+                    assert_eq!(
+                        select_by_distance(&peaks, &h, d),
+                        greedy_distance(&peaks, &h, d),
+                        "len {len} levels {levels} d {d}"
+                    );
+                }
+            }
         }
     }
 
     #[test]
     fn flat_peaks_report_middle_rounded_down_and_edges() {
         let x = [0.0, 1.0, 1.0, 0.0, 2.0, 2.0, 2.0, 0.0, 3.0, 3.0];
-        let (mid, l, r) = local_maxima(&x);
-        assert_eq!((mid, l, r), (vec![1, 5], vec![1, 4], vec![2, 6]));
+        let x2 = [0.0, 2.0, 1.0, 1.0, 3.0, 0.0];
+        assert_eq!(local_maxima(&x), (vec![1, 5], vec![(0, 1, 2), (1, 4, 6)]));
+        assert_eq!(local_maxima(&x2), (vec![1, 4], vec![]));
     }
 
     #[test]

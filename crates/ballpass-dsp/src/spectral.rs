@@ -9,14 +9,11 @@
 use std::sync::Arc;
 
 use realfft::{RealFftPlanner, RealToComplex};
-use rustfft::num_complex::Complex;
+use rustfft::num_complex::Complex64;
 
-use crate::detrend::{detrend_unchecked, DetrendType};
+use crate::detrend::{DetrendType, Trend};
 use crate::error::{check_finite, invalid, DspError, Result};
 use crate::window::Window;
-
-/// A complex number of two `f64`s (re-exported from `num-complex`).
-pub type Complex64 = Complex<f64>;
 
 /// Units of a spectral estimate.
 ///
@@ -205,10 +202,23 @@ impl Engine {
 
     /// Detrended, windowed, zero-padded FFT of the segment at `start`.
     fn segment_fft(&mut self, x: &[f64], start: usize, detrend: DetrendType, into_y: bool) {
-        let seg = &mut self.buf[..self.nperseg];
-        seg.copy_from_slice(&x[start..start + self.nperseg]);
-        detrend_unchecked(seg, detrend);
-        seg.iter_mut().zip(&self.window).for_each(|(v, w)| *v *= w);
+        let seg = &x[start..start + self.nperseg];
+        // One pass: (x - trend) * w, as SciPy's detrend-then-window.
+        let t = Trend::fit(seg, detrend);
+        let out = self.buf[..self.nperseg]
+            .iter_mut()
+            .zip(seg)
+            .zip(&self.window);
+        match detrend {
+            DetrendType::None => out.for_each(|((b, v), w)| *b = v * w),
+            DetrendType::Constant => {
+                let m = t.at(0);
+                out.for_each(|((b, v), w)| *b = (v - m) * w)
+            }
+            DetrendType::Linear => out
+                .enumerate()
+                .for_each(|(i, ((b, v), w))| *b = (v - t.at(i)) * w),
+        }
         self.buf[self.nperseg..].fill(0.0);
         let out = if into_y {
             &mut self.spec_y
@@ -305,15 +315,19 @@ impl Engine {
         for seg in 0..nseg {
             self.segment_fft(x, seg * step, s.detrend, false);
             self.segment_fft(y, seg * step, s.detrend, true);
-            let prods = self
-                .spec_x
-                .iter()
-                .zip(&self.spec_y)
-                .map(|(a, b)| a.conj() * b);
             if use_median {
-                all.extend(prods);
+                all.extend(
+                    self.spec_x
+                        .iter()
+                        .zip(&self.spec_y)
+                        .map(|(a, b)| a.conj() * b),
+                );
             } else {
-                acc.iter_mut().zip(prods).for_each(|(a, p)| *a += p);
+                // conj(a) * b, written out so that the loop vectorises.
+                for ((s, a), b) in acc.iter_mut().zip(&self.spec_x).zip(&self.spec_y) {
+                    s.re += a.re * b.re + a.im * b.im;
+                    s.im += a.re * b.im - a.im * b.re;
+                }
             }
         }
         let fac = self.bin_factors(fs_hz, s.scaling, s.onesided);
@@ -665,14 +679,22 @@ impl Welch {
 /// [`Welch::psd`] for the formula.
 ///
 /// ```
-/// use ballpass_dsp::{welch, WelchSettings};
-/// // White noise of variance 1 at fs = 2 Hz has a one-sided density of 1 unit²/Hz.
-/// let x: Vec<f64> = (0..4096u64)
-///     .map(|i| if (i.wrapping_mul(2654435761) >> 7) & 1 == 0 { 1.0 } else { -1.0 })
-///     .collect();
-/// let p = welch(&x, 2.0, &WelchSettings::default()).unwrap();
-/// let mean: f64 = p.pxx[1..128].iter().sum::<f64>() / 127.0;
-/// assert!((mean - 1.0).abs() < 0.1);
+/// use ballpass_dsp::{welch, DetrendType, WelchSettings, Window};
+/// // Boxcar, no overlap, no detrending, segments tiling the signal: the
+/// // one-sided density integrates to the mean square (Parseval).
+/// let x: Vec<f64> = (0..1024).map(|n| ((n * 37 % 101) as f64 - 50.0) / 10.0).collect();
+/// let s = WelchSettings {
+///     window: Window::Boxcar,
+///     nperseg: 128,
+///     noverlap: Some(0),
+///     detrend: DetrendType::None,
+///     ..Default::default()
+/// };
+/// let p = welch(&x, 10.0, &s).unwrap();
+/// let ms = x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64;
+/// let integral = p.pxx.iter().sum::<f64>() * p.freq_hz[1];
+/// assert!((integral - ms).abs() < 1e-12 * ms);
+/// assert_eq!(p.n_segments, 8);
 /// ```
 ///
 /// # Errors
@@ -785,6 +807,14 @@ mod tests {
     }
 
     #[test]
+    fn coherence_of_mean_removed_single_samples_is_nan() {
+        // One-sample segments detrend to zero: Pxx = Pyy = 0, so 0/0 as in SciPy.
+        let c = coherence(&[1.0], &[2.0], 1.0, &WelchSettings::default()).unwrap();
+        assert_eq!(c.freq_hz, vec![0.0]);
+        assert!(c.cxy[0].is_nan());
+    }
+
+    #[test]
     fn fftfreq_order() {
         let e = Engine::new(&Window::Boxcar, 5, 0, 5).unwrap();
         assert_eq!(e.freqs(5.0, false), vec![0.0, 1.0, 2.0, -2.0, -1.0]);
@@ -855,6 +885,23 @@ mod tests {
         assert!(welch(&x, 0.0, &d()).is_err());
         assert!(welch(&x, f64::NAN, &d()).is_err());
         assert!(welch(&[], 1.0, &d()).is_err());
+        assert!(matches!(
+            welch(&[1.0, f64::NAN, 2.0], 1.0, &d()).unwrap_err(),
+            DspError::NonFinite {
+                what: "x",
+                index: 1,
+                ..
+            }
+        ));
+        assert!(matches!(
+            csd(&x, &[f64::INFINITY], 1.0, &d()).unwrap_err(),
+            DspError::NonFinite {
+                what: "y",
+                index: 0,
+                ..
+            }
+        ));
+        assert!(csd(&x, &x, -2.0, &d()).is_err());
         assert!(coherence(&x, &x[..99], 1.0, &d()).is_err());
         assert!(coherence(
             &x,

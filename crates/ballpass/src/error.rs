@@ -76,6 +76,14 @@ pub enum Error {
         /// What is wrong, with the value.
         reason: String,
     },
+    /// The optical channel holds no ball passages that can be measured.
+    #[error("{source_name}: no ball passages found in optical_V: {reason}")]
+    NoPassages {
+        /// File or test the recording came from.
+        source_name: String,
+        /// What was found instead, with the threshold.
+        reason: String,
+    },
     /// A kernel of `ballpass-dsp` rejected its input.
     #[error("{context}: {source}")]
     Dsp {
@@ -83,6 +91,15 @@ pub enum Error {
         context: String,
         /// The kernel's error.
         source: ballpass_dsp::DspError,
+    },
+    /// A figure or report cannot be built: malformed figure data (length
+    /// mismatch, bad range, nothing drawable), a bad id, or drawing failed.
+    #[error("report: {what}: {reason}")]
+    Report {
+        /// Which figure, panel or series (`figure 'corr_ff' panel 2 series 'R'`).
+        what: String,
+        /// What is wrong, with the values.
+        reason: String,
     },
 }
 

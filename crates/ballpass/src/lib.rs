@@ -9,7 +9,10 @@
 pub mod analysis;
 pub mod bearing;
 pub mod error;
+pub mod model;
 pub mod recording;
+pub mod report;
+pub mod sim;
 
 pub use error::{Error, Result};
 

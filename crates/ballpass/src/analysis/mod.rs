@@ -31,8 +31,8 @@
 //! Decisions where the brief left room are recorded in the docs of each
 //! step and in [`Analysis::method_notes`], which `analysis.json` carries.
 //!
-//! The optical passage summary (`analysis::passage`, another branch) is not
-//! part of [`Analysis`] yet; it is wired in once both land.
+//! The optical ball passages are analysed by [`passage`]; their summary is not
+//! part of [`Analysis`] yet (to be wired in by the coordinator).
 
 use ballpass_dsp::{DetrendType, Normalization, Window};
 use serde::{Deserialize, Serialize};
@@ -43,6 +43,8 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
+mod lm;
+pub mod passage;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
@@ -50,6 +52,7 @@ mod stats;
 
 pub use correlation::{Correlations, MeasuredPeriod, Phase, SignalPeriod};
 pub use export::{write_outputs, OutputPaths};
+pub use passage::{detect_passages, PassageAnalysis, PassageSettings};
 pub use preprocess::{Prepared, VelocityErrorStats};
 pub use repeats::{RecordScalars, Repeats, Spread};
 pub use spectra::{CoherenceRow, HarmonicRow, HarmonicValue, Spectra, SpectrumInfo};

@@ -10,9 +10,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
+pub mod inspect;
 pub mod io;
+pub mod profile;
 
-pub use io::{load, write_csv, ChannelSource, Format, LoadOptions};
+pub use io::{load, write_csv, write_mat, ChannelSource, Format, LoadOptions};
+pub use profile::Profile;
 
 /// The three measured channels of the testbed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]

@@ -12,7 +12,8 @@
 //!   and, when velocity and bearing are known, the recording must span at
 //!   least [`LoadOptions::min_periods`] ball-pass periods.
 //!
-//! [`write_csv`] writes the canonical CSV that [`load`] reads back bit for bit.
+//! [`write_csv`] writes the canonical CSV and [`write_mat`] a level-5 MAT-file;
+//! [`load`] reads either back bit for bit.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -25,7 +26,10 @@ use crate::bearing::Geometry;
 use crate::error::{Error, Result};
 
 pub mod csv;
+pub mod mat;
 pub mod timebase;
+
+pub use mat::write_mat;
 
 /// File formats a recording can be read from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -121,7 +125,7 @@ pub struct LoadOptions {
     /// against the time column when it has one.
     pub fs_hz: Option<f64>,
     /// Name of the time column / variable, s. `None`: `time_s` if present
-    /// (a MAT file also tries `t` and `time`, and ControlDesk's `X.Data`).
+    /// (ControlDesk's `X.Data` in a ControlDesk MAT-file).
     pub time: Option<String>,
     /// Ignore any time column and use [`LoadOptions::fs_hz`] alone.
     pub ignore_time: bool,
@@ -258,12 +262,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Recording> {
     })?;
     let table = match format {
         Format::Csv | Format::Tsv => csv::parse(path, &bytes, format, opts)?,
-        Format::Mat => {
-            return Err(Error::Format {
-                path: path.to_path_buf(),
-                reason: "MAT-files are not supported yet; export the recording as CSV".into(),
-            })
-        }
+        Format::Mat => mat::parse(path, &bytes, opts)?,
     };
     finish(path, table, opts)
 }

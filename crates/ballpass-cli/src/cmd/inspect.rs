@@ -1,0 +1,147 @@
+//! `ballpass inspect`: what a user must know about recording files before
+//! analysing them.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{anyhow, Result};
+use ballpass::recording::inspect::{inspect, InspectSettings, Inspection, Severity};
+use ballpass::recording::load;
+use clap::Args;
+use serde::Serialize;
+
+use crate::args::LoadArgs;
+
+/// Arguments of `ballpass inspect`.
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7).
+    #[arg(required = true, value_name = "FILE")]
+    files: Vec<PathBuf>,
+    #[command(flatten)]
+    load: LoadArgs,
+    /// Print JSON for a program instead of text for a person.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct FileReport {
+    path: PathBuf,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    inspection: Option<Inspection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+}
+
+#[derive(Serialize)]
+struct Output<'a> {
+    schema: &'static str,
+    version: &'static str,
+    settings: InspectSettings,
+    files: &'a [FileReport],
+}
+
+/// Runs `ballpass inspect`.
+pub fn run(a: &InspectArgs) -> Result<()> {
+    let opts = a.load.options()?;
+    let settings = InspectSettings::default();
+    let mut reports = Vec::new();
+    let mut first_error = None;
+    for path in &a.files {
+        match load(path, &opts) {
+            Ok(rec) => reports.push(FileReport {
+                path: path.clone(),
+                inspection: Some(inspect(&rec, opts.geometry.as_ref(), &settings)),
+                error: None,
+            }),
+            Err(e) => {
+                let msg = e.to_string();
+                if a.files.len() > 1 {
+                    eprintln!("error: {msg}");
+                }
+                first_error.get_or_insert_with(|| msg.clone());
+                reports.push(FileReport {
+                    path: path.clone(),
+                    inspection: None,
+                    error: Some(msg),
+                });
+            }
+        }
+    }
+    let mut out = std::io::stdout().lock();
+    if a.json {
+        let o = Output {
+            schema: "ballpass.inspect/1",
+            version: ballpass::VERSION,
+            settings,
+            files: &reports,
+        };
+        serde_json::to_writer_pretty(&mut out, &o)?;
+        writeln!(out)?;
+    } else {
+        for (k, r) in reports.iter().enumerate() {
+            if let Some(i) = &r.inspection {
+                if k > 0 {
+                    writeln!(out)?;
+                }
+                print_text(&mut out, i)?;
+            }
+        }
+    }
+    out.flush()?;
+    let failed = reports.iter().filter(|r| r.error.is_some()).count();
+    match (failed, first_error) {
+        (0, _) => Ok(()),
+        (_, Some(msg)) if a.files.len() == 1 => Err(anyhow!(msg)),
+        (n, _) => Err(anyhow!(
+            "{n} of {} files could not be loaded",
+            a.files.len()
+        )),
+    }
+}
+
+fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
+    writeln!(out, "{}", i.source)?;
+    writeln!(
+        out,
+        "  {} samples at {} Hz = {:.3} s, first sample at t = {} s",
+        i.samples, i.fs_hz, i.duration_s, i.start_time_s
+    )?;
+    let v = i
+        .velocity_mm_s
+        .map(|v| format!("{v} mm/s"))
+        .unwrap_or_else(|| "unknown".into());
+    let b = i.bearing.as_deref().unwrap_or("unknown");
+    write!(out, "  velocity {v}, bearing {b}")?;
+    if let (Some(t), Some(p)) = (i.tau_c_s, i.periods) {
+        write!(out, ": tau_c = {t:.4} s, {p:.1} periods")?;
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "  {:<12} {:<4} {:>13} {:>13} {:>13} {:>12} {:>13}",
+        "channel", "unit", "min", "max", "mean", "std", "slope /s"
+    )?;
+    for c in &i.channels {
+        writeln!(
+            out,
+            "  {:<12} {:<4} {:>13.6} {:>13.6} {:>13.6} {:>12.6} {:>13.6}",
+            c.channel, c.unit, c.min, c.max, c.mean, c.std, c.slope_per_s
+        )?;
+    }
+    if !i.missing.is_empty() {
+        writeln!(out, "  missing: {}", i.missing.join(", "))?;
+    }
+    for f in &i.findings {
+        let sev = match f.severity {
+            Severity::Info => "note",
+            Severity::Warning => "WARNING",
+        };
+        match &f.channel {
+            Some(c) => writeln!(out, "  {sev}: {c}: {}", f.message)?,
+            None => writeln!(out, "  {sev}: {}", f.message)?,
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,239 @@
+//! `ballpass passage`: ball passages seen by the optical sensor, per record.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
+use ballpass::recording::io::{load, LoadOptions};
+use clap::Args;
+use serde::Serialize;
+
+use crate::args::BearingArgs;
+use crate::output::{ensure_dir, write_csv, write_json};
+
+/// Arguments of `ballpass passage`.
+#[derive(Debug, Args)]
+pub struct PassageArgs {
+    /// Recording files (CSV/TSV/...; see the recording loader).
+    #[arg(required = true, value_name = "REC")]
+    records: Vec<PathBuf>,
+    /// Tracking velocity, mm/s (else the recording's own, else the period is
+    /// found from the pulses and no prediction is made).
+    #[arg(long, short = 'v')]
+    velocity: Option<f64>,
+    #[command(flatten)]
+    bearing: BearingArgs,
+    /// Sampling rate, Hz, for files without a time column.
+    #[arg(long, value_name = "HZ")]
+    fs: Option<f64>,
+    /// Column holding the optical sensor voltage (default optical_V).
+    #[arg(long, value_name = "NAME")]
+    optical_column: Option<String>,
+    /// Smallest pulse prominence, in noise standard deviations.
+    #[arg(long, default_value_t = PassageSettings::default().min_snr)]
+    min_snr: f64,
+    /// Pulses in the Gaussian/rectangular train fits (0: no fits).
+    #[arg(long, default_value_t = PassageSettings::default().fit_pulses)]
+    fit_pulses: usize,
+    /// Order of the rectangular Fourier series fitted.
+    #[arg(long, default_value_t = PassageSettings::default().rectangular_order)]
+    order: usize,
+    /// Output directory for passages.csv and passage.json.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Serialize)]
+struct Row<'a> {
+    record: &'a str,
+    index: usize,
+    time_s: f64,
+    peak_time_s: f64,
+    polarity: i8,
+    tau_c_s: Option<f64>,
+    tau_p_s: f64,
+    sigma_s: f64,
+    tau_p_over_tau_c: Option<f64>,
+    amplitude_v: f64,
+    height_v: f64,
+    spacing_mm: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct Failure {
+    record: String,
+    error: String,
+}
+
+#[derive(Serialize)]
+struct Output<'a> {
+    schema: &'static str,
+    version: &'static str,
+    bearing: &'a str,
+    records: &'a [PassageAnalysis],
+    failed: &'a [Failure],
+}
+
+/// Runs `ballpass passage`.
+pub fn run(a: &PassageArgs) -> Result<()> {
+    let (bearing_name, geometry) = a.bearing.geometry()?;
+    let settings = PassageSettings {
+        velocity_mm_s: a.velocity,
+        geometry: Some(geometry),
+        min_snr: a.min_snr,
+        fit_pulses: a.fit_pulses,
+        rectangular_order: a.order,
+        ..Default::default()
+    };
+    let mut opts = LoadOptions {
+        fs_hz: a.fs,
+        velocity_mm_s: a.velocity,
+        geometry: Some(geometry),
+        ..Default::default()
+    };
+    opts.optical.name = a.optical_column.clone();
+    let mut done = Vec::new();
+    let mut failed = Vec::new();
+    for path in &a.records {
+        let result = load(path, &opts)
+            .map_err(anyhow::Error::from)
+            .and_then(|rec| detect_passages(&rec, &settings).map_err(anyhow::Error::from));
+        match result {
+            Ok(r) => done.push(r),
+            Err(e) => failed.push(Failure {
+                record: path.display().to_string(),
+                error: e.to_string(),
+            }),
+        }
+    }
+    let mut err = std::io::stderr().lock();
+    for f in &failed {
+        writeln!(err, "error: {}", f.error)?;
+    }
+    if done.is_empty() {
+        bail!(
+            "no passages measured in {} record(s); nothing written",
+            a.records.len()
+        );
+    }
+    let rows: Vec<Row> = done
+        .iter()
+        .flat_map(|r| {
+            r.passages.iter().map(move |p| Row {
+                record: &r.source,
+                index: p.index,
+                time_s: p.time_s,
+                peak_time_s: p.peak_time_s,
+                polarity: p.polarity,
+                tau_c_s: p.tau_c_s,
+                tau_p_s: p.tau_p_s,
+                sigma_s: p.sigma_s,
+                tau_p_over_tau_c: p.tau_p_over_tau_c,
+                amplitude_v: p.amplitude_v,
+                height_v: p.height_v,
+                spacing_mm: p.spacing_mm,
+            })
+        })
+        .collect();
+    ensure_dir(&a.out)?;
+    write_csv(&a.out.join("passages.csv"), &rows)?;
+    write_json(
+        &a.out.join("passage.json"),
+        &Output {
+            schema: "ballpass.passage/1",
+            version: ballpass::VERSION,
+            bearing: &bearing_name,
+            records: &done,
+            failed: &failed,
+        },
+    )?;
+    let mut out = std::io::stdout().lock();
+    for r in &done {
+        summarize(&mut out, r)?;
+    }
+    writeln!(
+        out,
+        "wrote {}/{{passages.csv, passage.json}}",
+        a.out.display()
+    )?;
+    if !failed.is_empty() {
+        bail!(
+            "{} of {} record(s) failed (see above); the others were written",
+            failed.len(),
+            a.records.len()
+        );
+    }
+    Ok(())
+}
+
+fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {
+    writeln!(out, "{}:", r.source)?;
+    let vel = match r.velocity_mm_s {
+        Some(v) => format!("v = {v} mm/s ({})", r.velocity_source),
+        None => "velocity unknown (period from the pulses)".into(),
+    };
+    writeln!(
+        out,
+        "  {} passages ({} inverted) in {:.2} s; {vel}; noise {:.3e} V, threshold {:.3e} V",
+        r.count, r.count_inverted, r.duration_s, r.noise_v, r.prominence_threshold_v
+    )?;
+    writeln!(
+        out,
+        "  tau_c = {:.5} ± {:.5} s, tau_p = {:.5} ± {:.5} s (width at half prominence), tau_p/tau_c = {:.4} ± {:.4} (thesis 0.155)",
+        r.tau_c_s.mean, r.tau_c_s.std, r.tau_p_s.mean, r.tau_p_s.std, r.tau_p_over_tau_c.mean, r.tau_p_over_tau_c.std
+    )?;
+    match (r.f_c_predicted_hz, r.f_c_relative_error) {
+        (Some(p), Some(e)) => writeln!(
+            out,
+            "  f_c measured {:.5} Hz, predicted {p:.5} Hz ({:+.2}%)",
+            r.f_c_measured_hz,
+            100.0 * e
+        )?,
+        _ => writeln!(out, "  f_c measured {:.5} Hz", r.f_c_measured_hz)?,
+    }
+    if let (Some(d), Some(c)) = (r.d_avg_implied_mm, r.d_avg_catalog_mm) {
+        writeln!(
+            out,
+            "  d_avg = v tau_c / 2 = {d:.4} mm (catalog {c:.4} mm, {:+.2}%)",
+            100.0 * (d / c - 1.0)
+        )?;
+    }
+    if let Some(s) = &r.spacing {
+        writeln!(
+            out,
+            "  spacing {:.3}–{:.3} mm (std {:.3} mm) against [{}, {}] mm: spread uses {:.0}% of d_ext, {} outside",
+            s.min_mm,
+            s.max_mm,
+            s.std_mm,
+            s.limit_min_mm,
+            s.limit_max_mm,
+            100.0 * s.spread_over_free_space,
+            s.outside_limits
+        )?;
+    }
+    if let Some(f) = &r.fits {
+        let q = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.4}"));
+        writeln!(
+            out,
+            "  fits over {} pulses: Gaussian R² {} (rms/amplitude {}), rectangular R² {} (rms/amplitude {}) → {}",
+            f.pulses,
+            q(f.gaussian.as_ref().map(|g| g.quality.r_squared)),
+            q(f.gaussian.as_ref().map(|g| g.quality.rms_over_amplitude)),
+            q(f.rectangular.as_ref().map(|g| g.quality.r_squared)),
+            q(f.rectangular.as_ref().map(|g| g.quality.rms_over_amplitude)),
+            f.better.as_deref().unwrap_or("no fit")
+        )?;
+    }
+    if r.conditions.is_empty() {
+        writeln!(
+            out,
+            "  no artefacts found (drift, AC coupling, inverted pulses, gaps)"
+        )?;
+    }
+    for c in &r.conditions {
+        writeln!(out, "  {}: {}", c.kind.name(), c.message)?;
+        writeln!(out, "    → {}", c.advice)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,155 @@
+//! End-to-end tests of `ballpass model`: the real binary in a temp directory.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ballpass-model-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_ballpass"))
+        .args(args)
+        .output()
+        .expect("run ballpass");
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// Column `name` of a CSV file as numbers.
+fn column(path: &PathBuf, name: &str) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let i = header
+        .iter()
+        .position(|h| *h == name)
+        .unwrap_or_else(|| panic!("{name} in {header:?}"));
+    lines
+        .map(|l| l.split(',').nth(i).unwrap().parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn pulses_writes_errata_coefficients() {
+    let d = tmp("pulses");
+    let (ok, out, err) = run(&[
+        "model",
+        "pulses",
+        "--ratio",
+        "0.155",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("10.05%"), "{out}");
+    let c = column(&d.join("gaussian_coefficients.csv"), "c_over_p");
+    // ERRATA §6 values, 5 significant digits printed.
+    for (got, want) in c.iter().zip([0.38853, 0.24180, 0.058290, 0.0054426]) {
+        assert!((got - want).abs() / want < 5e-5, "{got} vs {want}");
+    }
+    let a = column(&d.join("rectangular_coefficients.csv"), "a_n");
+    // ERRATA §11 a0 = 0.310, a1 = 0.26326 (truncated digits).
+    assert!((a[0] - 0.310).abs() < 5e-4 && (a[1] - 0.26326).abs() < 1e-5);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("pulses.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "ballpass.model.pulses/1");
+    // No temp files left behind by the atomic writes.
+    assert!(std::fs::read_dir(&d).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .starts_with('.')));
+}
+
+#[test]
+fn stage_writes_bode_and_velocity_response() {
+    let d = tmp("stage");
+    let (ok, out, err) = run(&[
+        "model",
+        "stage",
+        "--mass",
+        "3",
+        "--natural-frequency",
+        "16.6",
+        "--damping",
+        "0.05",
+        "--velocity",
+        "9",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("natural frequency 16.6000 Hz"), "{out}");
+    for f in [
+        "bode.csv",
+        "difference.csv",
+        "harmonics.csv",
+        "velocity_response.csv",
+        "stage.json",
+    ] {
+        assert!(d.join(f).exists(), "{f}");
+    }
+    let v = column(&d.join("velocity_response.csv"), "velocity_mm_s");
+    assert_eq!(v.len(), 1000);
+    // The velocity deviation has zero mean (D_0 = 0): rounding only.
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    let pp = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - v.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!(mean.abs() < 1e-12 * pp.max(1.0), "{mean}");
+}
+
+#[test]
+fn stage_without_loop_parameters_is_a_clear_error() {
+    let d = tmp("bad");
+    let (ok, _, err) = run(&[
+        "model",
+        "stage",
+        "--mass",
+        "3",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("--kp") && err.contains("--natural-frequency"),
+        "{err}"
+    );
+    let (ok, _, err) = run(&["model", "signals", "--out", d.to_str().unwrap()]);
+    assert!(!ok && err.contains("--velocity"), "{err}");
+    let (ok, _, err) = run(&[
+        "model",
+        "pulses",
+        "--ratio",
+        "1.5",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("ratio"), "{err}");
+}
+
+#[test]
+fn signals_reports_phase_in_words() {
+    let d = tmp("signals");
+    let (ok, out, err) = run(&[
+        "model",
+        "signals",
+        "--f-c",
+        "1",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("ve leads F by 0.25000 s"), "{out}");
+    let r = column(&d.join("correlations.csv"), "r_fve");
+    let tau = column(&d.join("correlations.csv"), "tau_s");
+    // Eq. 7.1 default: R_Fve(τ) = +(a_f a_v/2) sin ω_c τ; rounding only.
+    for (t, r) in tau.iter().zip(&r) {
+        assert!((r - 0.5 * (2.0 * std::f64::consts::PI * t).sin()).abs() < 1e-12);
+    }
+}

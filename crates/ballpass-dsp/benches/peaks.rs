@@ -1,0 +1,78 @@
+//! find_peaks (distance + prominence) and peak_widths on 30 000 samples of a
+//! noisy Gaussian pulse train at 1 kHz, the same signal and work as
+//! `tools/bench_scipy_peaks.py` (same splitmix64 stream).
+//!
+//! Measured once on the 2-core dev box (shared with other builds), one core:
+//! SciPy 1.17.1 1084 us (find_peaks + peak_widths), 737 us (find_peaks);
+//! see the commit message for ours.
+// criterion_group! generates an undocumented pub fn.
+#![allow(missing_docs)]
+
+use ballpass_dsp::{find_peaks, peak_widths, Bound, FindPeaksSettings, PeakWidthsSettings};
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+
+struct SplitMix64(u64);
+
+impl SplitMix64 {
+    fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 * 2f64.powi(-53)
+    }
+}
+
+/// Pulse every 0.2 s +- 10 ms, amplitude 1 +- 0.1, sigma 12 ms, baseline
+/// 0.1, Gaussian noise sd 0.05.
+fn pulse_train(n: usize, fs_hz: f64, seed: u64) -> Vec<f64> {
+    let mut rng = SplitMix64(seed);
+    let t_end = (n - 1) as f64 / fs_hz;
+    let mut x = vec![0.1; n];
+    let mut c = 0.1;
+    while c < t_end {
+        let a = 1.0 + 0.2 * (rng.next_f64() - 0.5);
+        for (i, v) in x.iter_mut().enumerate() {
+            let u = (i as f64 / fs_hz - c) / 0.012;
+            *v += a * (-0.5 * u * u).exp();
+        }
+        c += 0.2 + 0.02 * (rng.next_f64() - 0.5);
+    }
+    for v in &mut x {
+        let u1 = 1.0 - rng.next_f64();
+        let u2 = rng.next_f64();
+        *v += 0.05 * (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos();
+    }
+    x
+}
+
+fn bench(c: &mut Criterion) {
+    let x = pulse_train(30_000, 1000.0, 42);
+    let settings = FindPeaksSettings {
+        distance: Some(100.0),
+        prominence: Some(Bound::at_least(0.3)),
+        ..Default::default()
+    };
+    let widths = PeakWidthsSettings::default();
+    let peaks = find_peaks(&x, &settings).expect("valid input");
+    let w = peak_widths(&x, &peaks.indices, &widths).expect("valid input");
+    let mean = w.widths.iter().sum::<f64>() / w.widths.len() as f64;
+    eprintln!(
+        "{} peaks, mean width {mean:.4} samples",
+        peaks.indices.len()
+    );
+
+    c.bench_function("find_peaks(distance, prominence) + peak_widths, 30k", |b| {
+        b.iter(|| {
+            let p = find_peaks(black_box(&x), &settings).expect("valid input");
+            peak_widths(&x, &p.indices, &widths).expect("valid input")
+        })
+    });
+    c.bench_function("find_peaks(distance, prominence), 30k", |b| {
+        b.iter(|| find_peaks(black_box(&x), &settings).expect("valid input"))
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,432 @@
+//! What a user must know about a recording before analysing it.
+//!
+//! Per channel: range, mean, standard deviation, and three checks, each with
+//! a threshold in [`InspectSettings`]:
+//!
+//! - **clipping**: a run of at least `clip_run` consecutive samples exactly
+//!   at the channel's minimum or maximum (an input stuck at a rail of the
+//!   converter: a clean noisy signal touches its extreme once);
+//! - **dropouts**: a run of at least `dropout_run` identical consecutive
+//!   samples away from the extremes (a frozen or disconnected input);
+//! - **drift** (friction only, the quartz load cell's DC drift): the least
+//!   squares line through the samples,
+//!   ```text
+//!   x(t) ≈ a + b t,   change over the record = b · duration
+//!   ```
+//!   flagged when the change exceeds `drift_ratio` times the standard
+//!   deviation of what is left after removing the line.
+//!
+//! With a position channel, the mean stage velocity is the slope of the same
+//! fit; it is compared with the stated tracking velocity (`velocity_ratio`).
+//! With velocity and geometry known, the number of ball-pass periods spanned.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Channel, Recording};
+use crate::bearing::Geometry;
+
+/// Thresholds of the checks of [`inspect`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct InspectSettings {
+    /// Fewest consecutive samples at an extreme that count as clipping.
+    pub clip_run: usize,
+    /// Fewest identical consecutive samples (not at an extreme) that count as a dropout.
+    pub dropout_run: usize,
+    /// Friction drift over the record, in detrended standard deviations, that is flagged.
+    pub drift_ratio: f64,
+    /// Largest relative difference between the position's slope and the stated velocity.
+    pub velocity_ratio: f64,
+}
+
+impl Default for InspectSettings {
+    fn default() -> Self {
+        Self {
+            clip_run: 5,
+            dropout_run: 20,
+            drift_ratio: 2.0,
+            velocity_ratio: 0.02,
+        }
+    }
+}
+
+/// How serious a finding is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    /// Worth knowing.
+    Info,
+    /// Likely to spoil an analysis.
+    Warning,
+}
+
+/// One thing the checks found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    /// How serious.
+    pub severity: Severity,
+    /// Channel concerned, canonical name, if one.
+    pub channel: Option<String>,
+    /// One line for a person.
+    pub message: String,
+}
+
+/// A run of identical samples.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Run {
+    /// The repeated value, in the channel's unit.
+    pub value: f64,
+    /// First sample of the run (0-based).
+    pub start: usize,
+    /// Length in samples.
+    pub len: usize,
+    /// Start time, s.
+    pub start_time_s: f64,
+}
+
+/// Summary of one channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelSummary {
+    /// Canonical name (`friction_N`, ...).
+    pub channel: String,
+    /// Unit.
+    pub unit: String,
+    /// Smallest sample.
+    pub min: f64,
+    /// Largest sample.
+    pub max: f64,
+    /// Mean.
+    pub mean: f64,
+    /// Standard deviation (population, `ddof = 0`).
+    pub std: f64,
+    /// Samples exactly at the minimum or maximum in runs of at least `clip_run`.
+    pub clipped_samples: usize,
+    /// Longest run at an extreme.
+    pub longest_clip: Option<Run>,
+    /// Runs of identical samples away from the extremes, at least `dropout_run` long.
+    pub dropouts: Vec<Run>,
+    /// Slope of the least-squares line, unit per second.
+    pub slope_per_s: f64,
+    /// Slope times duration, in the channel's unit.
+    pub change_over_record: f64,
+    /// Standard deviation after removing the line.
+    pub detrended_std: f64,
+}
+
+/// Everything [`inspect`] reports about one recording.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Inspection {
+    /// Source file or test id.
+    pub source: String,
+    /// Test id.
+    pub test_id: Option<String>,
+    /// Samples per channel.
+    pub samples: usize,
+    /// Sampling rate, Hz.
+    pub fs_hz: f64,
+    /// Duration `samples / fs`, s.
+    pub duration_s: f64,
+    /// Time of the first sample, s.
+    pub start_time_s: f64,
+    /// Stated tracking velocity, mm/s.
+    pub velocity_mm_s: Option<f64>,
+    /// Bearing name.
+    pub bearing: Option<String>,
+    /// Mean stage velocity from the position channel, mm/s.
+    pub position_velocity_mm_s: Option<f64>,
+    /// Predicted ball-pass period at the stated velocity, s.
+    pub tau_c_s: Option<f64>,
+    /// Ball-pass periods spanned, `duration / tau_c`.
+    pub periods: Option<f64>,
+    /// Channels present, canonical order.
+    pub channels: Vec<ChannelSummary>,
+    /// Channels absent (analyses that need them will refuse).
+    pub missing: Vec<String>,
+    /// Clipping, dropouts, drift, velocity mismatch.
+    pub findings: Vec<Finding>,
+}
+
+/// Inspects a recording (see the module doc for what is checked).
+pub fn inspect(rec: &Recording, geometry: Option<&Geometry>, s: &InspectSettings) -> Inspection {
+    let mut findings = Vec::new();
+    let mut channels = Vec::new();
+    let mut position_velocity_mm_s = None;
+    for c in rec.channels() {
+        let x = rec.channel(c).unwrap_or_default();
+        let sum = summarise(rec, c, x, s);
+        let name = c.column_name().to_string();
+        if let Some(run) = &sum.longest_clip {
+            findings.push(Finding {
+                severity: Severity::Warning,
+                channel: Some(name.clone()),
+                message: format!(
+                    "clipped: {} samples stuck at {} {} (longest run {} samples from t = {:.3} s)",
+                    sum.clipped_samples,
+                    run.value,
+                    c.unit(),
+                    run.len,
+                    run.start_time_s
+                ),
+            });
+        }
+        if let Some(first) = sum.dropouts.first() {
+            let total: usize = sum.dropouts.iter().map(|r| r.len).sum();
+            findings.push(Finding {
+                severity: Severity::Warning,
+                channel: Some(name.clone()),
+                message: format!(
+                    "{} dropout(s): {total} samples frozen at one value (first: {} {} for {} samples from t = {:.3} s)",
+                    sum.dropouts.len(),
+                    first.value,
+                    c.unit(),
+                    first.len,
+                    first.start_time_s
+                ),
+            });
+        }
+        if c == Channel::Friction
+            && sum.change_over_record.abs() > s.drift_ratio * sum.detrended_std
+        {
+            findings.push(Finding {
+                severity: Severity::Warning,
+                channel: Some(name.clone()),
+                message: format!(
+                    "load-cell DC drift: {:+.4} N over the record ({:+.4} N/s), {:.1} times the \
+                     detrended standard deviation",
+                    sum.change_over_record,
+                    sum.slope_per_s,
+                    sum.change_over_record.abs() / sum.detrended_std.max(f64::MIN_POSITIVE)
+                ),
+            });
+        }
+        if c == Channel::Position {
+            position_velocity_mm_s = Some(sum.slope_per_s);
+        }
+        channels.push(sum);
+    }
+    let v = rec.meta.velocity_mm_s;
+    if let (Some(v), Some(pv)) = (v, position_velocity_mm_s) {
+        if (pv.abs() - v).abs() > s.velocity_ratio * v {
+            findings.push(Finding {
+                severity: Severity::Warning,
+                channel: Some(Channel::Position.column_name().into()),
+                message: format!(
+                    "the stage moves at {:.4} mm/s by the position channel, not the stated {v} mm/s",
+                    pv.abs()
+                ),
+            });
+        }
+    }
+    let tau_c_s = match (v, geometry) {
+        (Some(v), Some(g)) if v > 0.0 => Some(2.0 * g.d_avg_mm() / v),
+        _ => None,
+    };
+    let periods = tau_c_s.map(|t| rec.duration_s() / t);
+    if let (Some(p), Some(t)) = (periods, tau_c_s) {
+        findings.push(Finding {
+            severity: Severity::Info,
+            channel: None,
+            message: format!("spans {p:.1} ball-pass periods (tau_c = {t:.4} s)"),
+        });
+    }
+    if v.is_none() {
+        findings.push(Finding {
+            severity: Severity::Info,
+            channel: None,
+            message: "tracking velocity unknown: give it to get predictions".into(),
+        });
+    }
+    let missing = Channel::ALL
+        .into_iter()
+        .filter(|&c| rec.channel(c).is_none())
+        .map(|c| c.column_name().to_string())
+        .collect();
+    Inspection {
+        source: rec.source_name(),
+        test_id: rec.meta.test_id.clone(),
+        samples: rec.len(),
+        fs_hz: rec.fs_hz(),
+        duration_s: rec.duration_s(),
+        start_time_s: rec.meta.start_time_s,
+        velocity_mm_s: v,
+        bearing: rec.meta.bearing.clone(),
+        position_velocity_mm_s,
+        tau_c_s,
+        periods,
+        channels,
+        missing,
+        findings,
+    }
+}
+
+fn summarise(rec: &Recording, c: Channel, x: &[f64], s: &InspectSettings) -> ChannelSummary {
+    let n = x.len() as f64;
+    let min = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mean = x.iter().sum::<f64>() / n;
+    let std = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    // Least-squares line against t = i / fs (centred, so the sums stay small).
+    let tm = (n - 1.0) / 2.0;
+    let sxx: f64 = (0..x.len()).map(|i| (i as f64 - tm).powi(2)).sum();
+    let sxy: f64 = x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (i as f64 - tm) * (v - mean))
+        .sum();
+    let slope_per_sample = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    let resid = (x
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (v - mean - slope_per_sample * (i as f64 - tm)).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let slope_per_s = slope_per_sample * rec.fs_hz();
+    let mut clipped = 0;
+    let mut longest_clip: Option<Run> = None;
+    let mut dropouts = Vec::new();
+    let mut i = 0;
+    while i < x.len() {
+        let mut j = i + 1;
+        while j < x.len() && x[j] == x[i] {
+            j += 1;
+        }
+        let len = j - i;
+        let run = Run {
+            value: x[i],
+            start: i,
+            len,
+            start_time_s: rec.time_s(i),
+        };
+        let at_rail = (x[i] == min || x[i] == max) && max > min;
+        if at_rail && len >= s.clip_run {
+            clipped += len;
+            if longest_clip.is_none_or(|r| len > r.len) {
+                longest_clip = Some(run);
+            }
+        } else if !at_rail && len >= s.dropout_run {
+            dropouts.push(run);
+        }
+        i = j;
+    }
+    ChannelSummary {
+        channel: c.column_name().into(),
+        unit: c.unit().into(),
+        min,
+        max,
+        mean,
+        std,
+        clipped_samples: clipped,
+        longest_clip,
+        dropouts,
+        slope_per_s,
+        change_over_record: slope_per_s * rec.duration_s(),
+        detrended_std: resid,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::{Channels, Metadata};
+
+    fn rec(f: Vec<f64>, p: Vec<f64>, o: Vec<f64>, v: Option<f64>) -> Recording {
+        Recording::new(
+            1000.0,
+            Channels {
+                friction_n: Some(f),
+                position_mm: Some(p),
+                optical_v: Some(o),
+            },
+            Metadata {
+                velocity_mm_s: v,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    }
+
+    /// Deterministic noise in [-0.5, 0.5).
+    fn noise(n: usize, seed: u64) -> Vec<f64> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    #[test]
+    fn clean_recording_has_no_warnings_and_right_velocity() {
+        let n = 10_000;
+        let f: Vec<f64> = noise(n, 1).iter().map(|e| 2.0 + 0.1 * e).collect();
+        let p: Vec<f64> = (0..n).map(|i| 9.0 * i as f64 / 1000.0).collect();
+        let o = noise(n, 2);
+        let g = crate::bearing::lookup("sr25w").unwrap().geometry;
+        let r = inspect(
+            &rec(f, p, o, Some(9.0)),
+            Some(&g),
+            &InspectSettings::default(),
+        );
+        assert!(
+            r.findings.iter().all(|f| f.severity == Severity::Info),
+            "{:?}",
+            r.findings
+        );
+        // An exact ramp: the fitted slope is 9 mm/s to rounding (1e-9 relative is
+        // far above the ~1e-13 accumulated in the sums of 1e4 terms).
+        assert!((r.position_velocity_mm_s.unwrap() - 9.0).abs() < 9e-9);
+        // 10 s / 0.90123 s.
+        assert!((r.periods.unwrap() - 10.0 / 0.901234567901).abs() < 1e-6);
+        assert_eq!(r.channels[0].channel, "friction_N");
+        assert!(r.missing.is_empty());
+    }
+
+    #[test]
+    fn clipping_dropout_drift_and_velocity_mismatch_are_found() {
+        let n = 10_000;
+        // Friction drifts by 1 N over 10 s with 0.01 N noise.
+        let f: Vec<f64> = noise(n, 3)
+            .iter()
+            .enumerate()
+            .map(|(i, e)| 2.0 + 0.1 * i as f64 / 1000.0 + 0.01 * e)
+            .collect();
+        // Position at 8 mm/s (stated 9).
+        let p: Vec<f64> = (0..n).map(|i| 8.0 * i as f64 / 1000.0).collect();
+        // Optical clipped at 10 V for 50 samples, frozen at 0.123 for 100.
+        let mut o = noise(n, 4);
+        for v in &mut o[2000..2050] {
+            *v = 10.0;
+        }
+        for v in &mut o[5000..5100] {
+            *v = 0.123;
+        }
+        let r = inspect(&rec(f, p, o, Some(9.0)), None, &InspectSettings::default());
+        let msgs: Vec<&str> = r.findings.iter().map(|f| f.message.as_str()).collect();
+        assert!(
+            msgs.iter()
+                .any(|m| m.contains("clipped: 50 samples stuck at 10 V")),
+            "{msgs:?}"
+        );
+        assert!(
+            msgs.iter().any(|m| m.contains("1 dropout(s): 100 samples")),
+            "{msgs:?}"
+        );
+        assert!(
+            msgs.iter().any(|m| m.contains("load-cell DC drift: +")),
+            "{msgs:?}"
+        );
+        // 0.1 N/s for 10 s; the 0.01 N noise moves the fitted change by ~1e-4 N.
+        assert!((r.channels[0].change_over_record - 1.0).abs() < 1e-3);
+        assert!(
+            msgs.iter()
+                .any(|m| m.contains("8.0000 mm/s") && m.contains("stated 9")),
+            "{msgs:?}"
+        );
+        let o = &r.channels[2];
+        assert_eq!(o.longest_clip.unwrap().start, 2000);
+        assert_eq!(o.dropouts[0].start, 5000);
+    }
+}

@@ -1,0 +1,1205 @@
+//! The testbed simulator: recordings whose true answer is known.
+//!
+//! It is the built-in data source of `ballpass demo` and the test oracle of
+//! every analysis. One call, [`simulate`], turns a [`SimSettings`] into a
+//! [`Simulation`]: a [`Recording`] with the three bench channels and a
+//! [`Truth`] (schema `ballpass.truth/1`) with the true passage times, the
+//! realised `f_c` and `tau_c`, pulse widths, lags and every parameter.
+//!
+//! # Physics
+//!
+//! ```text
+//! stage   m y'' = -K K_P y - K K_D y' - f - m r''      y = x - r, r = V t   (thesis Eqs. 6.1-6.6)
+//! friction f = sat(x' / v_eps) [F_c + rough(x) + sum_j P g(s - e_j) + sum_j A_j g_stick(s - e_j)]
+//! balls   s = (x - x_0) / 2  (balls advance at half the stage speed; passages at fixed s)
+//! load cell  HP(tau) then 2nd-order Butterworth 400 Hz, sampled, + white noise
+//! encoder    floor(x / 0.1 um) * 0.1 um
+//! optical    DC + m(t) sum_j P_o,k g(s - e_j - offset), [AC coupling], Butterworth 400 Hz, + noise
+//! ```
+//!
+//! - The stage is integrated exactly (zero-order-hold discretisation by a
+//!   matrix exponential) at `oversample x fs` (20 kHz by default); friction
+//!   and sensors are evaluated at that internal rate, pulses only within six
+//!   sigmas of their centres.
+//! - Friction opposes motion; the load cell reads `+f` (see [`stage`]).
+//! - Ball gaps are a uniform random split of `d_ext`, re-drawn per recording,
+//!   so passage intervals vary as ERRATA §1 describes while the long-run
+//!   passage rate is exactly `v / (2 d_avg)`.
+//! - Pulse widths are set as FWHM / `tau_c` ratios (the thesis' `tau_p /
+//!   tau_c = 0.155`, width at half prominence) and are fixed lengths along
+//!   the ball travel, so they scale with `1 / v` like the thesis' Fig. 52.
+//! - `good` bearing: pulses of 0.2 N on a 3 N Coulomb level plus a random
+//!   "roughness" force (an Ornstein–Uhlenbeck process along the rail, std
+//!   0.2 N, correlation length 1.3 mm) that leaves the `f_c` line only 2–4
+//!   times its neighbourhood in a 0.2 Hz-resolution Welch spectrum of the
+//!   20 Hz low-passed friction (hard to see, thesis Fig. 63a) while
+//!   averaged autocorrelations still rise at multiples of `tau_c` (Fig. 55).
+//! - `sticking` bearing: in addition, 60 % of ball entries (at random) carry
+//!   a narrow spike (FWHM 0.05 `tau_c`) whose peak is uniform up to
+//!   `(10 - 1) F_c`, so the total friction reaches up to ten times the
+//!   Coulomb level (thesis Fig. 66). Its low-frequency friction spectrum is
+//!   about 100 times a good bearing's with clear peaks at `f_c` (Figs. 67-68).
+//!
+//! # Which numbers come from the thesis
+//!
+//! | quantity | value | source |
+//! |---|---|---|
+//! | SR25W geometry | d = 4 mm, d_ext = 2 mm, N_B = 36 | thesis §1, §3.1 |
+//! | sampling, duration | 1 kHz, 30 s | thesis §7 |
+//! | optical pulse width | FWHM = 0.155 tau_c | thesis §6.4 (Fig. 53) |
+//! | optical lag behind friction | 0.39 s at 9 mm/s → sensor offset 1.755 mm | thesis §7.1 (ERRATA §8–9 for the sign) |
+//! | anti-alias filters | 400 Hz (2nd-order Butterworth assumed) | thesis §5.3, §7 |
+//! | encoder | 0.1 µm | thesis §4 |
+//! | interference drift | period 5 s, pulses invert at crests | thesis §5.2 (Fig. 32) |
+//! | sticking spikes | up to 10x the friction, at ball passages | thesis §8 (Fig. 66) |
+//! | velocity-error std | peak near 9 mm/s at ~100 µm/s (calibration target) | thesis Fig. 29 (110 µm/s) |
+//! | load-cell time constant | 10 s (spec >= 50 s; Fig. 54 decays faster) | thesis §3.3, §7 |
+//!
+//! Assumptions (the thesis gives no number): the PD stage (natural frequency
+//! at the 9 mm/s ball-pass frequency, damping 0.35, effective mass 240 kg —
+//! see [`StageSettings`] for why), Coulomb level 3 N ("a few newtons"),
+//! pulse amplitude 0.2 N, roughness 0.2 N over 1.3 mm, friction pulse width
+//! equal to the optical one, sticking probability 0.6 and spike width
+//! 0.05 tau_c, noise levels (load cell 0.02 N, photodetector 0.01 V), DC
+//! level 1 V and pulse height 0.5 V with 5 % ball-to-ball spread, reference
+//! acceleration 100 mm/s², AC-coupling time constant 1 s, drift amplitude
+//! 0.5 V, and the Gaussian pulse shape of the friction.
+//!
+//! With the defaults the velocity-error std (as the analysis computes it,
+//! `numpy.gradient` of the encoder position) averages about 50 µm/s at
+//! 1 mm/s, 100 µm/s at 9–10 mm/s and 83 µm/s at 20 mm/s (5 seeds; see
+//! `examples/sim_sweep.rs`).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::bearing::{self, check_velocity, Geometry};
+use crate::error::{Error, Result};
+use crate::recording::{Channels, Metadata, Recording};
+
+pub mod balls;
+pub mod campaign;
+pub mod rng;
+pub mod sensors;
+pub mod stage;
+
+pub use stage::{PdStage, StageSettings};
+
+use balls::Circuit;
+use rng::Rng;
+use sensors::{gaussian, quantize, sigma_from_fwhm, Butterworth2, HighPass1, PULSE_CUTOFF_SIGMAS};
+
+/// Schema tag of the truth file.
+pub const TRUTH_SCHEMA: &str = "ballpass.truth/1";
+
+/// Bearing condition.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Condition {
+    /// Small periodic friction content, hard to see in a spectrum.
+    #[default]
+    Good,
+    /// Sporadic large friction spikes at ball passages (thesis ch. 8).
+    Sticking,
+}
+
+impl Condition {
+    /// Lower-case name (`good`, `sticking`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Condition::Good => "good",
+            Condition::Sticking => "sticking",
+        }
+    }
+}
+
+/// How the recording starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Start {
+    /// Stage already tracking `V` in steady state; a settling time is
+    /// simulated before the first sample so that pulses and roughness have
+    /// driven the stage as they would in a long run.
+    #[default]
+    Settled,
+    /// Stage starts at rest, the reference accelerates to `V`, and the
+    /// recording triggers when the stage has travelled the trigger distance
+    /// (thesis ch. 7).
+    FromRest,
+}
+
+/// Motion profile and trigger.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MotionSettings {
+    /// Reference acceleration from rest, mm/s² (assumption: 100).
+    pub acceleration_mm_s2: f64,
+    /// Stage travel that triggers the recording in `from_rest`, mm; `None`:
+    /// `V² / (2 a) + V t_settle`.
+    pub trigger_distance_mm: Option<f64>,
+    /// Time allowed for transients, s; `None`: `10 / (zeta omega_n)` (e^-10).
+    pub settle_time_s: Option<f64>,
+}
+
+impl Default for MotionSettings {
+    fn default() -> Self {
+        Self {
+            acceleration_mm_s2: 100.0,
+            trigger_distance_mm: None,
+            settle_time_s: None,
+        }
+    }
+}
+
+/// Friction model.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FrictionSettings {
+    /// Coulomb level `F_c`, N.
+    pub coulomb_n: f64,
+    /// Peak of the Gaussian pulse of each ball entering the loaded zone, N.
+    pub pulse_amplitude_n: f64,
+    /// Friction pulse FWHM as a fraction of `tau_c`.
+    pub pulse_width_ratio: f64,
+    /// Standard deviation of the roughness force, N.
+    pub roughness_n: f64,
+    /// Correlation length of the roughness along the rail (stage travel), mm.
+    pub roughness_length_mm: f64,
+    /// Probability that a ball entry carries a sticking spike (`sticking` only).
+    pub stick_probability: f64,
+    /// Largest total friction during a spike, as a multiple of `F_c`.
+    pub stick_max_ratio: f64,
+    /// Sticking spike FWHM as a fraction of `tau_c`.
+    pub stick_width_ratio: f64,
+    /// Regularisation of the Coulomb sign near zero velocity, mm/s (raised
+    /// automatically where needed for stability at the internal step).
+    pub zero_velocity_band_mm_s: f64,
+}
+
+impl Default for FrictionSettings {
+    fn default() -> Self {
+        Self {
+            coulomb_n: 3.0,
+            pulse_amplitude_n: 0.2,
+            pulse_width_ratio: 0.155,
+            roughness_n: 0.2,
+            roughness_length_mm: 1.3,
+            stick_probability: 0.6,
+            stick_max_ratio: 10.0,
+            stick_width_ratio: 0.05,
+            zero_velocity_band_mm_s: 1e-3,
+        }
+    }
+}
+
+/// Quartz load cell.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LoadCellSettings {
+    /// Discharge time constant of the first-order high-pass, s. The 208C01 is
+    /// specified at >= 50 s, but thesis Fig. 54 decays within ~10 s; 10 s.
+    pub time_constant_s: f64,
+    /// White noise on the recorded samples, N (std).
+    pub noise_n: f64,
+    /// Analog anti-alias low-pass cut-off, Hz.
+    pub antialias_hz: f64,
+}
+
+impl Default for LoadCellSettings {
+    fn default() -> Self {
+        Self {
+            time_constant_s: 10.0,
+            noise_n: 0.02,
+            antialias_hz: 400.0,
+        }
+    }
+}
+
+/// Linear encoder.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EncoderSettings {
+    /// Resolution, µm (Renishaw RGH22 on the ABL20100: 0.1 µm).
+    pub resolution_um: f64,
+}
+
+impl Default for EncoderSettings {
+    fn default() -> Self {
+        Self { resolution_um: 0.1 }
+    }
+}
+
+/// Optical ball-pass sensor (photodetector).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OpticalSettings {
+    /// DC level, V.
+    pub dc_v: f64,
+    /// Peak of a ball's pulse, V.
+    pub pulse_amplitude_v: f64,
+    /// Relative ball-to-ball variation of the pulse height (std).
+    pub amplitude_jitter: f64,
+    /// Pulse FWHM (width at half prominence) as a fraction of `tau_c` (thesis: 0.155).
+    pub width_ratio: f64,
+    /// Distance from the loaded-zone entry to the sensor along the ball path, mm.
+    /// Optical pulses lag friction pulses by `offset / (v / 2)`; 1.755 mm gives
+    /// the thesis' 0.39 s at 9 mm/s (0.433 tau_c at every speed).
+    pub sensor_offset_mm: f64,
+    /// White noise on the recorded samples, V (std).
+    pub noise_v: f64,
+    /// Analog anti-alias low-pass cut-off, Hz.
+    pub antialias_hz: f64,
+    /// AC coupling (first-order high-pass) before the anti-alias filter (thesis Fig. 38).
+    pub ac_coupling: bool,
+    /// AC-coupling time constant, s.
+    pub ac_time_constant_s: f64,
+    /// Coherent-source interference drift (thesis Fig. 32): a slow sinusoid
+    /// `A sin(theta)` added to the signal and pulses multiplied by `-sin(theta)`,
+    /// so pulses point up in its troughs, invert at its crests and vanish at
+    /// its mid-level.
+    pub interference_drift: bool,
+    /// Period of the interference drift, s (thesis: 5 s).
+    pub interference_period_s: f64,
+    /// Amplitude of the interference drift, V.
+    pub interference_amplitude_v: f64,
+}
+
+impl Default for OpticalSettings {
+    fn default() -> Self {
+        Self {
+            dc_v: 1.0,
+            pulse_amplitude_v: 0.5,
+            amplitude_jitter: 0.05,
+            width_ratio: 0.155,
+            sensor_offset_mm: 1.755,
+            noise_v: 0.01,
+            antialias_hz: 400.0,
+            ac_coupling: false,
+            ac_time_constant_s: 1.0,
+            interference_drift: false,
+            interference_period_s: 5.0,
+            interference_amplitude_v: 0.5,
+        }
+    }
+}
+
+/// Everything that defines a simulated recording. Same settings (seed
+/// included), same samples, bit for bit, on one platform.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimSettings {
+    /// Tracking velocity `V`, mm/s.
+    pub velocity_mm_s: f64,
+    /// Recorded duration, s.
+    pub duration_s: f64,
+    /// Sampling rate of the recording, Hz.
+    pub fs_hz: f64,
+    /// Internal steps per sample (internal rate = `oversample * fs`).
+    pub oversample: u32,
+    /// Seed of all random draws.
+    pub seed: u64,
+    /// Bearing name written to the metadata (catalog key or a campaign label).
+    pub bearing: String,
+    /// Ball-circuit geometry.
+    pub geometry: Geometry,
+    /// Test id written to the metadata; `None`: `sim-v{V}-s{seed}`.
+    pub test_id: Option<String>,
+    /// Bearing condition.
+    pub condition: Condition,
+    /// Settled or from rest.
+    pub start: Start,
+    /// Stage model.
+    pub stage: StageSettings,
+    /// Motion profile and trigger.
+    pub motion: MotionSettings,
+    /// Friction model.
+    pub friction: FrictionSettings,
+    /// Load cell.
+    pub load_cell: LoadCellSettings,
+    /// Encoder.
+    pub encoder: EncoderSettings,
+    /// Photodetector.
+    pub optical: OpticalSettings,
+}
+
+impl Default for SimSettings {
+    fn default() -> Self {
+        Self {
+            velocity_mm_s: 9.0,
+            duration_s: 30.0,
+            fs_hz: 1000.0,
+            oversample: 20,
+            seed: 0,
+            bearing: "sr25w".into(),
+            geometry: SR25W,
+            test_id: None,
+            condition: Condition::Good,
+            start: Start::Settled,
+            stage: StageSettings::default(),
+            motion: MotionSettings::default(),
+            friction: FrictionSettings::default(),
+            load_cell: LoadCellSettings::default(),
+            encoder: EncoderSettings::default(),
+            optical: OpticalSettings::default(),
+        }
+    }
+}
+
+const SR25W: Geometry = Geometry {
+    ball_diameter_mm: 4.0,
+    free_space_mm: 2.0,
+    balls_in_race: 36,
+};
+
+/// Most samples one recording may have (guards against a typo like `--fs 1e9`).
+pub const MAX_SAMPLES: usize = 50_000_000;
+
+fn positive(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::setting(
+            name,
+            format!("must be a positive number, got {v}"),
+        ))
+    }
+}
+
+fn non_negative(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::setting(
+            name,
+            format!("must be zero or a positive number, got {v}"),
+        ))
+    }
+}
+
+impl SimSettings {
+    /// Settings for a catalog bearing at one velocity, other fields default.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] for an unknown bearing key.
+    pub fn for_bearing(key: &str, velocity_mm_s: f64) -> Result<Self> {
+        let entry = bearing::lookup(key).ok_or_else(|| {
+            let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
+            Error::setting(
+                "bearing",
+                format!("unknown bearing '{key}' (catalog: {})", keys.join(", ")),
+            )
+        })?;
+        Ok(Self {
+            velocity_mm_s,
+            bearing: entry.key.into(),
+            geometry: entry.geometry,
+            ..Self::default()
+        })
+    }
+
+    /// Number of recorded samples, `round(duration * fs)`.
+    pub fn n_samples(&self) -> usize {
+        (self.duration_s * self.fs_hz).round() as usize
+    }
+
+    /// Checks every field's range.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] naming the field and the value.
+    pub fn validate(&self) -> Result<()> {
+        check_velocity(self.velocity_mm_s)?;
+        positive("duration", self.duration_s)?;
+        positive("fs", self.fs_hz)?;
+        if !(1..=1000).contains(&self.oversample) {
+            return Err(Error::setting(
+                "oversample",
+                format!("must be 1 to 1000, got {}", self.oversample),
+            ));
+        }
+        let n = self.duration_s * self.fs_hz;
+        if n.round() < Recording::MIN_SAMPLES as f64 || n > MAX_SAMPLES as f64 {
+            return Err(Error::setting(
+                "duration",
+                format!(
+                    "{} s at {} Hz gives {n:.0} samples; expected {} to {MAX_SAMPLES}",
+                    self.duration_s,
+                    self.fs_hz,
+                    Recording::MIN_SAMPLES
+                ),
+            ));
+        }
+        self.geometry.validate()?;
+        self.stage.validate()?;
+        let band = self.friction.zero_velocity_band_mm_s;
+        if self.velocity_mm_s < 10.0 * band {
+            return Err(Error::setting(
+                "velocity",
+                format!(
+                    "{} mm/s is within 10x the friction's zero-velocity band ({band} mm/s); expected at least {}",
+                    self.velocity_mm_s,
+                    10.0 * band
+                ),
+            ));
+        }
+        let passages =
+            self.velocity_mm_s * (self.duration_s + 100.0) / (2.0 * self.geometry.d_avg_mm());
+        if passages > 1e7 {
+            return Err(Error::setting(
+                "velocity",
+                format!(
+                    "{} mm/s over {} s makes {passages:.0} ball passages; at most 1e7",
+                    self.velocity_mm_s, self.duration_s
+                ),
+            ));
+        }
+        positive("acceleration", self.motion.acceleration_mm_s2)?;
+        if let Some(d) = self.motion.trigger_distance_mm {
+            non_negative("trigger distance", d)?;
+        }
+        if let Some(t) = self.motion.settle_time_s {
+            non_negative("settle time", t)?;
+        }
+        let f = &self.friction;
+        non_negative("friction coulomb_n", f.coulomb_n)?;
+        non_negative("friction pulse_amplitude_n", f.pulse_amplitude_n)?;
+        positive("friction pulse_width_ratio", f.pulse_width_ratio)?;
+        non_negative("friction roughness_n", f.roughness_n)?;
+        positive("friction roughness_length_mm", f.roughness_length_mm)?;
+        if !(0.0..=1.0).contains(&f.stick_probability) {
+            return Err(Error::setting(
+                "friction stick_probability",
+                format!("must be between 0 and 1, got {}", f.stick_probability),
+            ));
+        }
+        if !(f.stick_max_ratio.is_finite() && f.stick_max_ratio >= 1.0) {
+            return Err(Error::setting(
+                "friction stick_max_ratio",
+                format!("must be at least 1, got {}", f.stick_max_ratio),
+            ));
+        }
+        positive("friction stick_width_ratio", f.stick_width_ratio)?;
+        positive(
+            "friction zero_velocity_band_mm_s",
+            f.zero_velocity_band_mm_s,
+        )?;
+        positive("load-cell time constant", self.load_cell.time_constant_s)?;
+        non_negative("load-cell noise", self.load_cell.noise_n)?;
+        positive("load-cell anti-alias cut-off", self.load_cell.antialias_hz)?;
+        positive("encoder resolution", self.encoder.resolution_um)?;
+        let o = &self.optical;
+        for (name, v) in [
+            ("optical dc_v", o.dc_v),
+            ("optical pulse_amplitude_v", o.pulse_amplitude_v),
+            ("optical sensor_offset_mm", o.sensor_offset_mm),
+            (
+                "optical interference_amplitude_v",
+                o.interference_amplitude_v,
+            ),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::setting(name, format!("must be finite, got {v}")));
+            }
+        }
+        non_negative("optical amplitude_jitter", o.amplitude_jitter)?;
+        positive("optical width_ratio", o.width_ratio)?;
+        non_negative("optical noise_v", o.noise_v)?;
+        positive("optical anti-alias cut-off", o.antialias_hz)?;
+        positive("optical AC-coupling time constant", o.ac_time_constant_s)?;
+        positive("optical interference period", o.interference_period_s)?;
+        Ok(())
+    }
+
+    fn settle_time_s(&self) -> f64 {
+        self.motion
+            .settle_time_s
+            .unwrap_or_else(|| 10.0 / (self.stage.damping_ratio() * self.stage.omega_n_rad_s()))
+    }
+
+    fn trigger_distance_mm(&self) -> f64 {
+        self.motion.trigger_distance_mm.unwrap_or_else(|| {
+            let v = self.velocity_mm_s;
+            v * v / (2.0 * self.motion.acceleration_mm_s2) + v * self.settle_time_s()
+        })
+    }
+}
+
+/// A simulated recording and what is true about it.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// The recording (friction_N, position_mm, optical_V).
+    pub recording: Recording,
+    /// The truth.
+    pub truth: Truth,
+}
+
+/// One sticking spike.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Spike {
+    /// Time of the spike's centre (the ball's loaded-zone entry), s from the first sample.
+    pub time_s: f64,
+    /// Peak added to the friction, N.
+    pub amplitude_n: f64,
+}
+
+/// What is true about a simulated recording (schema `ballpass.truth/1`).
+///
+/// Times are seconds from the first sample. Lags are of the fundamental at
+/// the realised `f_c`, between the *recorded* channels (sensor filters
+/// included), wrapped into `(-tau_c/2, tau_c/2]`; a positive lag means the
+/// signal lags the friction force, and the phase is `-360 lag / tau_c`
+/// degrees (ERRATA §8 convention).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    /// `ballpass.truth/1`.
+    pub schema: String,
+    /// ballpass version that produced it.
+    pub version: String,
+    /// Bearing condition.
+    pub condition: Condition,
+    /// Commanded velocity, mm/s.
+    pub velocity_mm_s: f64,
+    /// Sampling rate, Hz.
+    pub fs_hz: f64,
+    /// Number of samples per channel.
+    pub n_samples: usize,
+    /// Simulated time before the first sample (settling or acceleration), s.
+    pub record_start_time_s: f64,
+    /// Mean ball spacing `d_avg`, mm.
+    pub d_avg_mm: f64,
+    /// Predicted ball-pass frequency `V / (2 d_avg)`, Hz.
+    pub f_c_nominal_hz: f64,
+    /// Predicted ball-pass period, s.
+    pub tau_c_nominal_s: f64,
+    /// Mean stage velocity over the recording, mm/s.
+    pub mean_velocity_mm_s: f64,
+    /// Realised long-run ball-pass frequency `mean velocity / (2 d_avg)`, Hz.
+    pub f_c_hz: f64,
+    /// Realised ball-pass period `1 / f_c_hz`, s.
+    pub tau_c_s: f64,
+    /// Mean optical passage rate in the recording, `(n - 1) / (t_last - t_first)`, Hz
+    /// (`None` with fewer than two passages). Varies about `f_c` with the spacings.
+    pub passage_rate_hz: Option<f64>,
+    /// Centre-to-centre spacings of the circuit, ball `k` to `k + 1`, mm.
+    pub ball_spacings_mm: Vec<f64>,
+    /// Times the ball centres pass the optical sensor, s.
+    pub optical_passage_times_s: Vec<f64>,
+    /// Which ball made each optical passage.
+    pub optical_passage_balls: Vec<usize>,
+    /// Times the ball centres enter the loaded zone (friction pulse centres), s.
+    pub friction_pulse_times_s: Vec<f64>,
+    /// Which ball made each friction pulse.
+    pub friction_pulse_balls: Vec<usize>,
+    /// Sticking spikes in the recording (empty for a good bearing).
+    pub sticking_spikes: Vec<Spike>,
+    /// Optical pulse width at half prominence (FWHM), s.
+    pub optical_pulse_fwhm_s: f64,
+    /// Optical pulse Gaussian sigma, s.
+    pub optical_pulse_sigma_s: f64,
+    /// Optical pulse FWHM / tau_c.
+    pub optical_pulse_fwhm_tau_c: f64,
+    /// Friction pulse FWHM, s.
+    pub friction_pulse_fwhm_s: f64,
+    /// Delay of the optical pulses after the friction pulses, `offset / (v/2)`, s (not wrapped).
+    pub optical_delay_s: f64,
+    /// Lag of the optical channel behind the friction channel, s.
+    pub optical_lag_s: f64,
+    /// Same, in units of tau_c.
+    pub optical_lag_tau_c: f64,
+    /// Phase of the optical channel relative to friction, degrees.
+    pub optical_phase_deg: f64,
+    /// Lag of the velocity error (from the position channel) behind the friction channel, s.
+    pub velocity_error_lag_s: f64,
+    /// Same, in units of tau_c.
+    pub velocity_error_lag_tau_c: f64,
+    /// Phase of the velocity error relative to friction, degrees.
+    pub velocity_error_phase_deg: f64,
+    /// `|G_vf(j 2 pi f_c)|`, velocity error per unit friction at f_c, (mm/s)/N.
+    pub g_vf_gain_mm_s_per_n: f64,
+    /// Stage natural frequency `sqrt(K K_P / m) / 2 pi`, Hz.
+    pub natural_frequency_hz: f64,
+    /// Stage damping ratio.
+    pub damping_ratio: f64,
+    /// Steady lag of the stage behind the reference, `F_c / (K K_P)`, mm.
+    pub steady_offset_mm: f64,
+    /// Std of the velocity error as the analysis computes it (`numpy.gradient`
+    /// of the encoder position, minus V), mm/s.
+    pub velocity_error_std_mm_s: f64,
+    /// Std of the true (unquantised) velocity error at the sample instants, mm/s.
+    pub velocity_error_true_std_mm_s: f64,
+    /// Phase of the interference drift at the first sample, rad (when enabled).
+    pub interference_phase_rad: Option<f64>,
+    /// All parameters.
+    pub settings: SimSettings,
+}
+
+impl Truth {
+    /// Writes the truth as pretty-printed JSON, atomically (temporary file
+    /// beside `path`, then rename).
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn write_json(&self, path: &Path) -> Result<()> {
+        crate::recording::io::write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        })
+    }
+}
+
+/// The truth file that belongs beside a recording: `rec.csv` → `rec.truth.json`.
+pub fn truth_path(recording_path: &Path) -> PathBuf {
+    recording_path.with_extension("truth.json")
+}
+
+/// A train of Gaussian pulses at fixed ball-travel positions, evaluated only
+/// near the current position.
+struct PulseTrain {
+    centres_mm: Vec<f64>,
+    amps: Vec<f64>,
+    sigma_mm: f64,
+    lo: usize,
+    hi: usize,
+}
+
+impl PulseTrain {
+    fn new(centres_mm: Vec<f64>, amps: Vec<f64>, sigma_mm: f64) -> Self {
+        Self {
+            centres_mm,
+            amps,
+            sigma_mm,
+            lo: 0,
+            hi: 0,
+        }
+    }
+
+    fn value(&mut self, s: f64) -> f64 {
+        let reach = PULSE_CUTOFF_SIGMAS * self.sigma_mm;
+        let c = &self.centres_mm;
+        while self.lo < c.len() && c[self.lo] < s - reach {
+            self.lo += 1;
+        }
+        while self.lo > 0 && c[self.lo - 1] >= s - reach {
+            self.lo -= 1;
+        }
+        if self.hi < self.lo {
+            self.hi = self.lo;
+        }
+        while self.hi < c.len() && c[self.hi] <= s + reach {
+            self.hi += 1;
+        }
+        while self.hi > self.lo && c[self.hi - 1] > s + reach {
+            self.hi -= 1;
+        }
+        (self.lo..self.hi)
+            .map(|j| self.amps[j] * gaussian(s - c[j], self.sigma_mm))
+            .sum()
+    }
+}
+
+/// Rail roughness: an Ornstein–Uhlenbeck process in rail position with
+/// standard deviation `sigma` and correlation length `ell`, generated exactly
+/// at knots `h = ell / ROUGHNESS_KNOTS_PER_LENGTH` apart (`r[i+1] = rho r[i] +
+/// sigma sqrt(1 - rho^2) xi`, `rho = exp(-h / ell)`) and interpolated
+/// linearly in between; knots are drawn lazily as the stage advances.
+struct Roughness {
+    sigma: f64,
+    rho: f64,
+    h_mm: f64,
+    knots: Vec<f64>,
+    rng: Rng,
+}
+
+/// Roughness knots per correlation length (linear interpolation between
+/// them smooths only wavelengths far below the correlation length).
+const ROUGHNESS_KNOTS_PER_LENGTH: f64 = 50.0;
+
+impl Roughness {
+    fn new(sigma: f64, ell_mm: f64, mut rng: Rng) -> Self {
+        let h_mm = ell_mm / ROUGHNESS_KNOTS_PER_LENGTH;
+        let first = sigma * rng.normal();
+        Self {
+            sigma,
+            rho: (-h_mm / ell_mm).exp(),
+            h_mm,
+            knots: vec![first],
+            rng,
+        }
+    }
+
+    /// Value at `d_mm` of rail travel from the start (held at the first knot
+    /// for negative travel).
+    fn value(&mut self, d_mm: f64) -> f64 {
+        if self.sigma == 0.0 {
+            return 0.0;
+        }
+        let u = (d_mm / self.h_mm).max(0.0);
+        let i = u.floor() as usize;
+        let innov = self.sigma * (1.0 - self.rho * self.rho).sqrt();
+        while self.knots.len() < i + 2 {
+            let last = self.knots[self.knots.len() - 1];
+            let next = self.rho * last + innov * self.rng.normal();
+            self.knots.push(next);
+        }
+        let frac = u - i as f64;
+        self.knots[i] + frac * (self.knots[i + 1] - self.knots[i])
+    }
+}
+
+/// First forward crossings of fixed ball-travel positions, as times.
+struct Crossings {
+    centres_mm: Vec<f64>,
+    next: usize,
+    times_s: Vec<f64>,
+    index: Vec<usize>,
+}
+
+impl Crossings {
+    fn new(centres_mm: Vec<f64>, s0: f64) -> Self {
+        let next = centres_mm.partition_point(|&c| c <= s0);
+        Self {
+            centres_mm,
+            next,
+            times_s: Vec::new(),
+            index: Vec::new(),
+        }
+    }
+
+    /// Records crossings in `(s0, s1]` during `[t0, t0 + dt)`, keeping those
+    /// at or after `t_from`.
+    fn advance(&mut self, s0: f64, s1: f64, t0: f64, dt: f64, t_from: Option<f64>) {
+        if s1 <= s0 {
+            return;
+        }
+        while self.next < self.centres_mm.len() && self.centres_mm[self.next] <= s1 {
+            let c = self.centres_mm[self.next];
+            if let Some(t_from) = t_from {
+                let t = t0 + dt * (c - s0) / (s1 - s0);
+                if t >= t_from {
+                    self.times_s.push(t - t_from);
+                    self.index.push(self.next);
+                }
+            }
+            self.next += 1;
+        }
+    }
+}
+
+fn cmul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+}
+
+fn arg(z: (f64, f64)) -> f64 {
+    z.1.atan2(z.0)
+}
+
+/// Wraps a lag into `(-tau/2, tau/2]`.
+fn wrap_lag(lag: f64, tau: f64) -> f64 {
+    let mut l = lag - tau * (lag / tau).round();
+    if l <= -tau / 2.0 {
+        l += tau;
+    }
+    l
+}
+
+/// `numpy.gradient` with unit spacing: central differences inside,
+/// one-sided first differences at the ends.
+fn gradient(x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut g = vec![0.0; n];
+    if n < 2 {
+        return g;
+    }
+    g[0] = x[1] - x[0];
+    g[n - 1] = x[n - 1] - x[n - 2];
+    for i in 1..n - 1 {
+        g[i] = (x[i + 1] - x[i - 1]) / 2.0;
+    }
+    g
+}
+
+fn std_dev(x: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt()
+}
+
+// Random streams: one per part, so options do not shift each other's draws.
+const STREAM_BALLS: u64 = 1;
+const STREAM_ROUGHNESS: u64 = 2;
+const STREAM_STICK: u64 = 3;
+const STREAM_LOAD_CELL_NOISE: u64 = 4;
+const STREAM_OPTICAL_NOISE: u64 = 5;
+const STREAM_OPTICAL_AMPLITUDE: u64 = 6;
+const STREAM_INTERFERENCE: u64 = 7;
+
+/// Simulates one bench recording.
+///
+/// See the module docs for the model. Outputs: `friction_N` (load cell,
+/// `+` in the direction of motion), `position_mm` (encoder, quantised),
+/// `optical_V` (photodetector); metadata velocity, bearing and test id.
+///
+/// ```
+/// use ballpass::sim::{simulate, SimSettings};
+/// let sim = simulate(&SimSettings { duration_s: 2.0, ..Default::default() })?;
+/// assert_eq!(sim.recording.len(), 2000); // 2 s at 1 kHz
+/// // SR25W at 9 mm/s: f_c = 9 / (2 * 4.05556) = 1.10959 Hz (ERRATA §1).
+/// assert!((sim.truth.f_c_nominal_hz - 1.10959).abs() < 1e-5);
+/// # Ok::<(), ballpass::Error>(())
+/// ```
+///
+/// # Errors
+/// [`Error::InvalidSetting`] for a setting out of range (see
+/// [`SimSettings::validate`]), or when a `from_rest` stage never reaches the
+/// trigger distance, or when the stage does not move forward on average.
+pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
+    settings.validate()?;
+    let s = settings;
+    let g = &s.geometry;
+    let v_mm_s = s.velocity_mm_s;
+    let v_m_s = v_mm_s * 1e-3;
+    let dt = 1.0 / (s.fs_hz * f64::from(s.oversample));
+    let os = s.oversample as usize;
+    let n_out = s.n_samples();
+    let d_avg = g.d_avg_mm();
+    let tau_c_nom = 2.0 * d_avg / v_mm_s;
+    let fr = &s.friction;
+    let opt = &s.optical;
+    let m = s.stage.mass_kg;
+
+    // Balls and their passages on the ball-travel axis s (mm).
+    let mut rng_balls = Rng::stream(s.seed, STREAM_BALLS);
+    let circuit = Circuit::draw(g, &mut rng_balls);
+    let length = circuit.length_mm();
+    let settle = s.settle_time_s();
+    let trigger = s.trigger_distance_mm();
+    let pre_est_s = match s.start {
+        Start::Settled => settle,
+        Start::FromRest => trigger / v_mm_s + v_mm_s / s.motion.acceleration_mm_s2,
+    };
+    let travel_budget_mm = 1.2 * (v_mm_s * (pre_est_s + s.duration_s) + trigger) + 20.0;
+    let passages = circuit.passages(-length - 10.0, travel_budget_mm / 2.0 + length);
+    let entries: Vec<f64> = passages.iter().map(|p| p.travel_mm).collect();
+
+    // Spatial pulse widths: FWHM ratio * tau_c * v/2 = ratio * d_avg.
+    let sigma_f = sigma_from_fwhm(fr.pulse_width_ratio * d_avg);
+    let sigma_stick = sigma_from_fwhm(fr.stick_width_ratio * d_avg);
+    let sigma_o = sigma_from_fwhm(opt.width_ratio * d_avg);
+    let mut friction_pulses = PulseTrain::new(
+        entries.clone(),
+        vec![fr.pulse_amplitude_n; entries.len()],
+        sigma_f,
+    );
+    let mut rng_stick = Rng::stream(s.seed, STREAM_STICK);
+    let stick_amps: Vec<f64> = entries
+        .iter()
+        .map(|_| {
+            // Two draws per passage whatever the condition, so that the
+            // sequence is stable.
+            let hit = rng_stick.uniform() < fr.stick_probability;
+            let u = rng_stick.uniform();
+            if s.condition == Condition::Sticking && hit {
+                (fr.stick_max_ratio - 1.0) * fr.coulomb_n * u
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    // Only the entries that carry a spike are evaluated.
+    let (stick_centres, stick_nonzero): (Vec<f64>, Vec<f64>) = entries
+        .iter()
+        .zip(&stick_amps)
+        .filter(|(_, &a)| a > 0.0)
+        .map(|(&e, &a)| (e, a))
+        .unzip();
+    let mut stick_pulses = PulseTrain::new(stick_centres, stick_nonzero, sigma_stick);
+    let mut rng_amp = Rng::stream(s.seed, STREAM_OPTICAL_AMPLITUDE);
+    let ball_amps: Vec<f64> = (0..g.balls_in_race)
+        .map(|_| (opt.pulse_amplitude_v * (1.0 + opt.amplitude_jitter * rng_amp.normal())).max(0.0))
+        .collect();
+    let optical_centres: Vec<f64> = entries.iter().map(|e| e + opt.sensor_offset_mm).collect();
+    let mut optical_pulses = PulseTrain::new(
+        optical_centres.clone(),
+        passages.iter().map(|p| ball_amps[p.ball]).collect(),
+        sigma_o,
+    );
+
+    // Stage and reference.
+    let mut stage = PdStage::new(&s.stage, dt)?;
+    let a_ref = s.motion.acceleration_mm_s2 * 1e-3;
+    let t_acc = v_m_s / a_ref;
+    let (k_pre_settled, x_ref0) = match s.start {
+        Start::Settled => {
+            stage.set_state(-s.stage.steady_offset_m(fr.coulomb_n), 0.0);
+            let k = (settle / dt).ceil() as usize;
+            (Some(k), -(k as f64) * dt * v_m_s)
+        }
+        Start::FromRest => (None, 0.0),
+    };
+    // Reference position and velocity at time t (from the simulation start).
+    let reference = |t: f64| -> (f64, f64) {
+        match s.start {
+            Start::Settled => (x_ref0 + v_m_s * t, v_m_s),
+            Start::FromRest => {
+                if t < t_acc {
+                    (0.5 * a_ref * t * t, a_ref * t)
+                } else {
+                    (v_m_s * (t - 0.5 * t_acc), v_m_s)
+                }
+            }
+        }
+    };
+    let max_pre_steps = match s.start {
+        Start::Settled => k_pre_settled.unwrap_or(0),
+        Start::FromRest => ((10.0 * pre_est_s + 100.0) / dt).ceil() as usize,
+    };
+
+    // Sensors.
+    let mut lc_hp = HighPass1::new(s.load_cell.time_constant_s, dt, 0.0);
+    let mut lc_lp: Option<Butterworth2> = None;
+    let mut opt_ac = HighPass1::new(opt.ac_time_constant_s, dt, opt.dc_v);
+    let mut opt_lp: Option<Butterworth2> = None;
+    let mut rng_interf = Rng::stream(s.seed, STREAM_INTERFERENCE);
+    let interf_phase0 = std::f64::consts::TAU * rng_interf.uniform();
+    let interf_w = std::f64::consts::TAU / opt.interference_period_s;
+
+    let mut roughness = Roughness::new(
+        fr.roughness_n,
+        fr.roughness_length_mm,
+        Rng::stream(s.seed, STREAM_ROUGHNESS),
+    );
+
+    let (r0, _) = reference(0.0);
+    let x_init = r0 + stage.deviation_m();
+    let travel = |x: f64| (x - x_init) * 1e3 / 2.0;
+    let mut friction_cross = Crossings::new(entries.clone(), 0.0);
+    let mut optical_cross = Crossings::new(optical_centres, 0.0);
+
+    let mut friction_out = Vec::with_capacity(n_out);
+    let mut position_out = Vec::with_capacity(n_out);
+    let mut optical_out = Vec::with_capacity(n_out);
+    let mut ve_true = Vec::with_capacity(n_out);
+    let q_mm = s.encoder.resolution_um * 1e-3;
+    let v_band_min = fr.zero_velocity_band_mm_s * 1e-3;
+
+    let mut k_rec: Option<usize> = None;
+    let mut k = 0usize;
+    loop {
+        let t = k as f64 * dt;
+        let (r, rdot) = reference(t);
+        let x = r + stage.deviation_m();
+        let xdot = rdot + stage.velocity_error_m_s();
+        if k_rec.is_none() {
+            let triggered = match s.start {
+                Start::Settled => Some(k) == k_pre_settled,
+                Start::FromRest => (x - x_init) * 1e3 >= trigger,
+            };
+            if triggered {
+                k_rec = Some(k);
+            } else if k > max_pre_steps {
+                return Err(Error::setting(
+                    "trigger distance",
+                    format!(
+                        "the stage did not travel {trigger} mm within {:.0} s of starting from rest",
+                        k as f64 * dt
+                    ),
+                ));
+            }
+        }
+        let sample_index = k_rec.and_then(|kr| {
+            let d = k - kr;
+            (d % os == 0).then_some(d / os)
+        });
+        if sample_index == Some(n_out) {
+            break;
+        }
+
+        // Friction at this step (held over it).
+        let sb = travel(x);
+        let magnitude = (fr.coulomb_n
+            + roughness.value((x - x_init) * 1e3)
+            + friction_pulses.value(sb)
+            + stick_pulses.value(sb))
+        .max(0.0);
+        let v_eps = v_band_min.max(2.0 * magnitude * dt / m);
+        let friction = magnitude * (xdot / v_eps).clamp(-1.0, 1.0);
+
+        // Optical signal at this step.
+        let pulses = optical_pulses.value(sb);
+        let optical_in = if opt.interference_drift {
+            let th = interf_w * t + interf_phase0;
+            opt.dc_v + opt.interference_amplitude_v * th.sin() - th.sin() * pulses
+        } else {
+            opt.dc_v + pulses
+        };
+
+        // Sensors: high-pass has feedthrough, low-pass output is its state.
+        let lc_hp_out = lc_hp.step(friction);
+        let lcl =
+            lc_lp.get_or_insert_with(|| Butterworth2::new(s.load_cell.antialias_hz, dt, lc_hp_out));
+        let opt_hp_out = if opt.ac_coupling {
+            opt_ac.step(optical_in)
+        } else {
+            optical_in
+        };
+        let ol = opt_lp.get_or_insert_with(|| Butterworth2::new(opt.antialias_hz, dt, opt_hp_out));
+        if sample_index.is_some() {
+            friction_out.push(lcl.output());
+            optical_out.push(ol.output());
+            position_out.push(quantize(x * 1e3, q_mm));
+            ve_true.push((xdot - v_m_s) * 1e3);
+        }
+        lcl.step(lc_hp_out);
+        ol.step(opt_hp_out);
+
+        // Stage, with the step-average reference acceleration.
+        let (_, rdot1) = reference(t + dt);
+        stage.step(friction, (rdot1 - rdot) / dt);
+        let (r1, _) = reference(t + dt);
+        let x1 = r1 + stage.deviation_m();
+
+        let t_from = k_rec.map(|kr| kr as f64 * dt);
+        let s1 = travel(x1);
+        friction_cross.advance(sb, s1, t, dt, t_from);
+        optical_cross.advance(sb, s1, t, dt, t_from);
+        k += 1;
+    }
+    let k_rec = k_rec.unwrap_or(0);
+    let record_start_time_s = k_rec as f64 * dt;
+    let t_last = (n_out - 1) as f64 / s.fs_hz;
+    let keep = |c: &Crossings| -> (Vec<f64>, Vec<usize>) {
+        c.times_s
+            .iter()
+            .zip(&c.index)
+            .filter(|(&t, _)| t <= t_last)
+            .map(|(&t, &j)| (t, j))
+            .unzip()
+    };
+    let (optical_passage_times_s, opt_idx) = keep(&optical_cross);
+    let (friction_pulse_times_s, fr_idx) = keep(&friction_cross);
+    let sticking_spikes: Vec<Spike> = friction_pulse_times_s
+        .iter()
+        .zip(&fr_idx)
+        .filter(|(_, &j)| stick_amps[j] > 0.0)
+        .map(|(&t, &j)| Spike {
+            time_s: t,
+            amplitude_n: stick_amps[j],
+        })
+        .collect();
+
+    // Measurement noise, sampled at fs.
+    let mut rng_lc = Rng::stream(s.seed, STREAM_LOAD_CELL_NOISE);
+    friction_out
+        .iter_mut()
+        .for_each(|y| *y += s.load_cell.noise_n * rng_lc.normal());
+    let mut rng_on = Rng::stream(s.seed, STREAM_OPTICAL_NOISE);
+    optical_out
+        .iter_mut()
+        .for_each(|y| *y += opt.noise_v * rng_on.normal());
+
+    // Realised quantities.
+    let mean_v = v_mm_s + ve_true.iter().sum::<f64>() / n_out as f64;
+    if mean_v.is_nan() || mean_v <= 0.0 {
+        return Err(Error::setting(
+            "friction",
+            format!(
+                "the stage did not move forward on average ({mean_v:.3} mm/s); friction too high for the stage settings"
+            ),
+        ));
+    }
+    let f_c = mean_v / (2.0 * d_avg);
+    let tau_c = 1.0 / f_c;
+    let passage_rate_hz = match optical_passage_times_s.as_slice() {
+        [first, .., last] if last > first => {
+            Some((optical_passage_times_s.len() - 1) as f64 / (last - first))
+        }
+        _ => None,
+    };
+    let w = std::f64::consts::TAU * f_c;
+    let lc_resp = cmul(
+        HighPass1::response(s.load_cell.time_constant_s, w),
+        Butterworth2::response(s.load_cell.antialias_hz, w),
+    );
+    let mut opt_resp = Butterworth2::response(opt.antialias_hz, w);
+    if opt.ac_coupling {
+        opt_resp = cmul(opt_resp, HighPass1::response(opt.ac_time_constant_s, w));
+    }
+    let gvf = s.stage.g_vf(w);
+    let h_ve = (-gvf.0, -gvf.1);
+    let optical_delay_s = opt.sensor_offset_mm / (mean_v / 2.0);
+    let opt_phase = -w * optical_delay_s + arg(opt_resp) - arg(lc_resp);
+    let optical_lag_s = wrap_lag(-opt_phase / w, tau_c);
+    let ve_phase = arg(h_ve) - arg(lc_resp);
+    let velocity_error_lag_s = wrap_lag(-ve_phase / w, tau_c);
+    let ve_meas: Vec<f64> = gradient(&position_out)
+        .iter()
+        .map(|d| d * s.fs_hz - v_mm_s)
+        .collect();
+
+    let truth = Truth {
+        schema: TRUTH_SCHEMA.into(),
+        version: crate::VERSION.into(),
+        condition: s.condition,
+        velocity_mm_s: v_mm_s,
+        fs_hz: s.fs_hz,
+        n_samples: n_out,
+        record_start_time_s,
+        d_avg_mm: d_avg,
+        f_c_nominal_hz: 1.0 / tau_c_nom,
+        tau_c_nominal_s: tau_c_nom,
+        mean_velocity_mm_s: mean_v,
+        f_c_hz: f_c,
+        tau_c_s: tau_c,
+        passage_rate_hz,
+        ball_spacings_mm: circuit.spacings_mm.clone(),
+        optical_passage_balls: opt_idx.iter().map(|&j| passages[j].ball).collect(),
+        optical_passage_times_s,
+        friction_pulse_balls: fr_idx.iter().map(|&j| passages[j].ball).collect(),
+        friction_pulse_times_s,
+        sticking_spikes,
+        optical_pulse_fwhm_s: opt.width_ratio * tau_c,
+        optical_pulse_sigma_s: sigma_from_fwhm(opt.width_ratio * tau_c),
+        optical_pulse_fwhm_tau_c: opt.width_ratio,
+        friction_pulse_fwhm_s: fr.pulse_width_ratio * tau_c,
+        optical_delay_s,
+        optical_lag_s,
+        optical_lag_tau_c: optical_lag_s / tau_c,
+        optical_phase_deg: -360.0 * optical_lag_s / tau_c,
+        velocity_error_lag_s,
+        velocity_error_lag_tau_c: velocity_error_lag_s / tau_c,
+        velocity_error_phase_deg: -360.0 * velocity_error_lag_s / tau_c,
+        g_vf_gain_mm_s_per_n: (gvf.0 * gvf.0 + gvf.1 * gvf.1).sqrt() * 1e3,
+        natural_frequency_hz: s.stage.omega_n_rad_s() / std::f64::consts::TAU,
+        damping_ratio: s.stage.damping_ratio(),
+        steady_offset_mm: s.stage.steady_offset_m(fr.coulomb_n) * 1e3,
+        velocity_error_std_mm_s: std_dev(&ve_meas),
+        velocity_error_true_std_mm_s: std_dev(&ve_true),
+        interference_phase_rad: opt.interference_drift.then(|| {
+            (interf_w * record_start_time_s + interf_phase0).rem_euclid(std::f64::consts::TAU)
+        }),
+        settings: s.clone(),
+    };
+
+    let meta = Metadata {
+        velocity_mm_s: Some(v_mm_s),
+        bearing: Some(s.bearing.clone()),
+        test_id: Some(
+            s.test_id
+                .clone()
+                .unwrap_or_else(|| format!("sim-v{v_mm_s}-s{}", s.seed)),
+        ),
+        source: None,
+        start_time_s: 0.0,
+    };
+    let recording = Recording::new(
+        s.fs_hz,
+        Channels {
+            friction_n: Some(friction_out),
+            position_mm: Some(position_out),
+            optical_v: Some(optical_out),
+        },
+        meta,
+    )?;
+    Ok(Simulation { recording, truth })
+}
