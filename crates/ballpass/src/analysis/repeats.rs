@@ -201,7 +201,11 @@ fn evaluate(
             ph.cross_spectrum_f_hz = Some(hires.freq_hz[i]);
             ph.cross_spectrum_coherence = Some(c.coherence[i]);
             ph.disagreement_deg = Some(diff);
-            if diff.abs() > settings.phase_tolerance_deg {
+            // The cross-spectrum phase means something only where the
+            // coherence at that bin is significant; elsewhere it is noise
+            // and a disagreement is not worth a warning.
+            let coherent = coherence_threshold(hires, settings).is_some_and(|t| c.coherence[i] > t);
+            if coherent && diff.abs() > settings.phase_tolerance_deg {
                 warnings.push(format!(
                     "{}: correlation phase {:+.0}° and cross-spectrum phase {deg:+.0}° at {:.4} Hz \
                      disagree by {:.0}° (coherence there {:.2})",
@@ -240,6 +244,12 @@ fn evaluate(
         coherence,
         showing,
     }
+}
+
+/// Coherence threshold of one bin at the stated confidence (see [`spectra`]).
+fn coherence_threshold(s: &Spectra, settings: &AnalyzeSettings) -> Option<f64> {
+    let n_d = s.info.dof / 2.0;
+    (n_d > 1.0).then(|| 1.0 - (1.0 - settings.confidence).powf(1.0 / (n_d - 1.0)))
 }
 
 fn average_into(acc: &mut [f64], v: &[f64]) {
