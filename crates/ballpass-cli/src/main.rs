@@ -23,7 +23,7 @@ enum Command {
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
     /// Correlations, spectra, measured period, phases and harmonics of recordings.
-    Analyze(cmd::analyze::AnalyzeArgs),
+    Analyze(Box<cmd::analyze::AnalyzeArgs>),
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
