@@ -65,9 +65,49 @@ fn writes_the_four_outputs_and_a_summary() {
     );
     assert!(head("spectra.csv").starts_with("freq_hz,friction,velocity_error,optical,friction__velocity_error_re,friction__velocity_error_im,friction__velocity_error_coh"));
     assert_eq!(head("spectra_hires.csv"), head("spectra.csv"));
-    // No temporary files left behind.
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 4);
+    // The report: the page and one figure per correlation, spectra, coherence.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("ball-pass frequency found"), "report summary");
+    for fig in [
+        "signals",
+        "corr_friction__optical",
+        "spectra",
+        "spectra_hires",
+        "coherence",
+    ] {
+        assert!(
+            out.join("figures").join(format!("{fig}.svg")).exists(),
+            "{fig}"
+        );
+    }
+    // --no-report: exactly the four data files, no temporary files left.
+    let bare = tmp("bare");
+    let (ok, _, stderr) = run(&[
+        "analyze",
+        rec.to_str().unwrap(),
+        "--velocity",
+        "18",
+        "--no-report",
+        "--out",
+        bare.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let mut names: Vec<String> = std::fs::read_dir(&bare)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "analysis.json",
+            "correlations.csv",
+            "spectra.csv",
+            "spectra_hires.csv"
+        ]
+    );
     std::fs::remove_dir_all(&out).unwrap();
+    std::fs::remove_dir_all(&bare).unwrap();
 }
 
 #[test]

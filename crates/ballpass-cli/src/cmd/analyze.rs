@@ -97,6 +97,12 @@ pub struct AnalyzeArgs {
     /// Confidence of the significance tests [default: 0.99].
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     confidence: Option<f64>,
+    /// Skip the HTML report and figures (DIR/report.html, DIR/figures/).
+    #[arg(long)]
+    no_report: bool,
+    /// Also write PNG figures beside the SVGs.
+    #[arg(long)]
+    png: bool,
     /// Print analysis.json to stdout instead of the summary.
     #[arg(long)]
     json: bool,
@@ -218,6 +224,21 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         writeln!(err, "warning: {w}")?;
     }
     analysis::write_outputs(&analysis, &a.out)?;
+    if !a.no_report {
+        let report = analysis::figures::report(&analysis, recs.first())?
+            .with_command(std::env::args().collect::<Vec<_>>().join(" "));
+        let files = ballpass::report::write_report(
+            &report,
+            &a.out,
+            ballpass::report::ReportOptions {
+                png: a.png,
+                ..Default::default()
+            },
+        )?;
+        for note in &files.warnings {
+            writeln!(err, "note: {note}")?;
+        }
+    }
     let mut out = std::io::stdout().lock();
     if a.json {
         serde_json::to_writer_pretty(&mut out, &analysis)?;

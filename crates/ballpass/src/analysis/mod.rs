@@ -43,6 +43,7 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
+pub mod figures;
 mod lm;
 pub mod passage;
 pub mod preprocess;
