@@ -46,7 +46,7 @@ def main():
         ref.write_csv(tmp / "ref" / "spectra_hires.csv", hires)
 
     def proc(recs):
-        cmd = [a.bin, "analyze", *recs, "--velocity", str(a.velocity), "--out", str(tmp / "bp")]
+        cmd = [a.bin, "analyze", *recs, "--velocity", str(a.velocity), "--no-report", "--out", str(tmp / "bp")]
         subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
 
     (tmp / "ref").mkdir()

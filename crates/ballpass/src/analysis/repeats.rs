@@ -259,6 +259,9 @@ fn average_into(acc: &mut [f64], v: &[f64]) {
 fn average_correlations(all: &[Correlations]) -> Correlations {
     let r = all.len() as f64;
     let mut out = all[0].clone();
+    if all.len() == 1 {
+        return out;
+    }
     for c in &all[1..] {
         for ((_, acc), (_, v)) in out.series.iter_mut().zip(&c.series) {
             average_into(acc, v);
@@ -575,7 +578,12 @@ pub(crate) fn run(
         hires.push(spectra::hires(&p, settings, &plan)?);
         prepared.push(p);
     }
-    let corr = average_correlations(&corrs);
+    // One record: its correlations are the result (no copy).
+    let corr = if corrs.len() == 1 {
+        corrs.pop().expect("one record")
+    } else {
+        average_correlations(&corrs)
+    };
     let full = average_spectra(&fulls);
     let hr = average_spectra(&hires);
     if hr.info.n_segments < 2 && recs.len() < 2 {
