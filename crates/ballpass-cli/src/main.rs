@@ -22,6 +22,8 @@ struct Cli {
 enum Command {
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
+    /// Correlations, spectra, measured period, phases and harmonics of recordings.
+    Analyze(Box<cmd::analyze::AnalyzeArgs>),
     /// Velocity sweep over a campaign: velocity-error trend, tau_c and tau_p against velocity, d_avg.
     Sweep(Box<cmd::campaign::CampaignArgs>),
     /// Bearing diagnosis over a batch: friction spectra, harmonics, sticking events, verdicts.
@@ -37,14 +39,13 @@ enum Command {
     Simulate(cmd::simulate::SimulateArgs),
     /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
     SimulateCampaign(cmd::simulate::CampaignArgs),
-    /// Correlations, spectra, measured period, phases and harmonics of recordings.
-    Analyze(cmd::analyze::AnalyzeArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Predict(a) => cmd::predict::run(&a),
+        Command::Analyze(a) => cmd::analyze::run(&a),
         Command::Sweep(a) => cmd::campaign::run_sweep(&a),
         Command::Diagnose(a) => cmd::campaign::run_diagnose(&a),
         Command::Inspect(a) => cmd::inspect::run(&a),
@@ -52,7 +53,6 @@ fn main() -> ExitCode {
         Command::Passage(a) => cmd::passage::run(&a),
         Command::Simulate(a) => cmd::simulate::run(&a),
         Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
-        Command::Analyze(a) => cmd::analyze::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -339,7 +339,7 @@ impl Correlator {
                 plan.spec_x.clone()
             })
             .collect();
-        let mut raws = Vec::with_capacity(pairs.len());
+        let mut results = Vec::with_capacity(pairs.len());
         for &(a, b) in pairs {
             let plan = self.plan.as_mut().expect("planned above");
             if a == b {
@@ -351,22 +351,15 @@ impl Correlator {
                     *o = x * y.conj();
                 }
             }
-            let mut values = Vec::new();
-            inverse_to_lags(plan, n, n, &mut values);
-            raws.push(values);
+            let mut out = Correlation {
+                lags: Vec::new(),
+                values: Vec::new(),
+            };
+            inverse_to_lags(plan, n, n, &mut out.values);
+            self.finish(&mut out, signals[a], signals[b])?;
+            results.push(out);
         }
-        pairs
-            .iter()
-            .zip(raws)
-            .map(|(&(a, b), values)| {
-                let mut out = Correlation {
-                    lags: Vec::new(),
-                    values,
-                };
-                self.finish(&mut out, signals[a], signals[b])?;
-                Ok(out)
-            })
-            .collect()
+        Ok(results)
     }
 
     fn check_lengths(&self, nx: usize, ny: usize) -> Result<()> {

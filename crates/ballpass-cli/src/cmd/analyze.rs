@@ -8,10 +8,10 @@ use anyhow::{bail, Context, Result};
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
 };
-use ballpass::recording::{self, LoadOptions};
+use ballpass::recording;
 use clap::{Args, ValueEnum};
 
-use crate::args::BearingArgs;
+use crate::args::LoadArgs;
 
 /// Trend removal choices.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -45,45 +45,39 @@ pub struct AnalyzeArgs {
     /// and are averaged.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
-    /// Commanded tracking velocity, mm/s (default: from the files' metadata).
-    #[arg(long, short = 'v', allow_hyphen_values = true)]
-    velocity: Option<f64>,
     #[command(flatten)]
-    bearing: BearingArgs,
-    /// Sampling rate, Hz, for files without a time column.
-    #[arg(long, value_name = "HZ")]
-    fs: Option<f64>,
+    load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
     /// spectra_hires.csv.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Seconds dropped at the start of each record (start transient).
-    #[arg(long, value_name = "S", default_value_t = 0.0)]
-    trim: f64,
-    /// Butterworth low-pass cutoff, Hz.
-    #[arg(long, value_name = "HZ", default_value_t = 20.0)]
-    lowpass: f64,
+    /// Seconds dropped at the start of each record (start transient) [default: 0].
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    trim: Option<f64>,
+    /// Butterworth low-pass cutoff, Hz [default: 20].
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    lowpass: Option<f64>,
     /// Skip the low-pass.
     #[arg(long)]
     no_lowpass: bool,
-    /// Butterworth order.
-    #[arg(long, value_name = "N", default_value_t = 5)]
-    order: usize,
-    /// Trend removed after the low-pass.
-    #[arg(long, value_enum, default_value = "linear")]
-    detrend: DetrendArg,
-    /// Full-range Welch segment length (capped at the record length).
-    #[arg(long, value_name = "N", default_value_t = 4096)]
-    nperseg: usize,
+    /// Butterworth order [default: 5].
+    #[arg(long, value_name = "N")]
+    order: Option<usize>,
+    /// Trend removed after the low-pass [default: linear].
+    #[arg(long, value_enum)]
+    detrend: Option<DetrendArg>,
+    /// Full-range Welch segment length, capped at the record length [default: 4096].
+    #[arg(long, value_name = "N")]
+    nperseg: Option<usize>,
     /// Full-range Welch overlap (default: half a segment).
     #[arg(long, value_name = "N")]
     noverlap: Option<usize>,
-    /// Welch window.
-    #[arg(long, value_enum, default_value = "hann")]
-    window: WindowArg,
-    /// Correlation normalisation.
-    #[arg(long, value_enum, default_value = "coeff")]
-    corr_norm: CorrNormArg,
+    /// Welch window [default: hann].
+    #[arg(long, value_enum)]
+    window: Option<WindowArg>,
+    /// Correlation normalisation [default: coeff].
+    #[arg(long, value_enum)]
+    corr_norm: Option<CorrNormArg>,
     /// High-resolution spectrum by the thesis' zoom processing with factor M
     /// (polyphase average; aliases, see ERRATA §10) instead of decimation.
     #[arg(long, value_name = "M")]
@@ -97,74 +91,120 @@ pub struct AnalyzeArgs {
     /// High-resolution overlap (default: half a segment).
     #[arg(long, value_name = "N")]
     noverlap_hr: Option<usize>,
-    /// Harmonics k = 1..=K examined.
-    #[arg(long, value_name = "K", default_value_t = 5)]
-    harmonics: usize,
-    /// Confidence of the significance tests.
-    #[arg(long, value_name = "P", default_value_t = 0.99)]
-    confidence: f64,
+    /// Harmonics k = 1..=K examined [default: 5].
+    #[arg(long, value_name = "K")]
+    harmonics: Option<usize>,
+    /// Confidence of the significance tests [default: 0.99].
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    confidence: Option<f64>,
+    /// Skip the HTML report and figures (DIR/report.html, DIR/figures/).
+    #[arg(long)]
+    no_report: bool,
+    /// Also write PNG figures beside the SVGs.
+    #[arg(long)]
+    png: bool,
     /// Print analysis.json to stdout instead of the summary.
     #[arg(long)]
     json: bool,
 }
 
 impl AnalyzeArgs {
-    fn settings(&self) -> AnalyzeSettings {
-        AnalyzeSettings {
-            trim_start_s: self.trim,
-            lowpass_hz: (!self.no_lowpass).then_some(self.lowpass),
-            order: self.order,
-            detrend: match self.detrend {
+    /// Settings: defaults, then the profile's `[analysis]` keys that name
+    /// an [`AnalyzeSettings`] field, then the flags given.
+    fn settings(&self, profile_analysis: Option<&serde_json::Value>) -> Result<AnalyzeSettings> {
+        let mut s = AnalyzeSettings::default();
+        if let Some(serde_json::Value::Object(table)) = profile_analysis {
+            let known = serde_json::to_value(&s)?;
+            let known = known.as_object().expect("settings serialise to an object");
+            let mut merged = known.clone();
+            for (k, v) in table {
+                if known.contains_key(k) {
+                    merged.insert(k.clone(), v.clone());
+                }
+            }
+            s = serde_json::from_value(serde_json::Value::Object(merged))
+                .context("profile [analysis] table")?;
+        }
+        if let Some(v) = self.trim {
+            s.trim_start_s = v;
+        }
+        if self.no_lowpass {
+            s.lowpass_hz = None;
+        } else if let Some(v) = self.lowpass {
+            s.lowpass_hz = Some(v);
+        }
+        if let Some(v) = self.order {
+            s.order = v;
+        }
+        if let Some(v) = self.detrend {
+            s.detrend = match v {
                 DetrendArg::Linear => Detrend::Linear,
                 DetrendArg::Constant => Detrend::Constant,
                 DetrendArg::None => Detrend::None,
-            },
-            corr_norm: match self.corr_norm {
+            };
+        }
+        if let Some(v) = self.corr_norm {
+            s.corr_norm = match v {
                 CorrNormArg::Biased => CorrNorm::Biased,
                 CorrNormArg::Unbiased => CorrNorm::Unbiased,
                 CorrNormArg::Coeff => CorrNorm::Coeff,
                 CorrNormArg::None => CorrNorm::None,
-            },
-            nperseg: self.nperseg,
-            noverlap: self.noverlap,
-            window: match self.window {
+            };
+        }
+        if let Some(v) = self.nperseg {
+            s.nperseg = v;
+        }
+        if self.noverlap.is_some() {
+            s.noverlap = self.noverlap;
+        }
+        if let Some(v) = self.window {
+            s.window = match v {
                 WindowArg::Hann => WindowKind::Hann,
                 WindowArg::Hamming => WindowKind::Hamming,
                 WindowArg::Boxcar => WindowKind::Boxcar,
-            },
-            hires: match self.zoom {
-                Some(m) => HiresMethod::PolyphaseZoom { m },
-                None => HiresMethod::Decimate,
-            },
-            hires_q: self.hires_q,
-            hires_nperseg: self.nperseg_hr,
-            hires_noverlap: self.noverlap_hr,
-            harmonics: self.harmonics,
-            confidence: self.confidence,
-            ..AnalyzeSettings::default()
+            };
         }
+        if let Some(m) = self.zoom {
+            s.hires = HiresMethod::PolyphaseZoom { m };
+        }
+        if self.hires_q.is_some() {
+            s.hires_q = self.hires_q;
+        }
+        if self.nperseg_hr.is_some() {
+            s.hires_nperseg = self.nperseg_hr;
+        }
+        if self.noverlap_hr.is_some() {
+            s.hires_noverlap = self.noverlap_hr;
+        }
+        if let Some(v) = self.harmonics {
+            s.harmonics = v;
+        }
+        if let Some(v) = self.confidence {
+            s.confidence = v;
+        }
+        s.validate()?;
+        Ok(s)
     }
 }
 
 /// Runs `ballpass analyze`.
 pub fn run(a: &AnalyzeArgs) -> Result<()> {
-    let (bearing_name, geometry) = a.bearing.geometry()?;
-    let settings = a.settings();
-    settings.validate()?;
-    let opts = LoadOptions {
-        fs_hz: a.fs,
-        velocity_mm_s: a.velocity,
-        bearing: Some(bearing_name.clone()),
-        geometry: Some(geometry),
-        min_periods: 2.0,
-        ..LoadOptions::default()
-    };
+    let profile = a.load.profile()?;
+    let settings = a.settings(profile.as_ref().and_then(|p| p.analysis.as_ref()))?;
+    let mut opts = a.load.options()?;
+    if a.load.min_periods.is_none() {
+        // analyze needs two periods (and says so itself); the loader's
+        // default of three would reject records analyze can handle.
+        opts.min_periods = opts.min_periods.min(2.0);
+    }
+    let bearing_name = opts.bearing.clone().unwrap_or_default();
+    let geometry = opts.geometry.expect("options() resolves the bearing");
     let recs = a
         .recs
         .iter()
         .map(|p| recording::load(p, &opts).with_context(|| format!("loading {}", p.display())))
         .collect::<Result<Vec<_>>>()?;
-    let velocity = match a.velocity {
+    let velocity = match a.load.velocity {
         Some(v) => v,
         None => {
             let vs: Vec<f64> = recs.iter().filter_map(|r| r.meta.velocity_mm_s).collect();
@@ -184,6 +224,21 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         writeln!(err, "warning: {w}")?;
     }
     analysis::write_outputs(&analysis, &a.out)?;
+    if !a.no_report {
+        let report = analysis::figures::report(&analysis, recs.first())?
+            .with_command(std::env::args().collect::<Vec<_>>().join(" "));
+        let files = ballpass::report::write_report(
+            &report,
+            &a.out,
+            ballpass::report::ReportOptions {
+                png: a.png,
+                ..Default::default()
+            },
+        )?;
+        for note in &files.warnings {
+            writeln!(err, "note: {note}")?;
+        }
+    }
     let mut out = std::io::stdout().lock();
     if a.json {
         serde_json::to_writer_pretty(&mut out, &analysis)?;

@@ -42,6 +42,7 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
+pub mod figures;
 pub mod passage;
 pub mod preprocess;
 pub mod repeats;

@@ -201,7 +201,11 @@ fn evaluate(
             ph.cross_spectrum_f_hz = Some(hires.freq_hz[i]);
             ph.cross_spectrum_coherence = Some(c.coherence[i]);
             ph.disagreement_deg = Some(diff);
-            if diff.abs() > settings.phase_tolerance_deg {
+            // The cross-spectrum phase means something only where the
+            // coherence at that bin is significant; elsewhere it is noise
+            // and a disagreement is not worth a warning.
+            let coherent = coherence_threshold(hires, settings).is_some_and(|t| c.coherence[i] > t);
+            if coherent && diff.abs() > settings.phase_tolerance_deg {
                 warnings.push(format!(
                     "{}: correlation phase {:+.0}° and cross-spectrum phase {deg:+.0}° at {:.4} Hz \
                      disagree by {:.0}° (coherence there {:.2})",
@@ -242,13 +246,22 @@ fn evaluate(
     }
 }
 
+/// Coherence threshold of one bin at the stated confidence (see [`spectra`]).
+fn coherence_threshold(s: &Spectra, settings: &AnalyzeSettings) -> Option<f64> {
+    let n_d = s.info.dof / 2.0;
+    (n_d > 1.0).then(|| 1.0 - (1.0 - settings.confidence).powf(1.0 / (n_d - 1.0)))
+}
+
 fn average_into(acc: &mut [f64], v: &[f64]) {
     acc.iter_mut().zip(v).for_each(|(a, b)| *a += b);
 }
 
 fn average_correlations(all: &[Correlations]) -> Correlations {
-    let mut out = all[0].clone();
     let r = all.len() as f64;
+    let mut out = all[0].clone();
+    if all.len() == 1 {
+        return out;
+    }
     for c in &all[1..] {
         for ((_, acc), (_, v)) in out.series.iter_mut().zip(&c.series) {
             average_into(acc, v);
@@ -565,7 +578,12 @@ pub(crate) fn run(
         hires.push(spectra::hires(&p, settings, &plan)?);
         prepared.push(p);
     }
-    let corr = average_correlations(&corrs);
+    // One record: its correlations are the result (no copy).
+    let corr = if corrs.len() == 1 {
+        corrs.pop().expect("one record")
+    } else {
+        average_correlations(&corrs)
+    };
     let full = average_spectra(&fulls);
     let hr = average_spectra(&hires);
     if hr.info.n_segments < 2 && recs.len() < 2 {

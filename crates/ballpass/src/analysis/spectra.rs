@@ -492,13 +492,31 @@ fn max_near(v: &[f64], i: usize) -> (usize, f64) {
     })
 }
 
+/// Chi-square ratios for one spectrum's degrees of freedom.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Quantiles {
+    /// `chi2_ppf(0.5, nu) / nu`: median of a noise bin over its mean.
+    median_ratio: f64,
+    /// `chi2_ppf(confidence^(1/3), nu) / nu`: the significance threshold.
+    threshold_ratio: f64,
+}
+
+impl Quantiles {
+    pub(crate) fn new(nu: f64, confidence: f64) -> Option<Quantiles> {
+        (nu > 0.0).then(|| Quantiles {
+            median_ratio: chi2_ppf(0.5, nu) / nu,
+            threshold_ratio: chi2_ppf(confidence.powf(1.0 / 3.0), nu) / nu,
+        })
+    }
+}
+
 /// The PSD at `f_hz` against its floor (module docs).
 pub(crate) fn harmonic_value(
     s: &Spectra,
     psd: &[f64],
     f_hz: f64,
     f_c_hz: f64,
-    confidence: f64,
+    q: Option<Quantiles>,
 ) -> Option<HarmonicValue> {
     let i = s.nearest_bin(f_hz)?;
     if i == 0 || i + 1 >= psd.len() {
@@ -517,11 +535,10 @@ pub(crate) fn harmonic_value(
         .filter(|&j| !near_harmonic(j))
         .map(|j| psd[j])
         .collect();
-    let nu = s.info.dof;
-    let (floor, ratio, thr, sig) = match median(&bins) {
-        Some(m) if bins.len() >= 3 && m > 0.0 && nu > 0.0 => {
-            let floor = m / (chi2_ppf(0.5, nu) / nu);
-            let thr = chi2_ppf(confidence.powf(1.0 / 3.0), nu) / nu;
+    let (floor, ratio, thr, sig) = match (median(&bins), q) {
+        (Some(m), Some(q)) if bins.len() >= 3 && m > 0.0 => {
+            let floor = m / q.median_ratio;
+            let thr = q.threshold_ratio;
             let ratio = p / floor;
             (
                 Some(floor),
@@ -551,6 +568,7 @@ pub(crate) fn harmonics(
     f_meas: Option<f64>,
     settings: &AnalyzeSettings,
 ) -> Vec<HarmonicRow> {
+    let q = Quantiles::new(s.info.dof, settings.confidence);
     let mut rows = Vec::new();
     for (sig, psd) in &s.auto {
         for k in 1..=settings.harmonics {
@@ -558,9 +576,8 @@ pub(crate) fn harmonics(
             rows.push(HarmonicRow {
                 signal: *sig,
                 k,
-                predicted: harmonic_value(s, psd, kf * f_pred, f_pred, settings.confidence),
-                measured: f_meas
-                    .and_then(|f| harmonic_value(s, psd, kf * f, f, settings.confidence)),
+                predicted: harmonic_value(s, psd, kf * f_pred, f_pred, q),
+                measured: f_meas.and_then(|f| harmonic_value(s, psd, kf * f, f, q)),
             });
         }
     }
