@@ -20,6 +20,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run the whole thesis on built-in simulated data into one report (start here).
+    Demo(cmd::demo::DemoArgs),
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
     /// Correlations, spectra, measured period, phases and harmonics of recordings.
@@ -44,6 +46,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(a) => cmd::demo::run(&a),
         Command::Predict(a) => cmd::predict::run(&a),
         Command::Analyze(a) => cmd::analyze::run(&a),
         Command::Sweep(a) => cmd::campaign::run_sweep(&a),

@@ -2,6 +2,7 @@
 
 pub mod analyze;
 pub mod campaign;
+pub mod demo;
 pub mod inspect;
 pub mod model;
 pub mod passage;
