@@ -147,3 +147,48 @@ fn friction_harmonics_are_not_invented() {
         mean_ratio(&bad)
     );
 }
+
+/// analysis.json carries the ball passages of each record: on a simulated
+/// record their period is the truth's realised passage period within 0.5 %
+/// (the passage issue's bound), and a record without an optical channel says
+/// so instead of giving numbers.
+#[test]
+fn analysis_carries_the_passage_summary() {
+    let mut s = ballpass::sim::SimSettings::for_bearing("sr25w", 9.0).unwrap();
+    s.seed = 4242;
+    let sim = ballpass::sim::simulate(&s).unwrap();
+    let g = ballpass::bearing::lookup("sr25w").unwrap().geometry;
+    let pred = g.predict(9.0, 5).unwrap();
+    let a = ballpass::analysis::analyze(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &ballpass::analysis::AnalyzeSettings::default(),
+    )
+    .unwrap();
+    assert_eq!(a.passages.len(), 1);
+    let p = &a.passages[0];
+    let truth_tau = 1.0 / sim.truth.passage_rate_hz.unwrap();
+    let tau = p.tau_c_s.unwrap().mean;
+    assert!(
+        (tau - truth_tau).abs() / truth_tau < 0.005,
+        "{tau} vs {truth_tau}"
+    );
+    assert_eq!(p.count, Some(sim.truth.optical_passage_times_s.len()));
+
+    let mut no_optical = sim.recording.clone();
+    let ch = ballpass::recording::Channels {
+        friction_n: no_optical
+            .channel(ballpass::recording::Channel::Friction)
+            .map(<[f64]>::to_vec),
+        position_mm: no_optical
+            .channel(ballpass::recording::Channel::Position)
+            .map(<[f64]>::to_vec),
+        optical_v: None,
+    };
+    no_optical =
+        ballpass::recording::Recording::new(no_optical.fs_hz(), ch, no_optical.meta.clone())
+            .unwrap();
+    let a = ballpass::analysis::analyze(&[no_optical], &pred, &Default::default()).unwrap();
+    assert_eq!(a.passages[0].count, None);
+    assert_eq!(a.passages[0].note.as_deref(), Some("no optical channel"));
+}

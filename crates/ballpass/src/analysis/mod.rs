@@ -478,6 +478,9 @@ pub struct Analysis {
     pub repeats: Option<Repeats>,
     /// Conclusion.
     pub verdict: Verdict,
+    /// Ball passages of each record (optical sensor), in brief; the full
+    /// table with fits is `ballpass passage`.
+    pub passages: Vec<PassageSummary>,
     /// Everything the user should know about the numbers.
     pub warnings: Vec<String>,
     /// Correlations (averaged over repeats), exported as `correlations.csv`.
@@ -509,4 +512,65 @@ pub fn analyze(
     settings: &AnalyzeSettings,
 ) -> Result<Analysis> {
     repeats::run(recs, prediction, settings)
+}
+
+/// The ball passages of one record in brief (part of `analysis.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassageSummary {
+    /// Record name.
+    pub source: String,
+    /// Passages found; `None` when detection failed (see `note`).
+    pub count: Option<usize>,
+    /// Ball-pass frequency from the passages `1 / mean tau_c`, Hz.
+    pub f_c_hz: Option<f64>,
+    /// Mean and sample std of the period between passages, s.
+    pub tau_c_s: Option<passage::MeanStd>,
+    /// Mean and sample std of the width at half prominence, s.
+    pub tau_p_s: Option<passage::MeanStd>,
+    /// Mean and sample std of `tau_p / tau_c` (thesis: 0.155).
+    pub tau_p_over_tau_c: Option<passage::MeanStd>,
+    /// Sensor conditions found (drift, AC coupling, inverted pulses, ...).
+    pub conditions: Vec<String>,
+    /// Why there is no summary (no optical channel, no pulses), if so.
+    pub note: Option<String>,
+}
+
+/// Detects the passages of each record (no pulse-train fits) with the
+/// prediction's velocity guiding the period; failures become notes.
+fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<PassageSummary> {
+    let settings = PassageSettings {
+        velocity_mm_s: Some(pred.velocity_mm_s),
+        fit_pulses: 0,
+        ..PassageSettings::default()
+    };
+    recs.iter()
+        .map(|r| {
+            let empty = |note: String| PassageSummary {
+                source: r.source_name(),
+                count: None,
+                f_c_hz: None,
+                tau_c_s: None,
+                tau_p_s: None,
+                tau_p_over_tau_c: None,
+                conditions: Vec::new(),
+                note: Some(note),
+            };
+            if r.channel(crate::recording::Channel::Optical).is_none() {
+                return empty("no optical channel".into());
+            }
+            match detect_passages(r, &settings) {
+                Ok(p) => PassageSummary {
+                    source: r.source_name(),
+                    count: Some(p.count),
+                    f_c_hz: Some(p.f_c_measured_hz).filter(|f| f.is_finite()),
+                    tau_c_s: Some(p.tau_c_s),
+                    tau_p_s: Some(p.tau_p_s),
+                    tau_p_over_tau_c: Some(p.tau_p_over_tau_c),
+                    conditions: p.conditions.iter().map(|c| c.message.clone()).collect(),
+                    note: None,
+                },
+                Err(e) => empty(e.to_string()),
+            }
+        })
+        .collect()
 }

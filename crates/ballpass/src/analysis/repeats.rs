@@ -701,6 +701,7 @@ pub(crate) fn run(
         velocity_error: prepared[0].velocity_error.clone(),
         repeats,
         verdict,
+        passages: super::passage_summaries(recs, pred),
         warnings,
         correlations: corr,
         spectra: full,
