@@ -1,0 +1,77 @@
+#!/usr/bin/env python3
+"""Time the campaign work of `ballpass sweep` + `ballpass diagnose` done the
+NumPy/SciPy way: a loop over the manifest's files, each read once and put
+through the same steps (pinned versions: tools/requirements.txt).
+
+Per file: np.loadtxt; velocity error (np.gradient); 5th-order Butterworth
+20 Hz sosfiltfilt + linear detrend of the three signals; the six full-lag
+correlations (signal.correlate, fft) normalised; full-range welch/csd/coherence
+(nperseg 4096); decimate(q=20) and hi-res welch/csd/coherence; ball passages
+(find_peaks on the optical signal with prominence and distance, peak_widths at
+half prominence); sticking spikes (find_peaks on friction minus its
+block-median baseline). Then the per-velocity and per-bearing tables are
+trivial in comparison and left out (that favours SciPy).
+
+Usage: python3 tools/bench_scipy_campaign.py CAMPAIGN_DIR/manifest.csv
+Prints the total wall time, one core.
+"""
+import csv
+import json
+import pathlib
+import sys
+import time
+
+import numpy as np
+from scipy import signal
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import reference_analyze as ra  # noqa: E402
+
+
+class Args:
+    lowpass = 20.0
+    order = 5
+    detrend = "linear"
+    corr_norm = "coeff"
+    nperseg = 4096
+    noverlap = None
+    q = 20
+    nperseg_hr = None
+    noverlap_hr = None
+    trim = 0.0
+    zoom = None
+    d_avg = 4.0 + 2.0 / 36.0
+
+
+def one(path, velocity):
+    fs, fr, pos, opt = ra.load_csv(path)
+    a = Args()
+    a.velocity = velocity
+    f_c = velocity / (2 * a.d_avg)
+    ra.analyze(fs, fr, pos, opt, a)
+    tau = 1.0 / f_c
+    base = np.percentile(opt, 10)
+    x = opt - base
+    noise = 1.4826 * np.median(np.abs(np.diff(x))) / np.sqrt(2)
+    peaks, props = signal.find_peaks(x, prominence=6 * noise, distance=max(1, int(0.7 * tau * fs)))
+    signal.peak_widths(x, peaks, rel_height=0.5)
+    block = max(8, int(round(tau * fs / 2)))
+    med = np.array([np.median(fr[i:i + block]) for i in range(0, len(fr), block)])
+    centres = np.arange(len(med)) * block + (block - 1) / 2
+    resid = fr - np.interp(np.arange(len(fr)), centres, med)
+    level = 1.4826 * np.median(np.abs(resid - np.median(resid)))
+    signal.find_peaks(resid, height=8 * level, distance=max(1, int(0.5 * tau * fs)))
+
+
+def main():
+    manifest = pathlib.Path(sys.argv[1])
+    rows = list(csv.DictReader(manifest.open()))
+    t0 = time.perf_counter()
+    for r in rows:
+        one(manifest.parent / r["path"], float(r["velocity_mm_s"]))
+    dt = time.perf_counter() - t0
+    print(json.dumps({"records": len(rows), "scipy_campaign_s": dt}))
+
+
+if __name__ == "__main__":
+    main()
