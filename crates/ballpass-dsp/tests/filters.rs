@@ -361,6 +361,62 @@ fn decimate_matches_scipy() {
     );
 }
 
+/// `tools/scipy_fixtures/filters.py::lcg_signal`: two tones, an offset and
+/// uniform noise from a 64-bit LCG, so long inputs need no fixture.
+fn lcg_signal(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|i| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let t = i as f64;
+            (2.0 * std::f64::consts::PI * t / 37.0).sin()
+                + 0.3 * (2.0 * std::f64::consts::PI * t / 5.3).cos()
+                + u
+                + 2.0
+        })
+        .collect()
+}
+
+#[test]
+fn long_records_match_scipy() {
+    // Records of 8 000 to 30 000 samples, long enough that the zero-phase
+    // filter runs as chunks in SIMD lanes with free-response corrections.
+    // Same bounds as the short cases above (1e-12 Butterworth, 1e-11
+    // decimate, norm-wise): chunking changes only the rounding order.
+    let fx = fixture(AREA, "long");
+    for case in fx["cases"].as_array().unwrap() {
+        let n = case["n"].as_u64().unwrap() as usize;
+        let x = lcg_signal(n, case["seed"].as_u64().unwrap());
+        let want = f64s(&case["y"]);
+        match case["kind"].as_str().unwrap() {
+            "sosfiltfilt" => {
+                let sos = Sos::new(sos_rows(&case["sos"])).unwrap();
+                let err = assert_close_norm(
+                    &format!("sosfiltfilt n={n}"),
+                    &sosfiltfilt(&sos, &x).unwrap(),
+                    &want,
+                    1e-12,
+                );
+                eprintln!("long sosfiltfilt n={n}: norm-wise error {err:e}");
+            }
+            "decimate" => {
+                let q = case["q"].as_u64().unwrap() as usize;
+                let err = assert_close_norm(
+                    &format!("decimate q={q} n={n}"),
+                    &decimate(&x, q).unwrap(),
+                    &want,
+                    1e-11,
+                );
+                eprintln!("long decimate q={q} n={n}: norm-wise error {err:e}");
+            }
+            other => panic!("unknown kind {other}"),
+        }
+    }
+}
+
 #[test]
 fn gradient_matches_numpy() {
     let fx = fixture(AREA, "gradient");
