@@ -22,8 +22,12 @@ use ballpass_dsp::{
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
 fn signal(n: usize) -> Vec<f64> {
+    signal_seeded(n, 0x2545_f491_4f6c_dd1d)
+}
+
+fn signal_seeded(n: usize, seed: u64) -> Vec<f64> {
     // Deterministic broadband test signal (LCG noise plus a 1.1 Hz tone).
-    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut state = seed;
     (0..n)
         .map(|i| {
             state = state
@@ -49,6 +53,16 @@ fn bench(c: &mut Criterion) {
     c.bench_function("sosfiltfilt butter5 20 Hz, 30k samples (planned)", |b| {
         b.iter(|| filt.apply_into(black_box(&x), &mut out).unwrap())
     });
+
+    let (x2, x3) = (signal_seeded(30_000, 2), signal_seeded(30_000, 3));
+    c.bench_function(
+        "sosfiltfilt butter5 20 Hz, 3 x 30k samples (apply_many)",
+        |b| b.iter(|| filt.apply_many(black_box(&[&x, &x2, &x3])).unwrap()),
+    );
+    c.bench_function(
+        "sosfiltfilt butter5 20 Hz, 3 x 30k samples (apply x3)",
+        |b| b.iter(|| [&x, &x2, &x3].map(|s| filt.apply(black_box(s)).unwrap())),
+    );
 
     let dec = Decimator::new(DecimateSettings {
         q: 20,

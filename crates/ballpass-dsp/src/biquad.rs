@@ -203,6 +203,35 @@ impl Cascade {
         self.filter(x, &mut z, rev);
     }
 
+    /// Filters two signals of equal length in place as the two lanes of one
+    /// run, `x[k]` from DF-II-T state `zi[k]` (final states not kept): each
+    /// lane rounds exactly as [`Cascade::filter`] on it alone, with two
+    /// samples per SIMD operation and no chunk corrections.
+    pub(crate) fn filter_pair(&self, x: [&mut [f64]; 2], zi: [&[[f64; 2]]; 2], rev: bool) {
+        debug_assert_eq!(x[0].len(), x[1].len());
+        macro_rules! fixed {
+            ($($s:literal)*) => {
+                match self.coefs.len() {
+                    $($s => {
+                        let c: &[Coef; $s] = self.coefs.as_slice().try_into().expect("length checked");
+                        let mut st = [Lanes::<2>::default(); $s];
+                        for (k, z) in zi.iter().enumerate() {
+                            for (l, z) in st.iter_mut().zip(z.iter()) {
+                                l.set_df2t(k, *z);
+                            }
+                        }
+                        return run_lanes(c, &mut st, x, rev);
+                    })*
+                    _ => {}
+                }
+            };
+        }
+        fixed!(1 2 3 4 5 6 7 8);
+        for (x, zi) in x.into_iter().zip(zi) {
+            self.filter(x, &mut zi.to_vec(), rev);
+        }
+    }
+
     /// Filters `x` in place from DF-II-T state `z` (updated to the final
     /// state); `rev` runs from the last sample to the first.
     pub(crate) fn filter(&self, x: &mut [f64], z: &mut [[f64; 2]], rev: bool) {
