@@ -43,7 +43,41 @@ pub(crate) struct Coef {
     a2: f64,
 }
 
+/// Exact relations between a section's coefficients that save multiplies
+/// without changing a result: `b1 x = (2 b0) x = 2 (b0 x) = u + u` and
+/// `1 x = x` are exact in floating point (barring subnormal `b0 x`), so
+/// each kind rounds exactly as [`Kind::General`]. Butterworth and
+/// Chebyshev low-pass designs are made of such sections (double zeros at
+/// `z = -1`, the gain in the first), so they run with 1-3 multiplies per
+/// section and sample instead of 5.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    /// Any coefficients.
+    General,
+    /// `b = b0 [1, 2, 1]`.
+    Double,
+    /// `b = [1, 2, 1]`.
+    DoubleUnit,
+    /// `b = [1, 1, 0]` (a single zero; `b2 x - a2 y = -(a2 y)` exactly).
+    FirstUnit,
+}
+
 impl Coef {
+    /// The cheapest [`Kind`] this section can run as.
+    fn kind(&self) -> Kind {
+        if self.b1 == 2.0 * self.b0 && self.b2 == self.b0 {
+            if self.b0 == 1.0 {
+                Kind::DoubleUnit
+            } else {
+                Kind::Double
+            }
+        } else if self.b0 == 1.0 && self.b1 == 1.0 && self.b2 == 0.0 {
+            Kind::FirstUnit
+        } else {
+            Kind::General
+        }
+    }
+
     pub(crate) fn new(s: &[f64; 6]) -> Coef {
         Coef {
             b0: s[0],
@@ -100,36 +134,107 @@ impl<const K: usize> Lanes<K> {
         self.q[k].abs().max(self.r[k].abs()).max(self.yp[k].abs())
     }
 
+    /// One sample through one section run as `kind` (a constant at every
+    /// call site, so the match folds away).
     #[inline(always)]
-    fn step(&mut self, c: &Coef, x: [f64; K]) -> [f64; K] {
+    fn step(&mut self, kind: Kind, c: &Coef, x: [f64; K]) -> [f64; K] {
         let mut y = [0.0; K];
-        for k in 0..K {
-            y[k] = (c.b0 * x[k] + self.q[k]) - c.a1 * self.yp[k];
-            self.q[k] = c.b1 * x[k] + self.r[k];
-            self.r[k] = c.b2 * x[k] - c.a2 * y[k];
+        match kind {
+            Kind::General => {
+                for k in 0..K {
+                    y[k] = (c.b0 * x[k] + self.q[k]) - c.a1 * self.yp[k];
+                    self.q[k] = c.b1 * x[k] + self.r[k];
+                    self.r[k] = c.b2 * x[k] - c.a2 * y[k];
+                }
+            }
+            Kind::Double => {
+                for k in 0..K {
+                    let u = c.b0 * x[k];
+                    y[k] = (u + self.q[k]) - c.a1 * self.yp[k];
+                    self.q[k] = (u + u) + self.r[k];
+                    self.r[k] = u - c.a2 * y[k];
+                }
+            }
+            Kind::DoubleUnit => {
+                for k in 0..K {
+                    let u = x[k];
+                    y[k] = (u + self.q[k]) - c.a1 * self.yp[k];
+                    self.q[k] = (u + u) + self.r[k];
+                    self.r[k] = u - c.a2 * y[k];
+                }
+            }
+            Kind::FirstUnit => {
+                for k in 0..K {
+                    y[k] = (x[k] + self.q[k]) - c.a1 * self.yp[k];
+                    self.q[k] = x[k] + self.r[k];
+                    self.r[k] = -(c.a2 * y[k]);
+                }
+            }
         }
         self.yp = y;
         y
     }
 }
 
-/// Runs the cascade on one sample vector.
+/// Section layouts known at compile time (the `F` parameter of the
+/// kernels): a run-time kind per section would keep the compiler from
+/// unrolling the cascade and holding its state in registers.
+const GENERAL: u8 = 0;
+/// `Double` first, `DoubleUnit` after: an even-order Butterworth or
+/// Chebyshev I low-pass.
+const LOWPASS: u8 = 1;
+/// As [`LOWPASS`], the last section `FirstUnit`: odd order.
+const LOWPASS_ODD: u8 = 2;
+
+/// Runs the cascade on one sample vector, sections laid out as `F`.
 #[inline(always)]
-fn cascade<const K: usize, const S: usize>(
+fn cascade<const K: usize, const S: usize, const F: u8>(
     c: &[Coef; S],
     st: &mut [Lanes<K>; S],
     mut x: [f64; K],
 ) -> [f64; K] {
-    for s in 0..S {
-        x = st[s].step(&c[s], x);
+    if F == GENERAL || S < 2 {
+        for s in 0..S {
+            x = st[s].step(Kind::General, &c[s], x);
+        }
+    } else {
+        x = st[0].step(Kind::Double, &c[0], x);
+        for s in 1..S - 1 {
+            x = st[s].step(Kind::DoubleUnit, &c[s], x);
+        }
+        let last = if F == LOWPASS_ODD {
+            Kind::FirstUnit
+        } else {
+            Kind::DoubleUnit
+        };
+        x = st[S - 1].step(last, &c[S - 1], x);
     }
     x
+}
+
+/// Which layout `coefs` fits.
+fn layout(coefs: &[Coef]) -> u8 {
+    let kinds: Vec<Kind> = coefs.iter().map(Coef::kind).collect();
+    match kinds.as_slice() {
+        [Kind::Double | Kind::DoubleUnit, mid @ .., last]
+            if mid.iter().all(|&k| k == Kind::DoubleUnit) =>
+        {
+            match last {
+                Kind::DoubleUnit => LOWPASS,
+                Kind::FirstUnit => LOWPASS_ODD,
+                _ => GENERAL,
+            }
+        }
+        _ => GENERAL,
+    }
 }
 
 /// A filter's sections in kernel form.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Cascade {
     coefs: Vec<Coef>,
+    /// [`GENERAL`], [`LOWPASS`] or [`LOWPASS_ODD`].
+    layout: u8,
     /// Samples after which the slowest mode has decayed by 2^-70, from the
     /// largest pole radius; `None` for a marginally stable or unstable
     /// filter (never chunked).
@@ -147,6 +252,37 @@ const CHUNKS: usize = 2;
 
 /// Shortest chunk worth the bookkeeping.
 const MIN_CHUNK: usize = 512;
+
+/// Runs `$body` with `$c: &[Coef; S]` for the cascade's section count `S`
+/// (1 to 8) and layout `F` as constants; falls through for more sections.
+macro_rules! dispatch {
+    ($self:ident, $S:ident, $F:ident, $c:ident => $body:expr) => {
+        dispatch!(@n $self, $S, $F, $c, $body, 1 2 3 4 5 6 7 8)
+    };
+    (@n $self:ident, $S:ident, $F:ident, $c:ident, $body:expr, $($n:literal)*) => {
+        match $self.coefs.len() {
+            $($n => {
+                const $S: usize = $n;
+                let $c: &[Coef; $S] = $self.coefs.as_slice().try_into().expect("length checked");
+                match $self.layout {
+                    LOWPASS => {
+                        const $F: u8 = LOWPASS;
+                        $body
+                    }
+                    LOWPASS_ODD => {
+                        const $F: u8 = LOWPASS_ODD;
+                        $body
+                    }
+                    _ => {
+                        const $F: u8 = GENERAL;
+                        $body
+                    }
+                }
+            })*
+            _ => {}
+        }
+    };
+}
 
 impl Cascade {
     pub(crate) fn new(sections: &[[f64; 6]]) -> Cascade {
@@ -174,7 +310,11 @@ impl Cascade {
                 (70.0 * std::f64::consts::LN_2 / -r_max.ln()).ceil() as usize + 2 * coefs.len()
             }
         });
-        Cascade { coefs, settle }
+        Cascade {
+            layout: layout(&coefs),
+            coefs,
+            settle,
+        }
     }
 
     /// Filters `x` in place from DF-II-T state `zi` (the final state is not
@@ -185,18 +325,7 @@ impl Cascade {
         debug_assert_eq!(zi.len(), self.coefs.len());
         if let Some(settle) = self.settle {
             if x.len() / CHUNKS >= MIN_CHUNK.max(settle) {
-                macro_rules! fixed {
-                    ($($s:literal)*) => {
-                        match self.coefs.len() {
-                            $($s => {
-                                let c: &[Coef; $s] = self.coefs.as_slice().try_into().expect("length checked");
-                                return filter_chunked::<CHUNKS, $s>(c, x, zi, rev);
-                            })*
-                            _ => {}
-                        }
-                    };
-                }
-                fixed!(1 2 3 4 5 6 7 8);
+                dispatch!(self, S, F, c => return filter_chunked::<CHUNKS, S, F>(c, x, zi, rev));
             }
         }
         let mut z = zi.to_vec();
@@ -209,24 +338,15 @@ impl Cascade {
     /// samples per SIMD operation and no chunk corrections.
     pub(crate) fn filter_pair(&self, x: [&mut [f64]; 2], zi: [&[[f64; 2]]; 2], rev: bool) {
         debug_assert_eq!(x[0].len(), x[1].len());
-        macro_rules! fixed {
-            ($($s:literal)*) => {
-                match self.coefs.len() {
-                    $($s => {
-                        let c: &[Coef; $s] = self.coefs.as_slice().try_into().expect("length checked");
-                        let mut st = [Lanes::<2>::default(); $s];
-                        for (k, z) in zi.iter().enumerate() {
-                            for (l, z) in st.iter_mut().zip(z.iter()) {
-                                l.set_df2t(k, *z);
-                            }
-                        }
-                        return run_lanes(c, &mut st, x, rev);
-                    })*
-                    _ => {}
+        dispatch!(self, S, F, c => {
+            let mut st = [Lanes::<2>::default(); S];
+            for (k, z) in zi.iter().enumerate() {
+                for (l, z) in st.iter_mut().zip(z.iter()) {
+                    l.set_df2t(k, *z);
                 }
-            };
-        }
-        fixed!(1 2 3 4 5 6 7 8);
+            }
+            return run_lanes::<2, S, F>(c, &mut st, x, rev);
+        });
         for (x, zi) in x.into_iter().zip(zi) {
             self.filter(x, &mut zi.to_vec(), rev);
         }
@@ -236,34 +356,7 @@ impl Cascade {
     /// state); `rev` runs from the last sample to the first.
     pub(crate) fn filter(&self, x: &mut [f64], z: &mut [[f64; 2]], rev: bool) {
         debug_assert_eq!(z.len(), self.coefs.len());
-        macro_rules! fixed {
-            ($($s:literal)*) => {
-                match self.coefs.len() {
-                    $($s => {
-                        let c: &[Coef; $s] = self.coefs.as_slice().try_into().expect("length checked");
-                        let mut st = [Lanes::<1>::default(); $s];
-                        for (l, zs) in st.iter_mut().zip(z.iter()) {
-                            l.set_df2t(0, *zs);
-                        }
-                        if rev {
-                            for v in x.iter_mut().rev() {
-                                *v = cascade(c, &mut st, [*v])[0];
-                            }
-                        } else {
-                            for v in x.iter_mut() {
-                                *v = cascade(c, &mut st, [*v])[0];
-                            }
-                        }
-                        for ((zs, l), co) in z.iter_mut().zip(&st).zip(c) {
-                            *zs = l.df2t(co, 0);
-                        }
-                        return;
-                    })*
-                    _ => {}
-                }
-            };
-        }
-        fixed!(1 2 3 4 5 6 7 8);
+        dispatch!(self, S, F, c => return filter_plain::<S, F>(c, x, z, rev));
         let mut st: Vec<Lanes<1>> = z
             .iter()
             .map(|zs| {
@@ -275,7 +368,7 @@ impl Cascade {
         let mut run = |v: &mut f64| {
             let mut cur = [*v];
             for (l, c) in st.iter_mut().zip(&self.coefs) {
-                cur = l.step(c, cur);
+                cur = l.step(Kind::General, c, cur);
             }
             *v = cur[0];
         };
@@ -318,10 +411,35 @@ fn split_lanes<const K: usize>(x: &mut [f64], len: usize, rev: bool) -> [&mut [f
     lanes
 }
 
+/// Sample-by-sample run of one signal from DF-II-T state `z` (updated).
+fn filter_plain<const S: usize, const F: u8>(
+    c: &[Coef; S],
+    x: &mut [f64],
+    z: &mut [[f64; 2]],
+    rev: bool,
+) {
+    let mut st = [Lanes::<1>::default(); S];
+    for (l, zs) in st.iter_mut().zip(z.iter()) {
+        l.set_df2t(0, *zs);
+    }
+    if rev {
+        for v in x.iter_mut().rev() {
+            *v = cascade::<1, S, F>(c, &mut st, [*v])[0];
+        }
+    } else {
+        for v in x.iter_mut() {
+            *v = cascade::<1, S, F>(c, &mut st, [*v])[0];
+        }
+    }
+    for ((zs, l), co) in z.iter_mut().zip(&st).zip(c) {
+        *zs = l.df2t(co, 0);
+    }
+}
+
 /// The lock-step loop: lane `k` filters `lanes[k]` in place (backwards when
 /// `rev`). Not inlined, so that the register allocator sees only this loop.
 #[inline(never)]
-fn run_lanes<const K: usize, const S: usize>(
+fn run_lanes<const K: usize, const S: usize, const F: u8>(
     c: &[Coef; S],
     st: &mut [Lanes<K>; S],
     mut lanes: [&mut [f64]; K],
@@ -334,7 +452,7 @@ fn run_lanes<const K: usize, const S: usize>(
     for i in 0..len {
         let j = if rev { len - 1 - i } else { i };
         let v: [f64; K] = std::array::from_fn(|k| lanes[k][j]);
-        let y = cascade(c, &mut local, v);
+        let y = cascade::<K, S, F>(c, &mut local, v);
         for (lane, y) in lanes.iter_mut().zip(y) {
             lane[j] = y;
         }
@@ -366,7 +484,7 @@ fn lane_size<const K: usize, const S: usize>(st: &[Lanes<K>; S], k: usize) -> f6
 /// added to). A free response still alive at the end of its chunk carries
 /// its state into the next chunk in another round, so the result never
 /// depends on how fast the filter settles, only the time does.
-fn filter_chunked<const K: usize, const S: usize>(
+fn filter_chunked<const K: usize, const S: usize, const F: u8>(
     c: &[Coef; S],
     x: &mut [f64],
     zi: &[[f64; 2]],
@@ -378,7 +496,7 @@ fn filter_chunked<const K: usize, const S: usize>(
     for (l, z) in st.iter_mut().zip(zi) {
         l.set_df2t(0, *z);
     }
-    run_lanes(c, &mut st, split_lanes::<K>(x, len, rev), rev);
+    run_lanes::<K, S, F>(c, &mut st, split_lanes::<K>(x, len, rev), rev);
     // carry[k]: state at the start of chunk k not yet accounted for.
     let mut carry: [[[f64; 2]; S]; K] = std::array::from_fn(|k| match k {
         0 => [[0.0; 2]; S],
@@ -388,7 +506,7 @@ fn filter_chunked<const K: usize, const S: usize>(
     let mut last: [Lanes<1>; S] = std::array::from_fn(|s| st[s].lane(K - 1));
     for pos in K * len..n {
         let v = &mut x[at(pos, n, rev)];
-        *v = cascade(c, &mut last, [*v])[0];
+        *v = cascade::<1, S, F>(c, &mut last, [*v])[0];
     }
     loop {
         let mut free = [Lanes::<K>::default(); S];
@@ -404,7 +522,7 @@ fn filter_chunked<const K: usize, const S: usize>(
         while i < len && !(1..K).all(|k| settled(&free, k)) {
             let end = (i + 32).min(len);
             for i in i..end {
-                let y = cascade(c, &mut free, [0.0; K]);
+                let y = cascade::<K, S, F>(c, &mut free, [0.0; K]);
                 for (k, y) in y.into_iter().enumerate().skip(1) {
                     x[at(k * len + i, n, rev)] += y;
                 }
@@ -415,7 +533,7 @@ fn filter_chunked<const K: usize, const S: usize>(
         let mut tail: [Lanes<1>; S] = std::array::from_fn(|s| free[s].lane(K - 1));
         let mut pos = K * len;
         while pos < n && !settled_one(&tail, limit[K - 1]) {
-            x[at(pos, n, rev)] += cascade(c, &mut tail, [0.0])[0];
+            x[at(pos, n, rev)] += cascade::<1, S, F>(c, &mut tail, [0.0])[0];
             pos += 1;
         }
         // Free responses alive at the end of a middle chunk go on into the
@@ -503,6 +621,34 @@ mod tests {
     }
 
     #[test]
+    fn section_kinds_round_as_the_general_form() {
+        // Bit-identical to the 5-multiply form (no tolerance): the kinds
+        // only drop multiplies by exact factors (2 b0 = b0 + b0, 1 x = x).
+        let lp = FilterBand::LowPass { cutoff_hz: 20.0 };
+        let anti_alias = FilterBand::LowPass { cutoff_hz: 0.04 };
+        for sos in [
+            butter(5, lp, 1000.0).unwrap(),
+            butter(4, lp, 1000.0).unwrap(),
+            cheby1(8, 0.05, anti_alias, 2.0).unwrap(),
+        ] {
+            let fast = Cascade::new(sos.sections());
+            assert_ne!(fast.layout, GENERAL);
+            let mut general = fast.clone();
+            general.layout = GENERAL;
+            let x = noise(5000);
+            let zi = vec![[0.25, -0.5]; sos.n_sections()];
+            for rev in [false, true] {
+                let (mut a, mut b) = (x.clone(), x.clone());
+                let (mut za, mut zb) = (zi.clone(), zi.clone());
+                fast.filter(&mut a, &mut za, rev);
+                general.filter(&mut b, &mut zb, rev);
+                assert_eq!(a, b);
+                assert_eq!(za, zb);
+            }
+        }
+    }
+
+    #[test]
     fn slow_filter_carries_free_responses_across_chunks() {
         // Settles in ~11 000 samples, far longer than the 2 000-sample
         // chunks forced here: the free responses must run through several
@@ -517,7 +663,7 @@ mod tests {
             let mut plain = x.clone();
             cascade.filter(&mut plain, &mut zi.to_vec(), rev);
             let mut fast = x.clone();
-            filter_chunked::<4, 1>(c, &mut fast, &zi, rev);
+            filter_chunked::<4, 1, GENERAL>(c, &mut fast, &zi, rev);
             let err = norm_err(&fast, &plain);
             assert!(err <= 1e-12, "rev {rev}: {err:e}");
         }
