@@ -9,6 +9,8 @@ Two uses:
     files written) and prints the best wall time, to put beside ballpass'.
 
 Steps (the defaults of ballpass' AnalyzeSettings; each is a flag here too):
+  0. trim: the first round(trim * fs) samples are dropped (velocity is
+     differentiated on the whole record first, then cut)
   1. velocity = np.gradient(position_mm, 1/fs); velocity_error = velocity - V
   2. for friction, velocity_error, optical:
        y = sosfiltfilt(butter(order, lowpass, 'low', fs=fs, output='sos'), x)
@@ -19,7 +21,12 @@ Steps (the defaults of ballpass' AnalyzeSettings; each is a flag here too):
   4. full-range spectra on the step-2 signals: welch/csd(nperseg, noverlap,
      window='hann', detrend='constant', scaling='density'), coherence
   5. high-resolution spectra: decimate(step-2 signal, q) (IIR, zero phase),
-     then welch/csd/coherence at fs/q with nperseg_hr.
+     then welch/csd/coherence at fs/q with nperseg_hr, where by default
+     q = floor(fs / (2.5 lowpass)) and
+     nperseg_hr = min(next_pow2(4 (fs/q) / f_c), len(decimated)),
+     f_c = V / (2 d_avg); or, with --zoom M, the thesis' polyphase average:
+     mean over i < M of welch/csd(x[i::M][:N//M], fs/M), coherence
+     |mean Pxy|^2 / (mean Pxx mean Pyy).
 
 Usage:
   python3 tools/reference_analyze.py REC.csv --velocity 9 --out DIR [--time]
@@ -52,7 +59,13 @@ def load_csv(path):
     header = pathlib.Path(path).read_text().split("\n", 1)[0].strip().lower().split(",")
     cols = {name: data[:, i] for i, name in enumerate(header)}
     t = cols["time_s"]
-    fs = 1.0 / np.median(np.diff(t))
+    # Rate from the whole span, snapped to 12 significant digits: a time
+    # column printed from i / fs gives fs exactly, as ballpass' loader does
+    # (recording/io/timebase.rs). 1 / median(diff(t)) would be off by ~1e-14
+    # relative, which shifts the velocity error by V * 1e-14 (visible
+    # without detrending).
+    fs = (len(t) - 1) / (t[-1] - t[0])
+    fs = float(f"{fs:.12g}")
     return fs, cols["friction_n"], cols["position_mm"], cols["optical_v"]
 
 
@@ -70,8 +83,11 @@ def normalise(z, n, how, x, y):
 
 
 def analyze(fs, friction, position, optical, a):
-    v = np.gradient(position, 1.0 / fs)
+    trim = int(round(a.trim * fs))
+    v = np.gradient(position, 1.0 / fs)[trim:]
     ve = v - a.velocity
+    friction = friction[trim:]
+    optical = optical[trim:]
     sos = signal.butter(a.order, a.lowpass, "low", fs=fs, output="sos")
     sig = {}
     for name, x in (("friction", friction), ("velocity_error", ve), ("optical", optical)):
@@ -104,11 +120,53 @@ def analyze(fs, friction, position, optical, a):
     nperseg = min(a.nperseg, n)
     noverlap = a.noverlap if a.noverlap is not None else nperseg // 2
     full = spectra(sig, fs, nperseg, noverlap)
-    dec = {k: signal.decimate(x, a.q, ftype="iir", zero_phase=True) for k, x in sig.items()}
-    nd = len(dec["friction"])
-    nhr = min(a.nperseg_hr, nd)
-    hires = spectra(dec, fs / a.q, nhr, nhr // 2)
+    f_c = a.velocity / (2.0 * a.d_avg)
+    if a.zoom:
+        m = a.zoom
+        nd = n // m
+        nhr = min(a.nperseg_hr or next_pow2(4.0 * (fs / m) / f_c), nd)
+        nov = a.noverlap_hr if a.noverlap_hr is not None else nhr // 2
+        hires = zoom_spectra(sig, fs, m, nhr, nov)
+    else:
+        q = a.q or max(int(np.floor(fs / (2.5 * a.lowpass))), 1)
+        dec = sig if q < 2 else {
+            k: signal.decimate(x, q, ftype="iir", zero_phase=True) for k, x in sig.items()
+        }
+        nd = len(dec["friction"])
+        nhr = min(a.nperseg_hr or next_pow2(4.0 * (fs / q) / f_c), nd)
+        nov = a.noverlap_hr if a.noverlap_hr is not None else nhr // 2
+        hires = spectra(dec, fs / q, nhr, nov)
     return sig, corr, full, hires
+
+
+def next_pow2(x):
+    n = 1
+    while n < x:
+        n *= 2
+    return n
+
+
+def zoom_spectra(sig, fs, m, nperseg, noverlap):
+    """Thesis zoom processing: mean of the spectra of the M polyphase branches."""
+    n = len(sig["friction"]) // m
+    br = {k: [x[i::m][:n] for i in range(m)] for k, x in sig.items()}
+    kw = dict(window="hann", nperseg=nperseg, noverlap=noverlap)
+    out = {}
+    auto = {}
+    for p, q in PAIRS:
+        if p == q:
+            ps = [signal.welch(b, fs / m, **kw) for b in br[p]]
+            out["freq_hz"] = ps[0][0]
+            auto[p] = np.mean([b[1] for b in ps], axis=0)
+            out[p] = auto[p]
+    for p, q in PAIRS:
+        if p != q:
+            pxy = np.mean([signal.csd(bx, by, fs / m, **kw)[1] for bx, by in zip(br[p], br[q])], axis=0)
+            name = series_name(p, q)
+            out[name + "_re"] = pxy.real
+            out[name + "_im"] = pxy.imag
+            out[name + "_coh"] = np.abs(pxy) ** 2 / auto[p] / auto[q]
+    return out
 
 
 def write_csv(path, table):
@@ -128,8 +186,12 @@ def main():
     ap.add_argument("--corr-norm", default="coeff", choices=["none", "biased", "unbiased", "coeff"])
     ap.add_argument("--nperseg", type=int, default=4096)
     ap.add_argument("--noverlap", type=int, default=None)
-    ap.add_argument("--q", type=int, default=20)
-    ap.add_argument("--nperseg-hr", type=int, default=256)
+    ap.add_argument("--q", type=int, default=None, help="default floor(fs / (2.5 lowpass))")
+    ap.add_argument("--nperseg-hr", type=int, default=None, help="default f_c/4 resolution")
+    ap.add_argument("--noverlap-hr", type=int, default=None)
+    ap.add_argument("--zoom", type=int, default=None, help="thesis polyphase zoom factor M")
+    ap.add_argument("--trim", type=float, default=0.0)
+    ap.add_argument("--d-avg", type=float, default=4.0 + 2.0 / 36.0, help="mm (SR25W)")
     ap.add_argument("--time", action="store_true")
     a = ap.parse_args()
     out = pathlib.Path(a.out)

@@ -1,11 +1,12 @@
 //! Shared argument groups and parsers.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use ballpass::bearing::{self, Geometry};
 use ballpass::recording::profile::{parse_delimiter, GeometryOverride};
 use ballpass::recording::{Format, LoadOptions, Profile};
+use ballpass::report::{write_report, Report, ReportFiles, ReportOptions};
 use clap::{Args, ValueEnum};
 
 /// Catalog key used when neither a flag nor a profile names a bearing.
@@ -284,6 +285,46 @@ impl LoadArgs {
         o.validate()?;
         Ok(o)
     }
+}
+
+/// The HTML report every command with an output directory writes: the
+/// flags it flattens in.
+#[derive(Debug, Clone, Args)]
+pub struct ReportArgs {
+    /// Do not write the HTML report (DIR/report.html and DIR/figures/*.svg).
+    #[arg(long, help_heading = "Report")]
+    pub no_report: bool,
+    /// Also write every figure as PNG (DIR/figures/*.png).
+    #[arg(long, conflicts_with = "no_report", help_heading = "Report")]
+    pub png: bool,
+}
+
+impl ReportArgs {
+    /// Writes `report` into `dir` unless `--no-report`, printing its drawing
+    /// notes to stderr; `None` when no report was asked for.
+    pub fn write(&self, report: &Report, dir: &Path) -> Result<Option<ReportFiles>> {
+        if self.no_report {
+            return Ok(None);
+        }
+        let files = write_report(
+            report,
+            dir,
+            ReportOptions {
+                png: self.png,
+                ..ReportOptions::default()
+            },
+        )
+        .with_context(|| format!("writing the report in {}", dir.display()))?;
+        for w in &files.warnings {
+            eprintln!("note: {w}");
+        }
+        Ok(Some(files))
+    }
+}
+
+/// The command line as typed, for a report's header.
+pub fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
 }
 
 /// Parses `V` or `START:STOP:STEP` (inclusive) into a list of velocities, mm/s.

@@ -20,8 +20,16 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run the whole thesis on built-in simulated data into one report (start here).
+    Demo(cmd::demo::DemoArgs),
     /// Predict the ball-pass frequency, period and band of a bearing at a velocity.
     Predict(cmd::predict::PredictArgs),
+    /// Correlations, spectra, measured period, phases and harmonics of recordings.
+    Analyze(Box<cmd::analyze::AnalyzeArgs>),
+    /// Velocity sweep over a campaign: velocity-error trend, tau_c and tau_p against velocity, d_avg.
+    Sweep(Box<cmd::campaign::CampaignArgs>),
+    /// Bearing diagnosis over a batch: friction spectra, harmonics, sticking events, verdicts.
+    Diagnose(Box<cmd::campaign::DiagnoseArgs>),
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
@@ -38,7 +46,11 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(a) => cmd::demo::run(&a),
         Command::Predict(a) => cmd::predict::run(&a),
+        Command::Analyze(a) => cmd::analyze::run(&a),
+        Command::Sweep(a) => cmd::campaign::run_sweep(&a),
+        Command::Diagnose(a) => cmd::campaign::run_diagnose(&a),
         Command::Inspect(a) => cmd::inspect::run(&a),
         Command::Model(a) => cmd::model::run(&a),
         Command::Passage(a) => cmd::passage::run(&a),

@@ -92,9 +92,25 @@ fn stage_writes_bode_and_velocity_response() {
         "harmonics.csv",
         "velocity_response.csv",
         "stage.json",
+        "report.html",
+        "figures/bode_g_xr.svg",
+        "figures/bode_g_xf.svg",
+        "figures/bode_g_vf.svg",
+        "figures/difference.svg",
+        "figures/velocity_response.svg",
     ] {
         assert!(d.join(f).exists(), "{f}");
     }
+    let html = std::fs::read_to_string(d.join("report.html")).unwrap();
+    // f_c = 1.1096 Hz, f_n = 16.6 Hz: the natural frequency is marked.
+    assert!(
+        html.contains("Natural frequency f_n = 16.60 Hz"),
+        "natural frequency in the captions"
+    );
+    assert!(
+        html.contains(env!("CARGO_PKG_VERSION")),
+        "version in the report"
+    );
     let v = column(&d.join("velocity_response.csv"), "velocity_mm_s");
     assert_eq!(v.len(), 1000);
     // The velocity deviation has zero mean (D_0 = 0): rounding only.
@@ -152,4 +168,32 @@ fn signals_reports_phase_in_words() {
     for (t, r) in tau.iter().zip(&r) {
         assert!((r - 0.5 * (2.0 * std::f64::consts::PI * t).sin()).abs() < 1e-12);
     }
+}
+
+#[test]
+fn pulses_report_has_the_coefficients_on_a_log_axis_and_no_report_writes_none() {
+    let d = tmp("pulses-report");
+    let (ok, _, err) = run(&["model", "pulses", "--out", d.to_str().unwrap(), "--png"]);
+    assert!(ok, "{err}");
+    for f in [
+        "report.html",
+        "figures/gaussian_coefficients.svg",
+        "figures/gaussian_coefficients.png",
+        "figures/trains.svg",
+    ] {
+        assert!(d.join(f).exists(), "{f}");
+    }
+    let svg = std::fs::read_to_string(d.join("figures/gaussian_coefficients.svg")).unwrap();
+    assert!(svg.contains("|C_n| / P"), "log-axis title");
+    let d2 = tmp("pulses-noreport");
+    let (ok, _, err) = run(&[
+        "model",
+        "pulses",
+        "--out",
+        d2.to_str().unwrap(),
+        "--no-report",
+    ]);
+    assert!(ok, "{err}");
+    assert!(d2.join("pulses.json").exists());
+    assert!(!d2.join("report.html").exists() && !d2.join("figures").exists());
 }

@@ -87,6 +87,57 @@ fn passage_writes_csv_json_and_summary() {
     let ratio = r["tau_p_over_tau_c"]["mean"].as_f64().unwrap();
     assert!((ratio / 0.155 - 1.0).abs() < 0.03, "{ratio}");
     assert_eq!(r["fits"]["better"], "gaussian");
+    // The whole record's train was fitted, with its goodness of fit.
+    assert_eq!(r["fits"]["pulses"].as_u64().unwrap() as usize, n);
+    assert!(
+        r["fits"]["gaussian"]["quality"]["r_squared"]
+            .as_f64()
+            .unwrap()
+            > 0.99
+    );
+    // The report, on by default.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("Prediction vs measurement") && html.contains("no artefacts found"));
+    for f in ["optical_1", "pulses_1", "widths_1"] {
+        assert!(out.join(format!("figures/{f}.svg")).exists(), "{f}");
+    }
+}
+
+#[test]
+fn passage_takes_the_shared_load_flags() {
+    // A headerless-time file with a renamed optical column, read through the
+    // shared --fs / --optical-col flags as `inspect` does.
+    let d = tmp("load");
+    let rec = d.join("run.csv");
+    write_pulses(&rec, true);
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let renamed: String = std::iter::once("pd_volts".to_string())
+        .chain(
+            text.lines()
+                .skip(1)
+                .map(|l| l.split(',').nth(1).unwrap().to_string()),
+        )
+        .collect::<Vec<_>>()
+        .join("\n");
+    let rec2 = d.join("renamed.csv");
+    std::fs::write(&rec2, renamed + "\n").unwrap();
+    let out = d.join("out");
+    let (ok, stdout, err) = run(&[
+        "passage",
+        rec2.to_str().unwrap(),
+        "--fs",
+        "1000",
+        "--optical-col",
+        "pd_volts",
+        "-v",
+        "10",
+        "--no-report",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("v = 10 mm/s (settings)"), "{stdout}");
+    assert!(out.join("passage.json").exists() && !out.join("report.html").exists());
 }
 
 #[test]

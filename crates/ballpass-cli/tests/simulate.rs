@@ -118,11 +118,49 @@ fn simulate_rejects_bad_input_with_one_line() {
     }
     let out = bin()
         .args(["simulate", "--velocity", "9", "-o"])
-        .arg(d.join("x.mat"))
+        .arg(d.join("x.txt"))
         .output()
         .unwrap();
-    assert!(String::from_utf8_lossy(&out.stderr).contains("MAT"));
-    assert!(!d.join("x.csv").exists() && !d.join("x.mat").exists());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("expected a .csv or .mat"));
+    assert!(!d.join("x.txt").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `-o rec.mat` writes a MAT file that the loader reads back to the same
+/// samples as the CSV of the same seed (bit for bit: both store f64).
+#[test]
+fn mat_output_holds_the_same_samples_as_csv() {
+    let d = temp_dir("mat");
+    for name in ["r.csv", "r.mat"] {
+        let out = bin()
+            .args([
+                "simulate",
+                "--velocity",
+                "9",
+                "--duration",
+                "5",
+                "--seed",
+                "3",
+                "-o",
+            ])
+            .arg(d.join(name))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let opts = ballpass::recording::LoadOptions::default();
+    let csv = ballpass::recording::load(&d.join("r.csv"), &opts).unwrap();
+    let mat = ballpass::recording::load(&d.join("r.mat"), &opts).unwrap();
+    assert_eq!(csv.fs_hz(), mat.fs_hz());
+    for c in ballpass::recording::Channel::ALL {
+        assert_eq!(csv.channel(c), mat.channel(c), "{c}");
+    }
+    assert!(d.join("r.truth.json").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -9,14 +9,11 @@
 use std::sync::Arc;
 
 use realfft::{RealFftPlanner, RealToComplex};
-use rustfft::num_complex::Complex;
+use rustfft::num_complex::Complex64;
 
 use crate::detrend::{DetrendType, Trend};
 use crate::error::{check_finite, invalid, DspError, Result};
 use crate::window::Window;
-
-/// A complex number of two `f64`s (re-exported from `num-complex`).
-pub type Complex64 = Complex<f64>;
 
 /// Units of a spectral estimate.
 ///

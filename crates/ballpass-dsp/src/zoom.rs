@@ -13,7 +13,8 @@
 //! once, or run Welch with `M`-times longer segments.
 
 use crate::error::{check_finite, invalid, DspError, Result};
-use crate::spectral::{Complex64, Csd, Psd, Welch, WelchSettings};
+use crate::spectral::{Csd, Psd, Welch, WelchSettings};
+use crate::Complex64;
 
 /// Splits `x` into `m` branches `x_i[k] = x[m k + i]`, `k < len / m`.
 fn branches(x: &[f64], m: usize) -> Vec<Vec<f64>> {

@@ -8,6 +8,8 @@
 
 pub mod analysis;
 pub mod bearing;
+pub mod campaign;
+pub mod demo;
 pub mod error;
 pub mod model;
 pub mod recording;

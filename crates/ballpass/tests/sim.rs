@@ -302,8 +302,9 @@ fn velocity_error_std_peaks_near_9_mm_s_at_order_100_um_s() {
             * 1e3
     };
     let (s2, s9, s20) = (mean_std(2.0), mean_std(9.0), mean_std(20.0));
+    // Calibrated means (5 seeds): 65, 100, 83 µm/s.
     assert!((70.0..=160.0).contains(&s9), "std at 9 mm/s: {s9} µm/s");
-    assert!(s9 > 1.2 * s2 && s9 > 1.15 * s20, "{s2} {s9} {s20}");
+    assert!(s9 > 1.3 * s2 && s9 > 1.1 * s20, "{s2} {s9} {s20}");
 }
 
 #[test]

@@ -1,5 +1,8 @@
 //! One module per subcommand.
 
+pub mod analyze;
+pub mod campaign;
+pub mod demo;
 pub mod inspect;
 pub mod model;
 pub mod passage;

@@ -14,7 +14,9 @@ use ballpass::model::stage::{
 use clap::{Args, Subcommand, ValueEnum};
 use serde::Serialize;
 
-use crate::args::BearingArgs;
+use ballpass::report::{self, Block, Level, Report, Section, Table, Verdict};
+
+use crate::args::{command_line, BearingArgs, ReportArgs};
 use crate::output::{ensure_dir, write_csv, write_json};
 
 /// Arguments of `ballpass model`.
@@ -127,6 +129,8 @@ struct SignalsArgs {
     /// Output directory.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -164,6 +168,8 @@ struct PulsesArgs {
     /// Output directory.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 #[derive(Debug, Args)]
@@ -214,6 +220,8 @@ struct StageArgs {
     /// Output directory.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 /// Runs `ballpass model`.
@@ -349,6 +357,40 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
         spectral_lines: lines,
     };
     write_json(&a.out.join("signals.json"), &json)?;
+    let tau: Vec<f64> = rows.iter().map(|r| r.tau_s).collect();
+    let col = |g: fn(&CorrelationRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
+    let cols = [
+        ("R_FF", col(|r| r.r_ff)),
+        ("R_vv", col(|r| r.r_veve)),
+        ("R_SS", col(|r| r.r_ss)),
+        ("R_Fv", col(|r| r.r_fve)),
+        ("R_FS", col(|r| r.r_fs)),
+        ("R_Sv", col(|r| r.r_sve)),
+    ];
+    let pairs: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    let mut peaks = Table::new(["pair", "peak lag (s)", "phase (deg)", "y lags x by (s)"]);
+    for p in &json.peaks {
+        peaks = peaks.with_row([
+            p.pair.clone(),
+            format!("{:+.5}", p.tau_phi_s),
+            format!("{:+.1}", p.phase_deg),
+            format!("{:+.5}", p.y_lags_x_s),
+        ]);
+    }
+    let rep = Report::new(format!("ballpass model signals: f_c = {f_c:.5} Hz"))
+        .with_command(command_line())
+        .with_section(
+            Section::new("Correlation peaks nearest zero lag")
+                .with(Block::Paragraph(json.convention_note.to_string()))
+                .with(Block::Table(peaks)),
+        )
+        .with_section(Section::new("Settings").with(Block::settings(&m)?))
+        .with_figure(report::model::correlations_figure(
+            &tau,
+            &pairs,
+            m.tau_c_s(),
+        ));
+    let written = a.report.write(&rep, &a.out)?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -372,8 +414,9 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
     }
     writeln!(
         out,
-        "wrote {}/{{correlations.csv, spectral_lines.csv, signals.json}}",
-        a.out.display()
+        "wrote {}/{{correlations.csv, spectral_lines.csv, signals.json{}}}",
+        a.out.display(),
+        report_note(&written)
     )?;
     Ok(())
 }
@@ -508,6 +551,69 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     write_csv(&a.out.join("rectangular_coefficients.csv"), &rrows)?;
     write_csv(&a.out.join("trains.csv"), &trows)?;
     write_json(&a.out.join("pulses.json"), &json)?;
+    let ns: Vec<f64> = grows.iter().map(|r| r.n as f64).collect();
+    let cn: Vec<f64> = grows.iter().map(|r| r.c_over_p).collect();
+    let printed: Vec<f64> = grows.iter().map(|r| r.thesis_printed_c_over_p).collect();
+    let tt: Vec<f64> = trows.iter().map(|r| r.t_s).collect();
+    let col = |g: fn(&TrainRow) -> f64| trows.iter().map(g).collect::<Vec<f64>>();
+    let (gv, gs, rv, rs) = (
+        col(|r| r.gaussian),
+        col(|r| r.gaussian_series),
+        col(|r| r.rectangular),
+        col(|r| r.rectangular_series),
+    );
+    let rs_name = format!("rectangular, order {}", a.order);
+    let gs_name = format!("Gaussian series, order {gorder}");
+    let rep = Report::new(format!(
+        "ballpass model pulses: tau_c = {tau_c:.5} s, sigma/tau_c = {sigma_ratio:.4}"
+    ))
+    .with_command(command_line())
+    .with_section(Section::new("Pulse trains").with(Block::KeyValues(vec![
+        ("tau_c".into(), format!("{tau_c:.6} s")),
+        ("sigma / tau_c".into(), format!("{sigma_ratio:.5}")),
+        ("FWHM / tau_c".into(), format!("{:.5}", g.fwhm_s() / tau_c)),
+        (
+            "rectangular tau_p / tau_c".into(),
+            format!("{:.5}", r.ratio),
+        ),
+        (
+            "Gibbs overshoot, order N".into(),
+            format!("{:.2}% of the jump", 100.0 * gibbs),
+        ),
+        (
+            "rms series error (rectangular / Gaussian)".into(),
+            format!(
+                "{:.4} / {:.1e}",
+                json.fit_rms_rectangular_series, json.fit_rms_gaussian_series
+            ),
+        ),
+    ])))
+    .with_section(Section::new("Settings").with(Block::KeyValues(vec![
+        ("amplitude P".into(), a.amplitude.to_string()),
+        ("dc S".into(), a.dc.to_string()),
+        ("order N".into(), a.order.to_string()),
+        ("harmonics listed".into(), a.harmonics.to_string()),
+        (
+            "periods x points".into(),
+            format!("{} x {}", a.periods, a.points),
+        ),
+    ])))
+    .with_figure(report::model::gaussian_coefficients_figure(
+        &ns,
+        &cn,
+        Some(&printed),
+        sigma_ratio,
+    ))
+    .with_figure(report::model::trains_figure(
+        &tt,
+        &[
+            ("Gaussian", &gv, false),
+            (&gs_name, &gs, true),
+            ("rectangular", &rv, false),
+            (&rs_name, &rs, true),
+        ],
+    ));
+    let written = a.report.write(&rep, &a.out)?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -540,8 +646,9 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     )?;
     writeln!(
         out,
-        "wrote {}/{{gaussian_coefficients.csv, rectangular_coefficients.csv, trains.csv, pulses.json}}",
-        a.out.display()
+        "wrote {}/{{gaussian_coefficients.csv, rectangular_coefficients.csv, trains.csv, pulses.json{}}}",
+        a.out.display(),
+        report_note(&written)
     )?;
     Ok(())
 }
@@ -644,7 +751,113 @@ fn run_stage(a: &StageArgs) -> Result<()> {
     };
     write_json(&a.out.join("stage.json"), &json)?;
     written.push("stage.json");
+    let rep = stage_report(
+        &json,
+        f_c,
+        a.fs,
+        &bode,
+        &diff,
+        resp.as_ref().map(|(_, r)| r),
+    )?;
+    if a.report.write(&rep, &a.out)?.is_some() {
+        written.extend(["report.html", "figures/"]);
+    }
     summarize_stage(&json, f_c, a.fs, &diff, &a.out, &written)
+}
+
+fn report_note(written: &Option<ballpass::report::ReportFiles>) -> &'static str {
+    if written.is_some() {
+        ", report.html, figures/"
+    } else {
+        ""
+    }
+}
+
+fn stage_report(
+    json: &StageJson,
+    f_c: Option<f64>,
+    fs: f64,
+    bode: &[ballpass::model::BodeRow],
+    diff: &[ballpass::model::DifferenceRow],
+    resp: Option<&ballpass::model::VelocityResponse>,
+) -> Result<Report> {
+    let f = &json.features;
+    let mut kv = vec![
+        (
+            "natural frequency f_n".to_string(),
+            format!("{:.4} Hz ({:.4} rad/s)", f.f_n_hz, f.omega_n_rad_s),
+        ),
+        ("damping ratio".into(), format!("{:.4}", f.damping_ratio)),
+        (
+            "G_xr peak".into(),
+            format!(
+                "{:.4} ({:+.3} dB) at {:.4} rad/s",
+                f.g_xr_peak_gain,
+                20.0 * f.g_xr_peak_gain.log10(),
+                f.g_xr_peak_rad_s
+            ),
+        ),
+        (
+            "G_vf peak 1/(K K_D)".into(),
+            format!("{:.4e} (m/s)/N at omega_n", f.g_vf_peak_m_s_per_n),
+        ),
+    ];
+    if let Some(fc) = f_c {
+        kv.push((
+            "ball-pass frequency f_c".into(),
+            format!("{fc:.5} Hz (f_c / f_n = {:.3})", fc / f.f_n_hz),
+        ));
+    }
+    let mut verdicts = Vec::new();
+    if let Some(fc) = f_c {
+        let ratio = fc / f.f_n_hz;
+        let level = if (0.7..1.4).contains(&ratio) {
+            Level::Warn
+        } else {
+            Level::Info
+        };
+        verdicts.push(Verdict::new(
+            level,
+            "f_c vs f_n",
+            format!("f_c is {ratio:.2} f_n: {}", if level == Level::Warn {
+                "the ball passages excite the stage near its resonance, where G_vf peaks (thesis §6.1, Fig. 58)"
+            } else {
+                "away from the stage resonance"
+            }),
+        ));
+    }
+    let mut rep = Report::new(format!(
+        "ballpass model stage: f_n = {:.4} Hz, zeta = {:.3}",
+        f.f_n_hz, f.damping_ratio
+    ))
+    .with_command(command_line())
+    .with_section(Section::new("Stage").with(Block::KeyValues(kv)));
+    if !verdicts.is_empty() {
+        rep = rep.with_section(Section::new("Conditions").with(Block::Verdicts(verdicts)));
+    }
+    if let Some(v) = &json.velocity_response {
+        rep = rep.with_section(
+            Section::new("Velocity response to the friction pulses").with(Block::KeyValues(vec![
+                (
+                    "velocity peak to peak".into(),
+                    format!("{:.4e} mm/s", v.velocity_peak_to_peak_mm_s),
+                ),
+                (
+                    "error of the thesis' magnitude-only sum".into(),
+                    format!("{:.1}% of the peak", 100.0 * v.magnitude_only_error_of_peak),
+                ),
+            ])),
+        );
+    }
+    rep = rep.with_section(Section::new("Settings").with(Block::settings(&json.stage)?));
+    for fig in report::model::stage_bode_figures(bode, f.f_n_hz, f_c) {
+        rep = rep.with_figure(fig);
+    }
+    rep = rep.with_figure(report::model::difference_figure(diff, fs));
+    if let Some(r) = resp {
+        rep = rep.with_figure(report::model::velocity_response_figure(r));
+    }
+    Ok(rep)
 }
 
 fn summarize_stage(

@@ -5,31 +5,25 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
-use ballpass::recording::io::{load, LoadOptions};
+use ballpass::recording::io::load;
+use ballpass::recording::Recording;
+use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
-use crate::args::BearingArgs;
+use crate::args::{command_line, LoadArgs, ReportArgs};
 use crate::output::{ensure_dir, write_csv, write_json};
 
 /// Arguments of `ballpass passage`.
 #[derive(Debug, Args)]
 pub struct PassageArgs {
-    /// Recording files (CSV/TSV/...; see the recording loader).
+    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7).
+    /// The velocity is --velocity, else the profile's or the file's; without
+    /// one the period is found from the pulses and nothing is predicted.
     #[arg(required = true, value_name = "REC")]
     records: Vec<PathBuf>,
-    /// Tracking velocity, mm/s (else the recording's own, else the period is
-    /// found from the pulses and no prediction is made).
-    #[arg(long, short = 'v')]
-    velocity: Option<f64>,
     #[command(flatten)]
-    bearing: BearingArgs,
-    /// Sampling rate, Hz, for files without a time column.
-    #[arg(long, value_name = "HZ")]
-    fs: Option<f64>,
-    /// Column holding the optical sensor voltage (default optical_V).
-    #[arg(long, value_name = "NAME")]
-    optical_column: Option<String>,
+    load: LoadArgs,
     /// Smallest pulse prominence, in noise standard deviations.
     #[arg(long, default_value_t = PassageSettings::default().min_snr)]
     min_snr: f64,
@@ -39,9 +33,11 @@ pub struct PassageArgs {
     /// Order of the rectangular Fourier series fitted.
     #[arg(long, default_value_t = PassageSettings::default().rectangular_order)]
     order: usize,
-    /// Output directory for passages.csv and passage.json.
+    /// Output directory for passages.csv, passage.json and the report.
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 #[derive(Serialize)]
@@ -77,30 +73,33 @@ struct Output<'a> {
 
 /// Runs `ballpass passage`.
 pub fn run(a: &PassageArgs) -> Result<()> {
-    let (bearing_name, geometry) = a.bearing.geometry()?;
+    let opts = a.load.options()?;
+    let bearing_name = opts.bearing.clone().unwrap_or_default();
     let settings = PassageSettings {
-        velocity_mm_s: a.velocity,
-        geometry: Some(geometry),
+        // An explicit --velocity is a setting; a profile's or the file's
+        // velocity reaches the analysis through the recording's metadata.
+        velocity_mm_s: a.load.velocity,
+        geometry: opts.geometry,
         min_snr: a.min_snr,
         fit_pulses: a.fit_pulses,
         rectangular_order: a.order,
         ..Default::default()
     };
-    let mut opts = LoadOptions {
-        fs_hz: a.fs,
-        velocity_mm_s: a.velocity,
-        geometry: Some(geometry),
-        ..Default::default()
-    };
-    opts.optical.name = a.optical_column.clone();
     let mut done = Vec::new();
+    let mut recs: Vec<Recording> = Vec::new();
     let mut failed = Vec::new();
     for path in &a.records {
         let result = load(path, &opts)
             .map_err(anyhow::Error::from)
-            .and_then(|rec| detect_passages(&rec, &settings).map_err(anyhow::Error::from));
+            .and_then(|rec| {
+                let r = detect_passages(&rec, &settings)?;
+                Ok((rec, r))
+            });
         match result {
-            Ok(r) => done.push(r),
+            Ok((rec, r)) => {
+                done.push(r);
+                recs.push(rec);
+            }
             Err(e) => failed.push(Failure {
                 record: path.display().to_string(),
                 error: e.to_string(),
@@ -148,14 +147,21 @@ pub fn run(a: &PassageArgs) -> Result<()> {
             failed: &failed,
         },
     )?;
+    let report = build_report(&recs, &done, &failed, &settings, &bearing_name)?;
+    let written = a.report.write(&report, &a.out)?;
     let mut out = std::io::stdout().lock();
     for r in &done {
         summarize(&mut out, r)?;
     }
     writeln!(
         out,
-        "wrote {}/{{passages.csv, passage.json}}",
-        a.out.display()
+        "wrote {}/{{passages.csv, passage.json{}}}",
+        a.out.display(),
+        if written.is_some() {
+            ", report.html, figures/"
+        } else {
+            ""
+        }
     )?;
     if !failed.is_empty() {
         bail!(
@@ -165,6 +171,44 @@ pub fn run(a: &PassageArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+fn build_report(
+    recs: &[Recording],
+    done: &[PassageAnalysis],
+    failed: &[Failure],
+    settings: &PassageSettings,
+    bearing: &str,
+) -> Result<Report> {
+    let title = match done {
+        [one] => format!("ballpass passage: {}", one.source),
+        _ => format!("ballpass passage: {} records", done.len()),
+    };
+    let mut rep = Report::new(title).with_command(command_line());
+    for (k, (rec, r)) in recs.iter().zip(done).enumerate() {
+        for s in report::passage::passage_sections(r) {
+            rep = rep.with_section(s);
+        }
+        for f in report::passage::passage_figures(k + 1, rec, r)? {
+            rep = rep.with_figure(f);
+        }
+    }
+    if !failed.is_empty() {
+        rep = rep.with_section(
+            Section::new("Records that failed").with(Block::Warnings(
+                failed
+                    .iter()
+                    .map(|f| format!("{}: {}", f.record, f.error))
+                    .collect(),
+            )),
+        );
+    }
+    let mut settings_block = Section::new("Settings").with(Block::KeyValues(vec![(
+        "bearing".into(),
+        bearing.to_string(),
+    )]));
+    settings_block = settings_block.with(Block::settings(settings)?);
+    Ok(rep.with_section(settings_block))
 }
 
 fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use ballpass::recording::write_csv;
+use ballpass::recording::{write_csv, write_mat};
 use ballpass::sim::{self, campaign, Condition, SimSettings, Simulation, Start};
 use clap::{Args, ValueEnum};
 use rayon::prelude::*;
@@ -222,19 +222,15 @@ pub fn run(a: &SimulateArgs) -> Result<()> {
     Ok(())
 }
 
-/// Only CSV can be written for now.
+/// Output formats: canonical CSV (`.csv`) or MATLAB level 5 (`.mat`).
 fn check_output(path: &Path) -> Result<()> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
-        Some("csv") => Ok(()),
-        Some("mat") => bail!(
-            "{}: writing MAT files is not available yet; write .csv",
-            path.display()
-        ),
+        Some("csv" | "mat") => Ok(()),
         _ => bail!(
-            "{}: unknown output format; expected a .csv file name",
+            "{}: unknown output format; expected a .csv or .mat file name",
             path.display()
         ),
     }
@@ -242,7 +238,14 @@ fn check_output(path: &Path) -> Result<()> {
 
 /// Writes the recording and its truth; returns the truth file's path.
 fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
-    write_csv(&sim.recording, path)?;
+    let is_mat = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
+    if is_mat {
+        write_mat(&sim.recording, path)?;
+    } else {
+        write_csv(&sim.recording, path)?;
+    }
     let truth_file = sim::truth_path(path);
     sim.truth.write_json(&truth_file)?;
     Ok(truth_file)

@@ -20,7 +20,8 @@
 //! Ready-made figures after the thesis (stacked signals, correlations with
 //! `tau_c` markers, spectra with `f_c` harmonics, coherence, pulses with
 //! models, Bode, error bars, log-log fits, ratio with mean, fleet overlay)
-//! are in [`kinds`].
+//! are in [`kinds`]; the figures and summaries of `ballpass passage` and
+//! `ballpass model` in [`passage`] and [`model`].
 //!
 //! Text is drawn with the embedded DejaVu Sans (`assets/fonts/`, Bitstream
 //! Vera licence) through `ab_glyph`: no fontconfig or system fonts, so PNGs
@@ -59,6 +60,8 @@
 mod draw;
 mod html;
 pub mod kinds;
+pub mod model;
+pub mod passage;
 mod prepare;
 mod spec;
 mod ticks;

@@ -28,31 +28,47 @@
 //! - Pulse widths are set as FWHM / `tau_c` ratios (the thesis' `tau_p /
 //!   tau_c = 0.155`, width at half prominence) and are fixed lengths along
 //!   the ball travel, so they scale with `1 / v` like the thesis' Fig. 52.
-//! - `good` bearing: pulses of 10 % of the Coulomb level plus a random
-//!   "roughness" force (an Ornstein–Uhlenbeck process along the rail) that
-//!   hides the `f_c` line in a single friction spectrum (thesis Fig. 63a)
-//!   while averaged correlations still show it. `sticking` bearing: in
-//!   addition, a random subset of ball entries carries a spike with total
-//!   friction up to 10 times the Coulomb level (thesis Fig. 66).
+//! - `good` bearing: pulses of 0.2 N on a 3 N Coulomb level plus a random
+//!   "roughness" force (an Ornstein–Uhlenbeck process along the rail, std
+//!   0.2 N, correlation length 1.3 mm) that leaves the `f_c` line only 2–4
+//!   times its neighbourhood in a 0.2 Hz-resolution Welch spectrum of the
+//!   20 Hz low-passed friction (hard to see, thesis Fig. 63a) while
+//!   averaged autocorrelations still rise at multiples of `tau_c` (Fig. 55).
+//! - `sticking` bearing: in addition, 60 % of ball entries (at random) carry
+//!   a narrow spike (FWHM 0.05 `tau_c`) whose peak is uniform up to
+//!   `(10 - 1) F_c`, so the total friction reaches up to ten times the
+//!   Coulomb level (thesis Fig. 66). Its low-frequency friction spectrum is
+//!   about 100 times a good bearing's with clear peaks at `f_c` (Figs. 67-68).
 //!
 //! # Which numbers come from the thesis
 //!
-//! From the thesis: SR25W geometry (d = 4 mm, d_ext = 2 mm, N_B = 36), fs
-//! 1 kHz, 30 s, optical pulse width 0.155 tau_c, 400 Hz anti-alias filters,
-//! 0.1 µm encoder, optical lag behind friction of 0.39 s at 9 mm/s (sensor
-//! offset 0.39 s x 4.5 mm/s = 1.755 mm), interference drift period 5 s
-//! (Fig. 32), sticking spikes up to 10x, velocity-error std peaking at 9 mm/s
-//! at about 110 µm/s (Fig. 29), a load-cell time constant faster than the
-//! specified >= 50 s (Fig. 54; default 10 s).
+//! | quantity | value | source |
+//! |---|---|---|
+//! | SR25W geometry | d = 4 mm, d_ext = 2 mm, N_B = 36 | thesis §1, §3.1 |
+//! | sampling, duration | 1 kHz, 30 s | thesis §7 |
+//! | optical pulse width | FWHM = 0.155 tau_c | thesis §6.4 (Fig. 53) |
+//! | optical lag behind friction | 0.39 s at 9 mm/s → sensor offset 1.755 mm | thesis §7.1 (ERRATA §8–9 for the sign) |
+//! | anti-alias filters | 400 Hz (2nd-order Butterworth assumed) | thesis §5.3, §7 |
+//! | encoder | 0.1 µm | thesis §4 |
+//! | interference drift | period 5 s, pulses invert at crests | thesis §5.2 (Fig. 32) |
+//! | sticking spikes | up to 10x the friction, at ball passages | thesis §8 (Fig. 66) |
+//! | velocity-error std | peak near 9 mm/s at ~100 µm/s (calibration target) | thesis Fig. 29 (110 µm/s) |
+//! | load-cell time constant | 10 s (spec >= 50 s; Fig. 54 decays faster) | thesis §3.3, §7 |
 //!
-//! Assumptions (not in the thesis): the PD stage parameters (natural
-//! frequency at the 9 mm/s ball-pass frequency, damping 0.35, effective mass
-//! 240 kg — chosen to reproduce Fig. 29 and Fig. 58, see [`StageSettings`]),
-//! Coulomb level 3 N ("a few newtons"), pulse amplitude 0.3 N, roughness
-//! 0.2 N over 1.3 mm, friction pulse width equal to the optical one,
-//! sticking probability 0.3 per passage with spike width 0.05 tau_c, noise
-//! levels, photodetector DC level and pulse height, acceleration 100 mm/s²,
-//! AC-coupling time constant 1 s, drift amplitude.
+//! Assumptions (the thesis gives no number): the PD stage (natural frequency
+//! at the 9 mm/s ball-pass frequency, damping 0.35, effective mass 240 kg —
+//! see [`StageSettings`] for why), Coulomb level 3 N ("a few newtons"),
+//! pulse amplitude 0.2 N, roughness 0.2 N over 1.3 mm, friction pulse width
+//! equal to the optical one, sticking probability 0.6 and spike width
+//! 0.05 tau_c, noise levels (load cell 0.02 N, photodetector 0.01 V), DC
+//! level 1 V and pulse height 0.5 V with 5 % ball-to-ball spread, reference
+//! acceleration 100 mm/s², AC-coupling time constant 1 s, drift amplitude
+//! 0.5 V, and the Gaussian pulse shape of the friction.
+//!
+//! With the defaults the velocity-error std (as the analysis computes it,
+//! `numpy.gradient` of the encoder position) averages about 50 µm/s at
+//! 1 mm/s, 100 µm/s at 9–10 mm/s and 83 µm/s at 20 mm/s (5 seeds; see
+//! `examples/sim_sweep.rs`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -166,11 +182,11 @@ impl Default for FrictionSettings {
     fn default() -> Self {
         Self {
             coulomb_n: 3.0,
-            pulse_amplitude_n: 0.3,
+            pulse_amplitude_n: 0.2,
             pulse_width_ratio: 0.155,
             roughness_n: 0.2,
             roughness_length_mm: 1.3,
-            stick_probability: 0.3,
+            stick_probability: 0.6,
             stick_max_ratio: 10.0,
             stick_width_ratio: 0.05,
             zero_velocity_band_mm_s: 1e-3,
@@ -824,10 +840,19 @@ const STREAM_INTERFERENCE: u64 = 7;
 /// `+` in the direction of motion), `position_mm` (encoder, quantised),
 /// `optical_V` (photodetector); metadata velocity, bearing and test id.
 ///
+/// ```
+/// use ballpass::sim::{simulate, SimSettings};
+/// let sim = simulate(&SimSettings { duration_s: 2.0, ..Default::default() })?;
+/// assert_eq!(sim.recording.len(), 2000); // 2 s at 1 kHz
+/// // SR25W at 9 mm/s: f_c = 9 / (2 * 4.05556) = 1.10959 Hz (ERRATA §1).
+/// assert!((sim.truth.f_c_nominal_hz - 1.10959).abs() < 1e-5);
+/// # Ok::<(), ballpass::Error>(())
+/// ```
+///
 /// # Errors
 /// [`Error::InvalidSetting`] for a setting out of range (see
 /// [`SimSettings::validate`]), or when a `from_rest` stage never reaches the
-/// trigger distance.
+/// trigger distance, or when the stage does not move forward on average.
 pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     settings.validate()?;
     let s = settings;
@@ -875,7 +900,7 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
             let hit = rng_stick.uniform() < fr.stick_probability;
             let u = rng_stick.uniform();
             if s.condition == Condition::Sticking && hit {
-                (fr.stick_max_ratio - 1.0) * fr.coulomb_n * u * u
+                (fr.stick_max_ratio - 1.0) * fr.coulomb_n * u
             } else {
                 0.0
             }

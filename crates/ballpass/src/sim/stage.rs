@@ -28,10 +28,15 @@ use crate::error::{Error, Result};
 /// standard deviation peaks at 9 mm/s (thesis Fig. 29) and friction and
 /// velocity error share a zero-lag correlation peak there (thesis Fig. 58;
 /// `G_vf` is real at `omega_n`). The effective mass sets the force-to-velocity
-/// scale: with 240 kg, friction pulses of 10 % of a 3 N Coulomb level give a
-/// velocity error of order 100 µm/s. It is an effective model mass, not the
-/// carriage's (a real ABL20100 carriage and rail weigh some 10–15 kg and are
-/// servoed far more stiffly); see `sim` module docs.
+/// scale: with 240 kg, friction fluctuations of 0.2 N on a 3 N Coulomb level
+/// give a velocity error of order 100 µm/s, while the sticking bearing's
+/// spikes (up to 27 N) leave the stage moving (velocity-error std about
+/// 0.5 mm/s at 20 mm/s). With a realistic carriage mass (10–15 kg) at the
+/// same natural frequency, 0.01 N would already give 100 µm/s and the
+/// sticking spikes would stall the stage, against thesis Fig. 66; with a
+/// realistically stiff servo (tens of Hz), no friction of a few newtons
+/// could produce Fig. 29's 110 µm/s. So 240 kg is an effective model mass
+/// for a PD cartoon of the real loop, not the carriage's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct StageSettings {

@@ -1,0 +1,540 @@
+//! `ballpass sweep` and `ballpass diagnose`: campaigns over many recordings.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
+use ballpass::campaign::figures::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
+use ballpass::campaign::manifest::OrderedVelocity;
+use ballpass::campaign::record::RecordResult;
+use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
+use ballpass::campaign::sweep::sweep;
+use ballpass::campaign::{
+    export, from_directory, read_manifest, run_batch, BatchOutcome, Manifest, ManifestEntry,
+};
+use ballpass::report::{write_report, Block, Report, ReportOptions, Section};
+use clap::Args;
+use serde::Serialize;
+
+use crate::args::LoadArgs;
+
+/// Arguments shared by `sweep` and `diagnose`.
+#[derive(Debug, Args)]
+pub struct CampaignArgs {
+    /// A manifest CSV (path, bearing, velocity_mm_s, repeat[, condition, notes]),
+    /// or a folder of recordings together with --pattern.
+    source: PathBuf,
+    /// File-name pattern inside the folder: `*` matches anything, `{velocity}`,
+    /// `{repeat}`, `{bearing}` capture fields (e.g. `v{velocity}_r{repeat}.csv`).
+    #[arg(long)]
+    pattern: Option<String>,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Use only these bearings (repeatable).
+    #[arg(long = "only-bearing", value_name = "NAME")]
+    only_bearing: Vec<String>,
+    /// Use only these velocities, mm/s (repeatable).
+    #[arg(long = "only-velocity", value_name = "MM/S")]
+    only_velocity: Vec<f64>,
+    /// Butterworth low-pass of the analysis, Hz.
+    #[arg(long, default_value_t = 20.0)]
+    lowpass: f64,
+    /// Harmonics k·f_c examined.
+    #[arg(long, default_value_t = 5)]
+    harmonics: usize,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Do not write report.html and figures/.
+    #[arg(long)]
+    no_report: bool,
+    /// Also write each figure as PNG.
+    #[arg(long)]
+    png: bool,
+    #[command(flatten)]
+    load: LoadArgs,
+}
+
+/// Arguments of `ballpass diagnose`.
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    #[command(flatten)]
+    common: CampaignArgs,
+    /// Low-band edge, Hz.
+    #[arg(long, default_value_t = 25.0)]
+    low_band: f64,
+    /// Low-band power over the batch median that makes a bearing bad.
+    #[arg(long, default_value_t = 10.0)]
+    bad_ratio: f64,
+    /// Low-band power over the batch median that makes a bearing suspect.
+    #[arg(long, default_value_t = 3.0)]
+    suspect_ratio: f64,
+    /// A sticking spike stands this many robust σ above the friction baseline.
+    #[arg(long, default_value_t = 8.0)]
+    spike_factor: f64,
+    /// Spikes per record (at ball-pass multiples) that make a bearing bad.
+    #[arg(long, default_value_t = 3.0)]
+    bad_spikes: f64,
+}
+
+/// Everything one campaign run produced before writing.
+struct Batch {
+    manifest: Manifest,
+    entries: Vec<ManifestEntry>,
+    outcome: BatchOutcome<RecordResult>,
+    notes: Vec<String>,
+    seconds: f64,
+}
+
+fn read_source(a: &CampaignArgs) -> Result<Manifest> {
+    if a.source.is_dir() {
+        let Some(p) = &a.pattern else {
+            bail!("{} is a folder: give --pattern (e.g. 'v{{velocity}}_r{{repeat}}.csv') or a manifest CSV", a.source.display());
+        };
+        Ok(from_directory(
+            &a.source,
+            p,
+            a.load.bearing.bearing.as_deref(),
+            a.load.velocity,
+        )?)
+    } else {
+        if a.pattern.is_some() {
+            bail!(
+                "--pattern goes with a folder, but {} is a file",
+                a.source.display()
+            );
+        }
+        Ok(read_manifest(&a.source)?)
+    }
+}
+
+fn settings(
+    a: &CampaignArgs,
+    low_band_hz: f64,
+    sticking: ballpass::campaign::sticking::StickingSettings,
+) -> CampaignSettings {
+    let mut s = CampaignSettings::default();
+    s.analyze.lowpass_hz = Some(a.lowpass);
+    s.analyze.harmonics = a.harmonics;
+    s.low_band_hz = low_band_hz;
+    s.sticking = sticking;
+    s
+}
+
+fn run(
+    a: &CampaignArgs,
+    pick: impl Fn(&Manifest) -> (Vec<ManifestEntry>, Vec<String>),
+    settings: &CampaignSettings,
+) -> Result<Batch> {
+    let manifest = read_source(a)?;
+    let (mut entries, mut notes) = if a.only_bearing.is_empty() && a.only_velocity.is_empty() {
+        pick(&manifest)
+    } else {
+        (manifest.entries.clone(), Vec::new())
+    };
+    if !a.only_bearing.is_empty() {
+        entries.retain(|e| a.only_bearing.contains(&e.bearing));
+        notes.push(format!("only bearings {}", a.only_bearing.join(", ")));
+    }
+    if !a.only_velocity.is_empty() {
+        entries.retain(|e| a.only_velocity.contains(&e.velocity_mm_s));
+        notes.push(format!("only velocities {:?} mm/s", a.only_velocity));
+    }
+    if entries.is_empty() {
+        bail!(
+            "{}: no recording left after the selection",
+            manifest.source.display()
+        );
+    }
+    let load = a.load.options()?;
+    let fallback = load.geometry.context("no bearing geometry")?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.jobs.unwrap_or(0))
+        .build()?;
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(entries.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} records  {elapsed}  eta {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let t0 = Instant::now();
+    let outcome = pool.install(|| {
+        run_batch(
+            &entries,
+            |e| process_entry(e, &load, fallback, settings),
+            |done, _| {
+                if let Some(b) = &bar {
+                    b.set_position(done as u64);
+                }
+            },
+        )
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    Ok(Batch {
+        manifest,
+        entries,
+        outcome,
+        notes,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Default selection of `sweep`: the bearing recorded at the most velocities.
+fn pick_sweep(m: &Manifest) -> (Vec<ManifestEntry>, Vec<String>) {
+    let mut per: BTreeMap<&str, BTreeSet<OrderedVelocity>> = BTreeMap::new();
+    for e in &m.entries {
+        per.entry(&e.bearing)
+            .or_default()
+            .insert(OrderedVelocity(e.velocity_mm_s));
+    }
+    let Some((best, _)) = per.iter().max_by_key(|(_, v)| v.len()) else {
+        return (Vec::new(), Vec::new());
+    };
+    let best = best.to_string();
+    let entries: Vec<ManifestEntry> = m
+        .entries
+        .iter()
+        .filter(|e| e.bearing == best)
+        .cloned()
+        .collect();
+    let notes = if per.len() > 1 {
+        vec![format!(
+            "swept bearing {best} (recorded at the most velocities); --only-bearing picks another"
+        )]
+    } else {
+        Vec::new()
+    };
+    (entries, notes)
+}
+
+/// Default selection of `diagnose`: the velocity with the most bearings,
+/// leaving out a bearing that is also recorded at other velocities (the
+/// sweep's bearing) when at least two others remain.
+fn pick_diagnose(m: &Manifest) -> (Vec<ManifestEntry>, Vec<String>) {
+    let mut per: BTreeMap<OrderedVelocity, BTreeSet<&str>> = BTreeMap::new();
+    for e in &m.entries {
+        per.entry(OrderedVelocity(e.velocity_mm_s))
+            .or_default()
+            .insert(&e.bearing);
+    }
+    let Some((v, bearings)) = per.iter().max_by_key(|(v, b)| (b.len(), *v)) else {
+        return (Vec::new(), Vec::new());
+    };
+    let swept: BTreeSet<&str> = bearings
+        .iter()
+        .copied()
+        .filter(|b| {
+            m.entries
+                .iter()
+                .any(|e| e.bearing == *b && e.velocity_mm_s != v.0)
+        })
+        .collect();
+    let mut notes = vec![format!(
+        "diagnosed the batch at {} mm/s (the velocity with the most bearings)",
+        v.0
+    )];
+    let keep_swept = bearings.len() - swept.len() < 2;
+    if !keep_swept && !swept.is_empty() {
+        notes.push(format!(
+            "left out {} (also recorded at other velocities: a sweep, not the batch); --only-bearing includes it",
+            swept.iter().copied().collect::<Vec<_>>().join(", ")
+        ));
+    }
+    let entries = m
+        .entries
+        .iter()
+        .filter(|e| e.velocity_mm_s == v.0 && (keep_swept || !swept.contains(e.bearing.as_str())))
+        .cloned()
+        .collect();
+    (entries, notes)
+}
+
+#[derive(Serialize)]
+struct CampaignJson<'a, T: Serialize> {
+    schema: &'static str,
+    version: &'static str,
+    source: String,
+    records: usize,
+    failed: Vec<export::Failure>,
+    selection: &'a [String],
+    settings: &'a CampaignSettings,
+    elapsed_s: f64,
+    result: &'a T,
+    record_results: Vec<&'a RecordResult>,
+}
+
+fn finish_report(
+    title: &str,
+    command: &str,
+    b: &Batch,
+    parts: ReportParts,
+    settings: &CampaignSettings,
+    out: &Path,
+    png: bool,
+) -> Result<PathBuf> {
+    let mut report = Report::new(title).with_command(command);
+    let mut inputs = vec![
+        (
+            "source".to_string(),
+            b.manifest.source.display().to_string(),
+        ),
+        (
+            "records".to_string(),
+            format!("{} ({} failed)", b.entries.len(), b.outcome.n_failed()),
+        ),
+    ];
+    for n in &b.notes {
+        inputs.push(("selection".into(), n.clone()));
+    }
+    report = report.with_section(Section::new("Inputs").with(Block::KeyValues(inputs)));
+    for s in parts.sections {
+        report = report.with_section(s);
+    }
+    let failed: Vec<String> = b
+        .outcome
+        .failed()
+        .map(|(e, why)| format!("{}: {why}", e.path.display()))
+        .collect();
+    if !failed.is_empty() {
+        report = report.with_section(Section::new("Failed records").with(Block::Warnings(failed)));
+    }
+    report = report.with_section(Section::new("Settings").with(Block::settings(settings)?));
+    for f in parts.figures {
+        report = report.with_figure(f);
+    }
+    let files = write_report(
+        &report,
+        out,
+        ReportOptions {
+            png,
+            ..Default::default()
+        },
+    )?;
+    Ok(files.html)
+}
+
+fn summary_failures(b: &Batch, out: &mut impl Write) -> Result<()> {
+    for (e, why) in b.outcome.failed() {
+        writeln!(out, "  failed: {}: {why}", e.path.display())?;
+    }
+    Ok(())
+}
+
+fn exit_status(b: &Batch) -> Result<()> {
+    let n = b.outcome.n_failed();
+    if n > 0 {
+        bail!(
+            "{n} of {} records failed (listed above and in the outputs)",
+            b.entries.len()
+        );
+    }
+    Ok(())
+}
+
+/// Runs `ballpass sweep`.
+pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
+    let settings = settings(a, 25.0, Default::default());
+    let b = run(a, pick_sweep, &settings)?;
+    let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
+    let load = a.load.options()?;
+    let geometry = geometry_for(
+        ok.first().map_or("", |r| r.bearing.as_str()),
+        load.geometry.context("no geometry")?,
+    );
+    let s = sweep(&ok, Some(geometry.d_avg_mm()));
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    export::write_text(
+        &a.out,
+        "records.csv",
+        &export::records_csv(&b.outcome, a.harmonics),
+    )?;
+    export::write_text(&a.out, "sweep.csv", &export::sweep_csv(&s))?;
+    export::write_json(
+        &a.out,
+        "sweep.json",
+        &CampaignJson {
+            schema: "ballpass.sweep/1",
+            version: ballpass::VERSION,
+            source: b.manifest.source.display().to_string(),
+            records: b.entries.len(),
+            failed: export::failures(&b.outcome),
+            selection: &b.notes,
+            settings: &settings,
+            elapsed_s: b.seconds,
+            result: &s,
+            record_results: ok.clone(),
+        },
+    )?;
+    let report = if a.no_report {
+        None
+    } else {
+        Some(finish_report(
+            "ballpass sweep",
+            "ballpass sweep",
+            &b,
+            sweep_parts(&s, "")?,
+            &settings,
+            &a.out,
+            a.png,
+        )?)
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} records ({} failed) in {:.2} s",
+        b.entries.len(),
+        b.outcome.n_failed(),
+        b.seconds
+    )?;
+    for n in &b.notes {
+        writeln!(out, "  {n}")?;
+    }
+    for f in &s.findings {
+        writeln!(out, "{f}")?;
+    }
+    summary_failures(&b, &mut out)?;
+    writeln!(
+        out,
+        "wrote {}{}",
+        a.out.display(),
+        report
+            .map(|r| format!(" (open {})", r.display()))
+            .unwrap_or_default()
+    )?;
+    exit_status(&b)
+}
+
+/// Runs `ballpass diagnose`.
+pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
+    let c = &a.common;
+    let ds = DiagnoseSettings {
+        low_band_hz: a.low_band,
+        bad_low_band_ratio: a.bad_ratio,
+        suspect_low_band_ratio: a.suspect_ratio,
+        bad_events_per_record: a.bad_spikes,
+        sticking: ballpass::campaign::sticking::StickingSettings {
+            spike_factor: a.spike_factor,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let settings = settings(c, ds.low_band_hz, ds.sticking.clone());
+    let b = run(c, pick_diagnose, &settings)?;
+    let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
+    let d = diagnose(&ok, &ds);
+    std::fs::create_dir_all(&c.out)
+        .with_context(|| format!("cannot create {}", c.out.display()))?;
+    export::write_text(
+        &c.out,
+        "records.csv",
+        &export::records_csv(&b.outcome, c.harmonics),
+    )?;
+    export::write_text(&c.out, "diagnosis.csv", &export::diagnosis_csv(&d))?;
+    export::write_text(
+        &c.out,
+        "friction_spectra.csv",
+        &export::friction_spectra_csv(&d),
+    )?;
+    export::write_json(
+        &c.out,
+        "diagnosis.json",
+        &CampaignJson {
+            schema: "ballpass.diagnosis/1",
+            version: ballpass::VERSION,
+            source: b.manifest.source.display().to_string(),
+            records: b.entries.len(),
+            failed: export::failures(&b.outcome),
+            selection: &b.notes,
+            settings: &settings,
+            elapsed_s: b.seconds,
+            result: &d,
+            record_results: ok.clone(),
+        },
+    )?;
+    let report = if c.no_report {
+        None
+    } else {
+        let f_c = ok.first().map(|r| r.f_c_predicted_hz);
+        let examples = friction_examples(&d, &b.entries, c)?;
+        Some(finish_report(
+            "ballpass diagnose",
+            "ballpass diagnose",
+            &b,
+            diagnosis_parts(&d, f_c, &examples, "")?,
+            &settings,
+            &c.out,
+            c.png,
+        )?)
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} records ({} failed) in {:.2} s",
+        b.entries.len(),
+        b.outcome.n_failed(),
+        b.seconds
+    )?;
+    for n in &b.notes {
+        writeln!(out, "  {n}")?;
+    }
+    for x in &d.bearings {
+        writeln!(
+            out,
+            "#{} {:<12} {:<8} {}",
+            x.rank,
+            x.bearing,
+            x.verdict.name(),
+            x.evidence.join("; ")
+        )?;
+    }
+    summary_failures(&b, &mut out)?;
+    writeln!(
+        out,
+        "wrote {}{}",
+        c.out.display(),
+        report
+            .map(|r| format!(" (open {})", r.display()))
+            .unwrap_or_default()
+    )?;
+    exit_status(&b)
+}
+
+/// The first record's friction of the best and the worst bearing (thesis
+/// Fig. 66), re-read for the report only.
+fn friction_examples(
+    d: &ballpass::campaign::diagnose::Diagnosis,
+    entries: &[ManifestEntry],
+    a: &CampaignArgs,
+) -> Result<Vec<FrictionTrace>> {
+    let (Some(worst), Some(best)) = (d.bearings.first(), d.bearings.last()) else {
+        return Ok(Vec::new());
+    };
+    let load = a.load.options()?;
+    let mut out = Vec::new();
+    for b in [best, worst] {
+        if let Some(e) = entries.iter().find(|e| e.bearing == b.bearing) {
+            if let Ok(rec) = ballpass::recording::load(&e.path, &load) {
+                if let Some(f) = rec.channel(ballpass::recording::Channel::Friction) {
+                    let t: Vec<f64> = (0..f.len()).map(|i| rec.time_s(i)).collect();
+                    out.push(FrictionTrace {
+                        name: format!("{} ({})", b.bearing, b.verdict.name()),
+                        t_s: t,
+                        friction_n: f.to_vec(),
+                    });
+                }
+            }
+        }
+    }
+    Ok(out)
+}

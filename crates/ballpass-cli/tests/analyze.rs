@@ -1,0 +1,167 @@
+//! End-to-end tests of `ballpass analyze`: the real binary on the parity
+//! fixture recording (8 s at 200 Hz, 18 mm/s) and on broken inputs.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ballpass-analyze-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn fixture() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../ballpass/tests/fixtures/analyze/input.csv")
+}
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_ballpass"))
+        .args(args)
+        .output()
+        .expect("run ballpass");
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn writes_the_four_outputs_and_a_summary() {
+    let out = tmp("ok");
+    let rec = fixture();
+    let (ok, stdout, stderr) = run(&[
+        "analyze",
+        rec.to_str().unwrap(),
+        "--velocity",
+        "18",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("f_c predicted 2.2192 Hz"), "{stdout}");
+    assert!(stdout.contains("optical lags friction by"), "{stdout}");
+    assert!(stdout.contains("verdict:"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("analysis.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "ballpass.analysis/1");
+    assert_eq!(json["settings"]["lowpass_hz"], 20.0);
+    assert_eq!(json["spectrum_hires"]["decimation"], 4);
+    // The fixture's pulses repeat every tau_c: 0.1 % covers interpolation.
+    let f = json["measured_period"]["f_c_hz"].as_f64().unwrap();
+    assert!((f - 2.219178).abs() < 2.3e-3, "{f}");
+    let head = |f: &str| {
+        std::fs::read_to_string(out.join(f))
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(
+        head("correlations.csv"),
+        "lag_s,friction,velocity_error,optical,friction__velocity_error,friction__optical,velocity_error__optical"
+    );
+    assert!(head("spectra.csv").starts_with("freq_hz,friction,velocity_error,optical,friction__velocity_error_re,friction__velocity_error_im,friction__velocity_error_coh"));
+    assert_eq!(head("spectra_hires.csv"), head("spectra.csv"));
+    // The report: the page and one figure per correlation, spectra, coherence.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("ball-pass frequency found"), "report summary");
+    for fig in [
+        "signals",
+        "corr_friction__optical",
+        "spectra",
+        "spectra_hires",
+        "coherence",
+    ] {
+        assert!(
+            out.join("figures").join(format!("{fig}.svg")).exists(),
+            "{fig}"
+        );
+    }
+    // --no-report: exactly the four data files, no temporary files left.
+    let bare = tmp("bare");
+    let (ok, _, stderr) = run(&[
+        "analyze",
+        rec.to_str().unwrap(),
+        "--velocity",
+        "18",
+        "--no-report",
+        "--out",
+        bare.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let mut names: Vec<String> = std::fs::read_dir(&bare)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "analysis.json",
+            "correlations.csv",
+            "spectra.csv",
+            "spectra_hires.csv"
+        ]
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+    std::fs::remove_dir_all(&bare).unwrap();
+}
+
+#[test]
+fn bad_input_is_a_one_line_error() {
+    let out = tmp("bad");
+    let rec = fixture();
+    let r = rec.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    for (args, want) in [
+        (vec!["--velocity", "0"], "velocity"),
+        (vec!["--velocity", "18", "--lowpass", "150"], "Nyquist"),
+        (
+            vec!["--velocity", "18", "--nperseg-hr", "8"],
+            "cannot resolve f_c",
+        ),
+        // 8 s at 0.5 mm/s is far less than two 16 s periods.
+        (vec!["--velocity", "0.5"], "ball-pass periods"),
+        (vec![], "velocity"),
+    ] {
+        let mut a = vec!["analyze", r, "--out", o];
+        a.extend(args.iter());
+        let (ok, _, stderr) = run(&a);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(
+            stderr.starts_with("error:") && stderr.contains(want) && stderr.lines().count() == 1,
+            "{args:?}: {stderr}"
+        );
+    }
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn a_missing_channel_is_a_warning_on_stderr() {
+    let out = tmp("missing");
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    // Drop the optical column.
+    let cut: String = text
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_string() + "\n")
+        .collect();
+    let rec = out.join("no_optical.csv");
+    std::fs::write(&rec, cut).unwrap();
+    let dir = out.join("res");
+    let (ok, _, stderr) = run(&[
+        "analyze",
+        rec.to_str().unwrap(),
+        "--velocity",
+        "18",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("warning: optical not analysed"), "{stderr}");
+    let head = std::fs::read_to_string(dir.join("correlations.csv")).unwrap();
+    assert!(head.starts_with("lag_s,friction,velocity_error,friction__velocity_error\n"));
+    std::fs::remove_dir_all(&out).unwrap();
+}

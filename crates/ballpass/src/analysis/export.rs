@@ -1,0 +1,225 @@
+//! Writing an [`Analysis`]: `analysis.json`, `correlations.csv`,
+//! `spectra.csv`, `spectra_hires.csv`, each to a temporary file renamed into
+//! place (a reader never sees half a file).
+//!
+//! The files are not `fsync`ed (unlike recordings written by
+//! [`crate::recording::io::write_csv`]): they are derived and can be
+//! recomputed, and four `fsync`s would cost more wall time than the whole
+//! analysis. The rename still guarantees all-or-nothing for readers.
+//!
+//! CSV layout: one header row, `,`-separated, numbers in the shortest form
+//! that reads back to the same `f64` (`nan`/`inf`/`-inf` for non-finite
+//! values, as NumPy writes them).
+//!
+//! - `correlations.csv`: `lag_s`, then `friction`, `velocity_error`,
+//!   `optical`, `friction__velocity_error`, `friction__optical`,
+//!   `velocity_error__optical` (absent series are left out).
+//! - `spectra.csv`, `spectra_hires.csv`: `freq_hz`, the auto-spectra by
+//!   signal name, then per cross pair `<pair>_re`, `<pair>_im`, `<pair>_coh`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::{pair_name, Analysis, Correlations, Spectra};
+use crate::error::{Error, Result};
+
+/// Where [`write_outputs`] put the files.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputPaths {
+    /// `analysis.json`.
+    pub json: PathBuf,
+    /// `correlations.csv`.
+    pub correlations: PathBuf,
+    /// `spectra.csv`.
+    pub spectra: PathBuf,
+    /// `spectra_hires.csv`.
+    pub spectra_hires: PathBuf,
+}
+
+/// Runs `body` on a buffered temporary file beside `path`, then renames it
+/// to `path` (no `fsync`, see the module docs); on error the temporary file
+/// is removed.
+fn write_atomic(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> Result<()> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "output".into());
+    let k = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let tmp = path.with_file_name(format!(".{name}.{}-{k}.tmp", std::process::id()));
+    let result = (|| {
+        let file = std::fs::File::options()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        let mut w = std::io::BufWriter::with_capacity(1 << 16, file);
+        body(&mut w)?;
+        w.into_inner().map_err(|e| e.into_error())?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// A table of named columns over one index column.
+pub(crate) struct Table<'a> {
+    pub index_name: &'a str,
+    pub index: &'a [f64],
+    pub columns: Vec<(String, Vec<f64>)>,
+}
+
+/// Columns of `correlations.csv`.
+pub fn correlation_columns(c: &Correlations) -> Vec<(String, &[f64])> {
+    c.series
+        .iter()
+        .map(|((x, y), v)| (pair_name(*x, *y), v.as_slice()))
+        .collect()
+}
+
+/// Columns of `spectra.csv` / `spectra_hires.csv` (without `freq_hz`).
+pub fn spectrum_columns(s: &Spectra) -> Vec<(String, Vec<f64>)> {
+    let mut cols: Vec<(String, Vec<f64>)> = s
+        .auto
+        .iter()
+        .map(|(k, v)| (k.name().to_string(), v.clone()))
+        .collect();
+    for c in &s.cross {
+        let name = pair_name(c.x, c.y);
+        cols.push((format!("{name}_re"), c.pxy.iter().map(|z| z.re).collect()));
+        cols.push((format!("{name}_im"), c.pxy.iter().map(|z| z.im).collect()));
+        cols.push((format!("{name}_coh"), c.coherence.clone()));
+    }
+    cols
+}
+
+/// Longest text of one number: zmij's longest f64 form is 24 bytes
+/// (`-1.2345678901234567e-308`).
+const SLOT: usize = 32;
+
+/// Writes the text of `v` at `out[*pos..]` (which has at least [`SLOT`]
+/// bytes) and advances `pos`. The fixed-size block copy avoids a `memmove`
+/// call per number, which cost as much as the formatting itself.
+fn put_num(out: &mut [u8], pos: &mut usize, buf: &mut zmij::Buffer, v: f64) {
+    let s: &[u8] = if v.is_finite() {
+        buf.format_finite(v).as_bytes()
+    } else if v.is_nan() {
+        b"nan"
+    } else if v > 0.0 {
+        b"inf"
+    } else {
+        b"-inf"
+    };
+    let mut block = [0u8; SLOT];
+    block[..s.len()].copy_from_slice(s);
+    let dst: &mut [u8; SLOT] = (&mut out[*pos..*pos + SLOT])
+        .try_into()
+        .expect("slot length");
+    *dst = block;
+    *pos += s.len();
+}
+
+/// Rows formatted per write: small enough that the one reused buffer
+/// (about 240 kB for 7 columns) stays in cache and costs no page faults.
+const CHUNK_ROWS: usize = 1024;
+
+fn write_table<W: Write>(
+    w: &mut W,
+    index_name: &str,
+    index: &[f64],
+    cols: &[(String, &[f64])],
+) -> std::io::Result<()> {
+    let mut head = index_name.to_string();
+    for (name, _) in cols {
+        head.push(',');
+        head.push_str(name);
+    }
+    head.push('\n');
+    w.write_all(head.as_bytes())?;
+    // Each number takes at most SLOT bytes plus a separator.
+    let mut out = vec![0u8; CHUNK_ROWS * (cols.len() + 1) * (SLOT + 1) + SLOT];
+    let mut buf = zmij::Buffer::new();
+    for start in (0..index.len()).step_by(CHUNK_ROWS) {
+        let mut pos = 0;
+        for i in start..(start + CHUNK_ROWS).min(index.len()) {
+            put_num(&mut out, &mut pos, &mut buf, index[i]);
+            for (_, col) in cols {
+                out[pos] = b',';
+                pos += 1;
+                put_num(&mut out, &mut pos, &mut buf, col[i]);
+            }
+            out[pos] = b'\n';
+            pos += 1;
+        }
+        w.write_all(&out[..pos])?;
+    }
+    Ok(())
+}
+
+/// Writes a table as CSV atomically.
+pub(crate) fn write_csv(path: &Path, t: &Table<'_>) -> Result<()> {
+    let cols: Vec<(String, &[f64])> = t
+        .columns
+        .iter()
+        .map(|(n, v)| (n.clone(), v.as_slice()))
+        .collect();
+    write_atomic(path, |w| write_table(w, t.index_name, t.index, &cols))
+}
+
+/// Writes `correlations.csv` to `path`.
+///
+/// # Errors
+/// [`Error::Io`] naming the file.
+pub fn write_correlations(path: &Path, c: &Correlations) -> Result<()> {
+    let cols = correlation_columns(c);
+    write_atomic(path, |w| write_table(w, "lag_s", &c.lag_s, &cols))
+}
+
+/// Writes a spectra table (`spectra.csv` layout) to `path`.
+///
+/// # Errors
+/// [`Error::Io`] naming the file.
+pub fn write_spectra(path: &Path, s: &Spectra) -> Result<()> {
+    write_csv(
+        path,
+        &Table {
+            index_name: "freq_hz",
+            index: &s.freq_hz,
+            columns: spectrum_columns(s),
+        },
+    )
+}
+
+/// Writes `analysis.json` and the three CSV files into `dir` (created if
+/// needed).
+///
+/// # Errors
+/// [`Error::Io`] naming the folder or file that could not be written.
+pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let paths = OutputPaths {
+        json: dir.join("analysis.json"),
+        correlations: dir.join("correlations.csv"),
+        spectra: dir.join("spectra.csv"),
+        spectra_hires: dir.join("spectra_hires.csv"),
+    };
+    write_correlations(&paths.correlations, &a.correlations)?;
+    write_spectra(&paths.spectra, &a.spectra)?;
+    write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
+    write_atomic(&paths.json, |w| {
+        serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })?;
+    Ok(paths)
+}

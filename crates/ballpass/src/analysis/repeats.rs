@@ -1,0 +1,710 @@
+//! Step 6 and the orchestration of [`analyze`](super::analyze): one record
+//! or several repeats at the same velocity.
+//!
+//! - All records must share the sampling rate (error otherwise); after the
+//!   trim they are truncated to the shortest (a warning says so).
+//! - Signals missing from any record are left out for all (warning).
+//! - Each record is prepared, correlated and its spectra estimated; the
+//!   correlations and the auto and cross spectra are averaged bin by bin
+//!   (arithmetic mean, thesis §7); coherence is recomputed from the averaged
+//!   spectra (= the coherence over all records' segments), and the
+//!   chi-square degrees of freedom multiply by the number of records.
+//! - The period, phases and harmonics are taken from the averages; each
+//!   record's own scalars are kept with their mean and sample standard
+//!   deviation (ddof 1).
+
+use ballpass_dsp::{CorrelateSettings, Correlator};
+use serde::Serialize;
+
+use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
+use super::preprocess::{self, Prepared};
+use super::spectra::{self, HarmonicRow, Spectra};
+use super::stats::mean_std;
+use super::{
+    pair_name, Absent, Analysis, AnalyzeSettings, InputInfo, SeriesInfo, Signal, Verdict, SCHEMA,
+};
+use crate::bearing::{check_velocity, Prediction};
+use crate::error::{Error, Result};
+use crate::recording::{Channel, Recording};
+
+/// Scalars of one record analysed alone.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordScalars {
+    /// Record name.
+    pub source: String,
+    /// Measured `f_c` from the preferred autocorrelation, Hz.
+    pub f_c_measured_hz: Option<f64>,
+    /// Each signal's own period, s.
+    pub periods_s: Vec<(Signal, Option<f64>)>,
+    /// Phase of each cross pair (lag s, degrees).
+    pub phases: Vec<(String, f64, f64)>,
+    /// Ratio of the PSD at the measured (else predicted) `f_c` to its floor, dB.
+    pub f_c_ratio_db: Vec<(Signal, Option<f64>)>,
+    /// Velocity-error standard deviation (ddof 0, raw), µm/s.
+    pub velocity_error_std_um_s: Option<f64>,
+}
+
+/// Mean and spread of one scalar across repeats.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Spread {
+    /// What (`f_c_measured_hz`, `phase_deg friction__optical`, ...).
+    pub quantity: String,
+    /// Records that had a value.
+    pub count: usize,
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (ddof 1; `None` for one value).
+    pub std: Option<f64>,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+/// Per-record results and their spread.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Repeats {
+    /// Records averaged.
+    pub count: usize,
+    /// Each record's scalars.
+    pub records: Vec<RecordScalars>,
+    /// Mean and spread of each scalar.
+    pub spread: Vec<Spread>,
+}
+
+/// What the correlations and spectra say, before packaging.
+struct Findings {
+    measured: MeasuredPeriod,
+    phases: Vec<Phase>,
+    harmonics: Vec<HarmonicRow>,
+    coherence: Vec<spectra::CoherenceRow>,
+    showing: Vec<Signal>,
+}
+
+fn is_sig(r: &HarmonicRow, measured: bool) -> Option<bool> {
+    let v = if measured {
+        r.measured.as_ref().or(r.predicted.as_ref())
+    } else {
+        r.predicted.as_ref()
+    };
+    v.and_then(|v| v.significant)
+}
+
+fn ratio(r: &HarmonicRow) -> f64 {
+    r.predicted
+        .as_ref()
+        .and_then(|v| v.ratio_db)
+        .unwrap_or(f64::NEG_INFINITY)
+}
+
+fn evaluate(
+    corr: &Correlations,
+    hires: &Spectra,
+    pred: &Prediction,
+    settings: &AnalyzeSettings,
+    warnings: &mut Vec<String>,
+) -> Findings {
+    let signals: Vec<Signal> = hires.auto.iter().map(|(s, _)| *s).collect();
+    // Which signals show f_c at the prediction (chooses the period's source).
+    let pre = spectra::harmonics(hires, pred.f_c_hz, None, settings);
+    let k1: Vec<&HarmonicRow> = pre.iter().filter(|r| r.k == 1).collect();
+    let shows = |s: Signal| {
+        k1.iter()
+            .any(|r| r.signal == s && is_sig(r, false) == Some(true))
+    };
+    let per_signal: Vec<SignalPeriod> = signals
+        .iter()
+        .filter_map(|&s| correlation::signal_period(corr, s, pred.tau_c_s, settings))
+        .collect();
+    let has_period = |s: Signal| {
+        per_signal
+            .iter()
+            .any(|p| p.signal == s && p.period_s.is_some())
+    };
+    let (from, choice) = if shows(Signal::Optical) && has_period(Signal::Optical) {
+        (
+            Some(Signal::Optical),
+            "optical: it shows f_c above its floor (preferred)".to_string(),
+        )
+    } else if let Some(r) = k1
+        .iter()
+        .filter(|r| is_sig(r, false) == Some(true) && has_period(r.signal))
+        .max_by(|a, b| ratio(a).total_cmp(&ratio(b)))
+    {
+        (
+            Some(r.signal),
+            format!(
+                "{}: the strongest signal at f_c above its floor (optical {})",
+                r.signal.words(),
+                if signals.contains(&Signal::Optical) {
+                    "does not show f_c"
+                } else {
+                    "absent"
+                }
+            ),
+        )
+    } else {
+        let fallback = [Signal::Optical, Signal::Friction, Signal::VelocityError]
+            .into_iter()
+            .find(|&s| has_period(s));
+        if let Some(s) = fallback {
+            warnings.push(format!(
+                "no signal shows f_c above its noise floor at {:.0}% confidence; the measured \
+                 period comes from the {} autocorrelation and may be noise",
+                settings.confidence * 100.0,
+                s.words()
+            ));
+        }
+        (
+            fallback,
+            "no signal shows f_c above its floor; first signal with autocorrelation peaks".into(),
+        )
+    };
+    let period_s = from.and_then(|s| {
+        per_signal
+            .iter()
+            .find(|p| p.signal == s)
+            .and_then(|p| p.period_s)
+    });
+    if from.is_none() {
+        warnings.push(
+            "no autocorrelation has peaks near multiples of tau_c: no measured period; phases use \
+             the predicted period"
+                .into(),
+        );
+    }
+    let f_meas = period_s.map(|t| 1.0 / t);
+    let f_spec = from
+        .and_then(|s| hires.auto_of(s))
+        .and_then(|psd| spectra::spectral_peak(hires, psd, pred.f_c_hz));
+    if let (Some(a), Some(b)) = (f_meas, f_spec) {
+        if (a - b).abs() > hires.info.resolution_hz {
+            warnings.push(format!(
+                "measured f_c {a:.5} Hz (autocorrelation) and {b:.5} Hz (spectral peak) differ by \
+                 more than the resolution {:.4} Hz",
+                hires.info.resolution_hz
+            ));
+        }
+    }
+    let t_used = period_s.unwrap_or(pred.tau_c_s);
+    let f_used = 1.0 / t_used;
+    let mut phases = Vec::new();
+    for (x, y) in pairs_for(&signals).into_iter().filter(|(x, y)| x != y) {
+        let Some(mut ph) = correlation::phase(corr, x, y, t_used) else {
+            continue;
+        };
+        if let (Some(c), Some(i)) = (hires.cross_of(x, y), hires.nearest_bin(f_used)) {
+            let p = c.pxy[i];
+            let deg = p.im.atan2(p.re).to_degrees();
+            let diff = correlation::wrap_deg(deg - ph.phase_deg);
+            ph.cross_spectrum_phase_deg = Some(deg);
+            ph.cross_spectrum_f_hz = Some(hires.freq_hz[i]);
+            ph.cross_spectrum_coherence = Some(c.coherence[i]);
+            ph.disagreement_deg = Some(diff);
+            // The cross-spectrum phase means something only where the
+            // coherence at that bin is significant; elsewhere it is noise
+            // and a disagreement is not worth a warning.
+            let coherent = coherence_threshold(hires, settings).is_some_and(|t| c.coherence[i] > t);
+            if coherent && diff.abs() > settings.phase_tolerance_deg {
+                warnings.push(format!(
+                    "{}: correlation phase {:+.0}° and cross-spectrum phase {deg:+.0}° at {:.4} Hz \
+                     disagree by {:.0}° (coherence there {:.2})",
+                    ph.pair,
+                    ph.phase_deg,
+                    hires.freq_hz[i],
+                    diff.abs(),
+                    c.coherence[i]
+                ));
+            }
+        }
+        phases.push(ph);
+    }
+    let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas, settings);
+    let showing: Vec<Signal> = signals
+        .iter()
+        .copied()
+        .filter(|&s| {
+            harmonics
+                .iter()
+                .any(|r| r.signal == s && r.k == 1 && is_sig(r, true) == Some(true))
+        })
+        .collect();
+    let coherence = spectra::coherence_rows(hires, f_used, settings);
+    Findings {
+        measured: MeasuredPeriod {
+            from_signal: from,
+            choice,
+            period_s,
+            f_c_hz: f_meas,
+            f_c_spectral_hz: f_spec,
+            per_signal,
+        },
+        phases,
+        harmonics,
+        coherence,
+        showing,
+    }
+}
+
+/// Coherence threshold of one bin at the stated confidence (see [`spectra`]).
+fn coherence_threshold(s: &Spectra, settings: &AnalyzeSettings) -> Option<f64> {
+    let n_d = s.info.dof / 2.0;
+    (n_d > 1.0).then(|| 1.0 - (1.0 - settings.confidence).powf(1.0 / (n_d - 1.0)))
+}
+
+fn average_into(acc: &mut [f64], v: &[f64]) {
+    acc.iter_mut().zip(v).for_each(|(a, b)| *a += b);
+}
+
+fn average_correlations(all: &[Correlations]) -> Correlations {
+    let r = all.len() as f64;
+    let mut out = all[0].clone();
+    if all.len() == 1 {
+        return out;
+    }
+    for c in &all[1..] {
+        for ((_, acc), (_, v)) in out.series.iter_mut().zip(&c.series) {
+            average_into(acc, v);
+        }
+    }
+    if all.len() > 1 {
+        for (_, acc) in &mut out.series {
+            acc.iter_mut().for_each(|a| *a /= r);
+        }
+    }
+    out
+}
+
+fn average_spectra(all: &[Spectra]) -> Spectra {
+    let mut out = all[0].clone();
+    let r = all.len();
+    if r == 1 {
+        return out;
+    }
+    for s in &all[1..] {
+        for ((_, acc), (_, v)) in out.auto.iter_mut().zip(&s.auto) {
+            average_into(acc, v);
+        }
+        for (acc, c) in out.cross.iter_mut().zip(&s.cross) {
+            acc.pxy.iter_mut().zip(&c.pxy).for_each(|(a, b)| *a += b);
+        }
+    }
+    let rf = r as f64;
+    for (_, acc) in &mut out.auto {
+        acc.iter_mut().for_each(|a| *a /= rf);
+    }
+    for c in &mut out.cross {
+        c.pxy.iter_mut().for_each(|a| *a /= rf);
+    }
+    out.refresh_coherence();
+    out.info.n_records = r;
+    out.info.dof *= rf;
+    out
+}
+
+fn spread(quantity: String, values: &[f64]) -> Option<Spread> {
+    let (mean, _) = mean_std(values, 0)?;
+    Some(Spread {
+        quantity,
+        count: values.len(),
+        mean,
+        std: mean_std(values, 1).map(|(_, s)| s),
+        min: values.iter().copied().fold(f64::INFINITY, f64::min),
+        max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    })
+}
+
+fn scalars(source: String, f: &Findings, p: &Prepared) -> RecordScalars {
+    RecordScalars {
+        source,
+        f_c_measured_hz: f.measured.f_c_hz,
+        periods_s: f
+            .measured
+            .per_signal
+            .iter()
+            .map(|s| (s.signal, s.period_s))
+            .collect(),
+        phases: f
+            .phases
+            .iter()
+            .map(|ph| (ph.pair.clone(), ph.lag_s, ph.phase_deg))
+            .collect(),
+        f_c_ratio_db: f
+            .harmonics
+            .iter()
+            .filter(|r| r.k == 1)
+            .map(|r| {
+                let v = r.measured.as_ref().or(r.predicted.as_ref());
+                (r.signal, v.and_then(|v| v.ratio_db))
+            })
+            .collect(),
+        velocity_error_std_um_s: p.velocity_error.as_ref().map(|v| v.std_um_s),
+    }
+}
+
+fn spreads(records: &[RecordScalars]) -> Vec<Spread> {
+    let mut out = Vec::new();
+    let collect = |f: &dyn Fn(&RecordScalars) -> Option<f64>| -> Vec<f64> {
+        records.iter().filter_map(f).collect()
+    };
+    out.extend(spread(
+        "f_c_measured_hz".into(),
+        &collect(&|r| r.f_c_measured_hz),
+    ));
+    out.extend(spread(
+        "velocity_error_std_um_s".into(),
+        &collect(&|r| r.velocity_error_std_um_s),
+    ));
+    for s in Signal::ALL {
+        out.extend(spread(
+            format!("period_s {}", s.name()),
+            &collect(&|r| {
+                r.periods_s
+                    .iter()
+                    .find(|(k, _)| *k == s)
+                    .and_then(|(_, v)| *v)
+            }),
+        ));
+        out.extend(spread(
+            format!("f_c_ratio_db {}", s.name()),
+            &collect(&|r| {
+                r.f_c_ratio_db
+                    .iter()
+                    .find(|(k, _)| *k == s)
+                    .and_then(|(_, v)| *v)
+            }),
+        ));
+    }
+    let pairs: Vec<String> = records
+        .first()
+        .map(|r| r.phases.iter().map(|p| p.0.clone()).collect())
+        .unwrap_or_default();
+    for pair in pairs {
+        let lags = collect(&|r| r.phases.iter().find(|p| p.0 == pair).map(|p| p.1));
+        out.extend(spread(format!("lag_s {pair}"), &lags));
+        // Phases are circular; spread them about the first record's value.
+        let degs = collect(&|r| r.phases.iter().find(|p| p.0 == pair).map(|p| p.2));
+        if let Some(&d0) = degs.first() {
+            let unwrapped: Vec<f64> = degs
+                .iter()
+                .map(|d| d0 + correlation::wrap_deg(d - d0))
+                .collect();
+            out.extend(spread(format!("phase_deg {pair}"), &unwrapped));
+        }
+    }
+    out
+}
+
+fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
+    let flagged: Vec<usize> = f
+        .harmonics
+        .iter()
+        .filter(|r| r.signal == Signal::Friction && is_sig(r, true) == Some(true))
+        .map(|r| r.k)
+        .collect();
+    let dev = f
+        .measured
+        .f_c_hz
+        .map(|m| 100.0 * (m - pred.f_c_hz) / pred.f_c_hz);
+    let mut text = match (f.measured.f_c_hz, f.showing.is_empty()) {
+        (Some(m), false) => format!(
+            "ball-pass frequency found: measured f_c = {m:.4} Hz vs predicted {:.4} Hz ({:+.2} %), \
+             shown by {}",
+            pred.f_c_hz,
+            dev.unwrap_or(0.0),
+            f.showing
+                .iter()
+                .map(|s| s.words())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        (Some(m), true) => format!(
+            "no signal shows f_c above its noise floor; the autocorrelation period gives {m:.4} Hz \
+             (predicted {:.4} Hz) but is not confirmed by the spectra",
+            pred.f_c_hz
+        ),
+        (None, _) => format!(
+            "ball-pass frequency not found (predicted {:.4} Hz): no autocorrelation peaks near \
+             multiples of tau_c",
+            pred.f_c_hz
+        ),
+    };
+    if !flagged.is_empty() {
+        let ks: Vec<String> = flagged.iter().map(|k| k.to_string()).collect();
+        text.push_str(&format!(
+            "; friction stands above its floor at k = {}{}",
+            ks.join(", "),
+            if flagged.len() >= 3 {
+                " (periodic friction disturbance with harmonics: check the bearing for sticking, \
+                 thesis ch. 8)"
+            } else {
+                ""
+            }
+        ));
+    } else if f.harmonics.iter().any(|r| r.signal == Signal::Friction) {
+        text.push_str("; friction shows no ball-pass harmonic above its floor");
+    }
+    Verdict {
+        f_c_predicted_hz: pred.f_c_hz,
+        f_c_measured_hz: f.measured.f_c_hz,
+        f_c_deviation_percent: dev,
+        signals_showing_f_c: f.showing.clone(),
+        friction_harmonics_flagged: flagged,
+        text,
+    }
+}
+
+/// [`analyze`](super::analyze).
+pub(crate) fn run(
+    recs: &[Recording],
+    pred: &Prediction,
+    settings: &AnalyzeSettings,
+) -> Result<Analysis> {
+    settings.validate()?;
+    check_velocity(pred.velocity_mm_s)?;
+    let Some(first) = recs.first() else {
+        return Err(Error::InvalidRecording {
+            source_name: "analyze".into(),
+            reason: "no recordings given".into(),
+        });
+    };
+    let fs = first.fs_hz();
+    for r in &recs[1..] {
+        if (r.fs_hz() - fs).abs() > 1e-9 * fs {
+            return Err(Error::InvalidRecording {
+                source_name: r.source_name(),
+                reason: format!(
+                    "sampling rate {} Hz differs from {} Hz of {}; repeats must share it",
+                    r.fs_hz(),
+                    fs,
+                    first.source_name()
+                ),
+            });
+        }
+    }
+    let mut warnings = Vec::new();
+    let mut notes = Vec::new();
+    let trim = (settings.trim_start_s * fs).round() as usize;
+    let mut n = usize::MAX;
+    for r in recs {
+        if r.len() <= trim {
+            return Err(Error::InvalidRecording {
+                source_name: r.source_name(),
+                reason: format!(
+                    "{} samples; trimming {} s ({trim} samples) leaves none",
+                    r.len(),
+                    settings.trim_start_s
+                ),
+            });
+        }
+        n = n.min(r.len() - trim);
+    }
+    if recs.iter().any(|r| r.len() - trim != n) {
+        warnings.push(format!(
+            "records differ in length; each is truncated to the shortest, {n} samples ({:.3} s) \
+             after the trim",
+            n as f64 / fs
+        ));
+    }
+    let duration = n as f64 / fs;
+    let periods = duration / pred.tau_c_s;
+    if periods < 2.0 {
+        return Err(Error::InvalidRecording {
+            source_name: first.source_name(),
+            reason: format!(
+                "{duration:.3} s analysed spans {periods:.2} ball-pass periods at {} mm/s \
+                 (tau_c = {:.4} s); at least 2 are needed",
+                pred.velocity_mm_s, pred.tau_c_s
+            ),
+        });
+    }
+    if periods < 4.0 {
+        warnings.push(format!(
+            "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
+             coarse spectrum"
+        ));
+    }
+    // Signals: those every record has.
+    let mut signals = Vec::new();
+    let mut absent = Vec::new();
+    for s in Signal::ALL {
+        let ch = match s {
+            Signal::Friction => Channel::Friction,
+            Signal::VelocityError => Channel::Position,
+            Signal::Optical => Channel::Optical,
+        };
+        let missing: Vec<String> = recs
+            .iter()
+            .filter(|r| r.channel(ch).is_none())
+            .map(|r| r.source_name())
+            .collect();
+        if missing.is_empty() {
+            signals.push(s);
+        } else {
+            let reason = format!(
+                "channel {} missing in {}",
+                ch.column_name(),
+                missing.join(", ")
+            );
+            warnings.push(format!("{} not analysed: {reason}", s.words()));
+            absent.push((s, reason));
+        }
+    }
+    if signals.is_empty() {
+        return Err(Error::MissingChannel {
+            channel: "friction_N",
+            source_name: first.source_name(),
+            needed_for: "analyze (no friction, position or optical channel)",
+        });
+    }
+    let filter = preprocess::lowpass_filter(settings, fs)?;
+    let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut warnings)?;
+    let mut correlator = Correlator::with_lengths(
+        CorrelateSettings {
+            normalization: settings.corr_norm.to_dsp(),
+        },
+        n,
+        n,
+    );
+    let mut prepared = Vec::with_capacity(recs.len());
+    let mut corrs = Vec::with_capacity(recs.len());
+    let mut fulls = Vec::with_capacity(recs.len());
+    let mut hires = Vec::with_capacity(recs.len());
+    for r in recs {
+        let mut p = preprocess::prepare(r, pred.velocity_mm_s, settings, filter.as_ref(), trim, n)?;
+        p.signals.retain(|(s, _)| signals.contains(s));
+        corrs.push(correlation::compute(&p, &mut correlator, settings)?);
+        fulls.push(spectra::full(&p, settings)?);
+        hires.push(spectra::hires(&p, settings, &plan)?);
+        prepared.push(p);
+    }
+    // One record: its correlations are the result (no copy).
+    let corr = if corrs.len() == 1 {
+        corrs.pop().expect("one record")
+    } else {
+        average_correlations(&corrs)
+    };
+    let full = average_spectra(&fulls);
+    let hr = average_spectra(&hires);
+    if hr.info.n_segments < 2 && recs.len() < 2 {
+        warnings.push(format!(
+            "high-resolution spectrum has {} segment: coherence is 1 by construction and the \
+             harmonic tests are weak",
+            hr.info.n_segments
+        ));
+    }
+    let findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
+    let repeats = if recs.len() > 1 {
+        let mut records = Vec::new();
+        for ((r, p), (c, h)) in recs.iter().zip(&prepared).zip(corrs.iter().zip(&hires)) {
+            let mut w = Vec::new();
+            let f = evaluate(c, h, pred, settings, &mut w);
+            records.push(scalars(r.source_name(), &f, p));
+        }
+        let spread = spreads(&records);
+        Some(Repeats {
+            count: recs.len(),
+            records,
+            spread,
+        })
+    } else {
+        None
+    };
+    notes.push(format!(
+        "high-resolution spectrum: {} with q = {}, fs = {} Hz, {}-sample segments, {} overlap, \
+         resolution {:.5} Hz",
+        hr.info.method, plan.q, plan.fs_hz, plan.nperseg, plan.noverlap, hr.info.resolution_hz
+    ));
+    notes.push(
+        "harmonic floor: median over ±1.5 f_c excluding ±1 bin of every harmonic, converted to a \
+         mean by chi2 median/nu; PSD = max of ±1 bin; threshold chi2_ppf(conf^(1/3), nu)/nu with \
+         nu the Welch equivalent dof (Percival & Walden 292b) times the records"
+            .into(),
+    );
+    notes.push(
+        "measured period: autocorrelation maxima within ±period_window·T of k·T (T re-fitted after \
+         each peak, starting at tau_c predicted), k·T up to half the record, least squares through \
+         the origin"
+            .into(),
+    );
+    notes.push(
+        "correlation convention Eq. 7.1: R_xy[m] = sum x[n+m] y[n]; a peak at negative lag means y \
+         lags x; phase = 360 lag / T wrapped to (-180, 180]"
+            .into(),
+    );
+    if recs.len() > 1 {
+        notes.push(
+            "repeats: correlations and spectra are arithmetic means over records; coherence from \
+             the averaged spectra; spread is the sample std (ddof 1) of per-record scalars"
+                .into(),
+        );
+    }
+    let present: Vec<String> = pairs_for(&signals)
+        .into_iter()
+        .map(|(x, y)| pair_name(x, y))
+        .collect();
+    let mut absent_series: Vec<Absent> = Vec::new();
+    for (s, reason) in &absent {
+        absent_series.push(Absent {
+            name: s.name().into(),
+            reason: reason.clone(),
+        });
+        for (x, y) in super::CROSS_PAIRS {
+            if x == *s || y == *s {
+                let name = pair_name(x, y);
+                if !absent_series.iter().any(|a| a.name == name) {
+                    absent_series.push(Absent {
+                        name,
+                        reason: reason.clone(),
+                    });
+                }
+            }
+        }
+    }
+    let verdict = verdict(pred, &findings);
+    Ok(Analysis {
+        schema: SCHEMA,
+        version: crate::VERSION,
+        inputs: recs
+            .iter()
+            .map(|r| InputInfo {
+                source: r.source_name(),
+                test_id: r.meta.test_id.clone(),
+                fs_hz: r.fs_hz(),
+                samples: r.len(),
+                duration_s: r.duration_s(),
+                channels: r
+                    .channels()
+                    .iter()
+                    .map(|c| c.column_name().to_string())
+                    .collect(),
+            })
+            .collect(),
+        settings: settings.clone(),
+        method_notes: notes,
+        samples_analysed: n,
+        fs_hz: fs,
+        duration_analysed_s: duration,
+        periods_in_record: periods,
+        prediction: pred.clone(),
+        series: SeriesInfo {
+            signals: signals.clone(),
+            present,
+            absent: absent_series,
+        },
+        spectrum_full: full.info.clone(),
+        spectrum_hires: hr.info.clone(),
+        measured_period: findings.measured,
+        phases: findings.phases,
+        harmonics: findings.harmonics,
+        coherence: findings.coherence,
+        velocity_error: prepared[0].velocity_error.clone(),
+        repeats,
+        verdict,
+        passages: super::passage_summaries(recs, pred),
+        warnings,
+        correlations: corr,
+        spectra: full,
+        spectra_hires: hr,
+    })
+}

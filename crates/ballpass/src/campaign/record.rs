@@ -1,0 +1,70 @@
+//! What a campaign keeps of one record: every scalar the analyses produced
+//! (one row of `records.csv`), plus the friction spectrum for diagnosis.
+
+use serde::Serialize;
+
+use super::sticking::StickingEvents;
+
+/// One record's results.
+#[derive(Debug, Clone, Serialize)]
+pub struct RecordResult {
+    /// Recording file.
+    pub path: String,
+    /// Bearing.
+    pub bearing: String,
+    /// Commanded velocity, mm/s.
+    pub velocity_mm_s: f64,
+    /// Repeat number.
+    pub repeat: u32,
+    /// Condition from the manifest, when given.
+    pub condition: Option<String>,
+    /// Sampling rate, Hz.
+    pub fs_hz: f64,
+    /// Duration analysed, s.
+    pub duration_s: f64,
+    /// Predicted ball-pass frequency, Hz.
+    pub f_c_predicted_hz: f64,
+    /// Ball-pass frequency from the autocorrelations, Hz.
+    pub f_c_correlation_hz: Option<f64>,
+    /// Ball passages counted by the optical sensor.
+    pub passages: Option<usize>,
+    /// Ball-pass frequency from the optical passages (1 / mean tau_c), Hz.
+    pub f_c_passages_hz: Option<f64>,
+    /// Mean ball-pass period from the passages, s.
+    pub tau_c_s: Option<f64>,
+    /// Standard deviation of the ball-pass period, s.
+    pub tau_c_std_s: Option<f64>,
+    /// Mean optical pulse width at half prominence, s.
+    pub tau_p_s: Option<f64>,
+    /// Standard deviation of the pulse width, s.
+    pub tau_p_std_s: Option<f64>,
+    /// Mean of tau_p / tau_c over the passages.
+    pub tau_ratio: Option<f64>,
+    /// Velocity-error standard deviation (raw, ddof 0), µm/s.
+    pub velocity_error_std_um_s: Option<f64>,
+    /// Velocity-error standard deviation after the low-pass, µm/s.
+    pub velocity_error_lowpassed_std_um_s: Option<f64>,
+    /// Phase of the optical signal relative to friction (correlation), degrees.
+    pub phase_friction_optical_deg: Option<f64>,
+    /// Phase of the velocity error relative to friction, degrees.
+    pub phase_friction_velocity_error_deg: Option<f64>,
+    /// Phase of the optical signal relative to the velocity error, degrees.
+    pub phase_velocity_error_optical_deg: Option<f64>,
+    /// Friction PSD over its local floor at k·f_c, k = 1..K, dB.
+    pub friction_harmonic_ratio_db: Vec<Option<f64>>,
+    /// Whether the friction PSD at k·f_c stands above its floor.
+    pub friction_harmonic_significant: Vec<Option<bool>>,
+    /// Friction power in the low band (0 to the diagnosis band edge), N².
+    pub friction_low_band_power_n2: Option<f64>,
+    /// Sticking events.
+    pub sticking: Option<StickingEvents>,
+    /// Warnings of the analyses.
+    pub warnings: Vec<String>,
+    /// Friction auto-spectrum (full range, after the analysis' low-pass and
+    /// detrend): frequencies, Hz.
+    #[serde(skip)]
+    pub friction_psd_freq_hz: Vec<f64>,
+    /// Friction auto-spectrum, N²/Hz.
+    #[serde(skip)]
+    pub friction_psd: Vec<f64>,
+}

@@ -1,0 +1,292 @@
+//! One record of a campaign, from file (or simulation) to [`RecordResult`]:
+//! the full analysis, the optical passages, the sticking events, and the
+//! friction spectrum kept for diagnosis.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::manifest::ManifestEntry;
+use super::record::RecordResult;
+use super::sticking::{sticking_events, StickingSettings};
+use crate::analysis::{analyze, detect_passages, AnalyzeSettings, PassageSettings, Signal};
+use crate::bearing::{lookup, Geometry};
+use crate::error::Result;
+use crate::recording::{load, Channel, LoadOptions, Recording};
+
+/// Settings of the per-record work of a campaign.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CampaignSettings {
+    /// The analysis of each record.
+    pub analyze: AnalyzeSettings,
+    /// Ball-passage detection (`fit_pulses` 0 by default: campaigns need the
+    /// passages, not the per-record pulse-train fits).
+    pub passage: PassageSettings,
+    /// Sticking-event detection.
+    pub sticking: StickingSettings,
+    /// Upper edge of the friction low band, Hz.
+    pub low_band_hz: f64,
+}
+
+impl Default for CampaignSettings {
+    fn default() -> Self {
+        Self {
+            analyze: AnalyzeSettings::default(),
+            passage: PassageSettings {
+                fit_pulses: 0,
+                ..PassageSettings::default()
+            },
+            sticking: StickingSettings::default(),
+            low_band_hz: 25.0,
+        }
+    }
+}
+
+/// The geometry of an entry's bearing: the catalog entry of that name, else
+/// `fallback` (a batch of numbered bearings of one model).
+pub fn geometry_for(bearing: &str, fallback: Geometry) -> Geometry {
+    lookup(bearing).map_or(fallback, |e| e.geometry)
+}
+
+/// Loads one manifest entry and processes it.
+///
+/// # Errors
+/// Whatever loading or the analysis reports (the message names the file).
+pub fn process_entry(
+    entry: &ManifestEntry,
+    load_options: &LoadOptions,
+    fallback: Geometry,
+    settings: &CampaignSettings,
+) -> Result<RecordResult> {
+    let geometry = geometry_for(&entry.bearing, fallback);
+    let opts = LoadOptions {
+        velocity_mm_s: Some(entry.velocity_mm_s),
+        bearing: Some(entry.bearing.clone()),
+        geometry: Some(geometry),
+        ..load_options.clone()
+    };
+    let rec = load(&entry.path, &opts)?;
+    process_recording(&rec, entry, geometry, settings)
+}
+
+/// Processes a recording already in memory (a loaded file or a simulation).
+///
+/// # Errors
+/// The analysis' errors (too short, missing channels, bad settings).
+pub fn process_recording(
+    rec: &Recording,
+    entry: &ManifestEntry,
+    geometry: Geometry,
+    settings: &CampaignSettings,
+) -> Result<RecordResult> {
+    let v = entry.velocity_mm_s;
+    let prediction = geometry.predict(v, settings.analyze.harmonics)?;
+    let analysis = analyze(std::slice::from_ref(rec), &prediction, &settings.analyze)?;
+    let mut warnings = analysis.warnings.clone();
+
+    let passages = if rec.channel(Channel::Optical).is_some() {
+        let ps = PassageSettings {
+            velocity_mm_s: Some(v),
+            geometry: Some(geometry),
+            ..settings.passage.clone()
+        };
+        match detect_passages(rec, &ps) {
+            Ok(p) => Some(p),
+            Err(e) => {
+                warnings.push(format!("passages: {e}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
+
+    let phase = |pair: &str| {
+        analysis
+            .phases
+            .iter()
+            .find(|p| p.pair == pair)
+            .map(|p| p.phase_deg)
+    };
+    let mut harmonics: Vec<_> = analysis
+        .harmonics
+        .iter()
+        .filter(|h| h.signal == Signal::Friction)
+        .collect();
+    harmonics.sort_by_key(|h| h.k);
+    let value =
+        |h: &&crate::analysis::HarmonicRow| h.measured.clone().or_else(|| h.predicted.clone());
+
+    let (freq, psd) = match analysis.spectra.auto_of(Signal::Friction) {
+        Some(p) => (analysis.spectra.freq_hz.clone(), p.to_vec()),
+        None => (Vec::new(), Vec::new()),
+    };
+    let df = if freq.len() > 1 {
+        freq[1] - freq[0]
+    } else {
+        0.0
+    };
+    let low_band = (!psd.is_empty()).then(|| {
+        freq.iter()
+            .zip(&psd)
+            .filter(|(f, _)| **f > 0.0 && **f <= settings.low_band_hz)
+            .map(|(_, p)| p * df)
+            .sum::<f64>()
+    });
+
+    let tau_for_sticking = passages
+        .as_ref()
+        .map(|p| p.tau_c_s.mean)
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .or(analysis.measured_period.period_s)
+        .unwrap_or(prediction.tau_c_s);
+    let sticking = match rec.channel(Channel::Friction) {
+        Some(f) => Some(sticking_events(
+            f,
+            rec.fs_hz(),
+            tau_for_sticking,
+            &settings.sticking,
+        )?),
+        None => None,
+    };
+
+    let ve = analysis.velocity_error.as_ref();
+    Ok(RecordResult {
+        path: entry.path.display().to_string(),
+        bearing: entry.bearing.clone(),
+        velocity_mm_s: v,
+        repeat: entry.repeat,
+        condition: entry.condition.clone(),
+        fs_hz: rec.fs_hz(),
+        duration_s: analysis.duration_analysed_s,
+        f_c_predicted_hz: prediction.f_c_hz,
+        f_c_correlation_hz: analysis.measured_period.f_c_hz,
+        passages: passages.as_ref().map(|p| p.count),
+        f_c_passages_hz: passages
+            .as_ref()
+            .map(|p| p.f_c_measured_hz)
+            .filter(|f| f.is_finite()),
+        tau_c_s: passages.as_ref().map(|p| p.tau_c_s.mean),
+        tau_c_std_s: passages.as_ref().map(|p| p.tau_c_s.std),
+        tau_p_s: passages.as_ref().map(|p| p.tau_p_s.mean),
+        tau_p_std_s: passages.as_ref().map(|p| p.tau_p_s.std),
+        tau_ratio: passages.as_ref().map(|p| p.tau_p_over_tau_c.mean),
+        velocity_error_std_um_s: ve.map(|s| s.std_um_s),
+        velocity_error_lowpassed_std_um_s: ve.map(|s| s.lowpassed_std_um_s),
+        phase_friction_optical_deg: phase("friction__optical"),
+        phase_friction_velocity_error_deg: phase("friction__velocity_error"),
+        phase_velocity_error_optical_deg: phase("velocity_error__optical"),
+        friction_harmonic_ratio_db: harmonics
+            .iter()
+            .map(|h| value(h).and_then(|v| v.ratio_db))
+            .collect(),
+        friction_harmonic_significant: harmonics
+            .iter()
+            .map(|h| value(h).and_then(|v| v.significant))
+            .collect(),
+        friction_low_band_power_n2: low_band,
+        sticking,
+        warnings,
+        friction_psd_freq_hz: freq,
+        friction_psd: psd,
+    })
+}
+
+/// A manifest entry for a recording that did not come from a manifest.
+pub fn entry_for(path: &Path, bearing: &str, velocity_mm_s: f64, repeat: u32) -> ManifestEntry {
+    ManifestEntry {
+        path: path.to_path_buf(),
+        bearing: bearing.to_string(),
+        velocity_mm_s,
+        repeat,
+        condition: None,
+        notes: None,
+    }
+}
+
+/// The manifest entry of a planned simulation (`path` is the plan's relative
+/// path with `.csv`).
+pub fn entry_of_simulation(c: &crate::sim::campaign::CampaignEntry) -> ManifestEntry {
+    ManifestEntry {
+        path: format!("{}.csv", c.path).into(),
+        bearing: c.bearing.clone(),
+        velocity_mm_s: c.velocity_mm_s,
+        repeat: c.repeat,
+        condition: Some(c.condition.name().to_string()),
+        notes: None,
+    }
+}
+
+/// Simulates one planned record in memory and processes it, as if its file
+/// had been loaded (the built-in data of `ballpass demo` and the oracle of
+/// the campaign tests).
+///
+/// # Errors
+/// The simulator's or the analysis' errors.
+pub fn process_simulation(
+    c: &crate::sim::campaign::CampaignEntry,
+    fallback: Geometry,
+    settings: &CampaignSettings,
+) -> Result<(Recording, RecordResult)> {
+    let sim = crate::sim::simulate(&c.settings)?;
+    let entry = entry_of_simulation(c);
+    let result = process_recording(
+        &sim.recording,
+        &entry,
+        geometry_for(&c.bearing, fallback),
+        settings,
+    )?;
+    Ok((sim.recording, result))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{simulate, Condition, SimSettings};
+
+    fn sim(v: f64, condition: Condition, seed: u64) -> Recording {
+        let mut s = SimSettings::for_bearing("sr25w", v).unwrap();
+        s.condition = condition;
+        s.seed = seed;
+        simulate(&s).unwrap().recording
+    }
+
+    /// A simulated good record: every field the sweep needs is filled and
+    /// agrees with the simulator's design (tau_c = 2 d_avg / v within the
+    /// spacing band, tau_p/tau_c near 0.155, no sticking spikes).
+    #[test]
+    fn a_simulated_record_gives_every_scalar() {
+        let g = lookup("sr25w").unwrap().geometry;
+        let rec = sim(9.0, Condition::Good, 7);
+        let e = entry_for(Path::new("sim"), "sr25w", 9.0, 1);
+        let r = process_recording(&rec, &e, g, &CampaignSettings::default()).unwrap();
+        let tau = r.tau_c_s.unwrap();
+        // The spacing band at 9 mm/s: 2(d_avg ± d_var)/v = 0.889 .. 0.914 s.
+        assert!((0.889..=0.914).contains(&tau), "tau_c {tau}");
+        assert!(
+            (r.tau_ratio.unwrap() - 0.155).abs() < 0.155 * 0.05,
+            "{:?}",
+            r.tau_ratio
+        );
+        assert!(r.velocity_error_std_um_s.unwrap() > 20.0);
+        assert_eq!(r.friction_harmonic_ratio_db.len(), 5);
+        assert!(
+            r.sticking.as_ref().unwrap().times_s.is_empty(),
+            "{:?}",
+            r.sticking
+        );
+        assert!(!r.friction_psd.is_empty() && r.friction_low_band_power_n2.unwrap() > 0.0);
+    }
+
+    #[test]
+    fn a_sticking_record_has_spikes_at_ball_pass_multiples() {
+        let g = lookup("sr25w").unwrap().geometry;
+        let rec = sim(20.0, Condition::Sticking, 11);
+        let e = entry_for(Path::new("sim"), "b4", 20.0, 1);
+        let r = process_recording(&rec, &e, g, &CampaignSettings::default()).unwrap();
+        let s = r.sticking.unwrap();
+        assert!(s.times_s.len() >= 10, "{} spikes", s.times_s.len());
+        assert!(s.timing_fraction.unwrap() >= 0.7, "{:?}", s.timing_fraction);
+    }
+}
