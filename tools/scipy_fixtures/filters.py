@@ -14,6 +14,20 @@ def _signal(rng, n):
             + 0.5 * rng.standard_normal(n) + 2.0)
 
 
+def lcg_signal(n, seed):
+    """Deterministic test signal that the Rust test rebuilds without a
+    fixture of its own: a 64-bit LCG's uniform noise on two tones and an
+    offset (filters.rs `lcg_signal`)."""
+    mask = (1 << 64) - 1
+    s = seed & mask
+    u = np.empty(n)
+    for i in range(n):
+        s = (s * 6364136223846793005 + 1442695040888963407) & mask
+        u[i] = (s >> 11) / float(1 << 53) - 0.5
+    t = np.arange(n)
+    return np.sin(2 * np.pi * t / 37.0) + 0.3 * np.cos(2 * np.pi * t / 5.3) + u + 2.0
+
+
 def generate(write):
     rng = np.random.default_rng(20240611)
 
@@ -103,6 +117,19 @@ def generate(write):
     x = _signal(rng, 500)
     cases.append({"q": 4, "n": 4, "x": x, "y": signal.decimate(x, 4, n=4)})
     write("decimate", {"cases": cases})
+
+    # --- long signals: sosfiltfilt and decimate on records long enough for
+    # the chunked (SIMD-lane) filter path; x is rebuilt in Rust from `seed` ---
+    long_cases = []
+    for seed, n, order, btype, wn in ((7, 8000, 5, "lowpass", 20.0),
+                                      (8, 8000, 3, "highpass", 50.0)):
+        sos = signal.butter(order, wn, btype=btype, fs=1000.0, output="sos")
+        long_cases.append({"kind": "sosfiltfilt", "seed": seed, "n": n, "sos": sos,
+                           "y": signal.sosfiltfilt(sos, lcg_signal(n, seed))})
+    for seed, n, q in ((9, 30000, 20), (10, 12000, 4)):
+        long_cases.append({"kind": "decimate", "seed": seed, "n": n, "q": q,
+                           "y": signal.decimate(lcg_signal(n, seed), q)})
+    write("long", {"cases": long_cases})
 
     # --- numpy.gradient ---
     cases = []

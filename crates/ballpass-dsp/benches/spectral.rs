@@ -9,14 +9,17 @@
 //! | work                                   | ours     | SciPy    | ratio |
 //! | -------------------------------------- | -------- | -------- | ----- |
 //! | full-lag xcorr, `correlate_into`       | 361 µs   | 1390 µs  | 3.9x  |
+//! | ... with 3-smooth FFT length (later)   | 306 µs   | 1359 µs  | 4.4x  |
 //! | full-lag xcorr, `correlate` (allocates)| 678 µs   | 1390 µs  | 2.1x  |
 //! | full-lag autocorrelation               | 233 µs   | 1364 µs  | 5.9x  |
 //! | welch, nperseg 4096                    | 78 µs    | 747 µs   | 9.6x  |
 //! | csd, nperseg 4096                      | 159 µs   | 1120 µs  | 7.0x  |
 //!
 //! Where the time goes (perf): the correlations are ~75 % RustFFT/realfft
-//! (three real transforms of length 60 000; SciPy's pocketfft does the same
-//! three), so no kernel-side change reaches 10x. The allocating
+//! (three real transforms of length 60 000, since then 62 208 = 2^8 3^5,
+//! which RustFFT runs 6-17 % faster; SciPy's pocketfft does the same
+//! three), so no kernel-side change reaches 10x. (The later row: best of
+//! 500 single calls, load ~2.) The allocating
 //! `correlate` also pays ~240 page faults per call for its fresh 1 MB of
 //! output (glibc returns the blocks to the OS between calls). Welch/csd are
 //! ~60 % FFT (13 or 26 transforms of 4096), the rest the per-segment

@@ -72,20 +72,30 @@ pub fn check_finite(what: &'static str, x: &[f64]) -> Result<()> {
     if x.is_empty() {
         return Err(DspError::Empty { what });
     }
-    // Fast path: a branch-free OR of "exponent all ones" (NaN or inf) over
-    // blocks vectorises, so kernels can afford to check every call.
+    match first_non_finite(x) {
+        Some(index) => Err(DspError::NonFinite {
+            what,
+            index,
+            value: x[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Index of the first NaN or infinity in `x`.
+///
+/// Fast path: a branch-free OR of "exponent all ones" (NaN or inf) over
+/// blocks vectorises, so kernels can afford to check every call.
+pub(crate) fn first_non_finite(x: &[f64]) -> Option<usize> {
     const EXP: u64 = 0x7ff0_0000_0000_0000;
     if x.chunks(1024).all(|c| {
         c.iter()
             .fold(0u64, |bad, v| bad | u64::from(v.to_bits() & EXP == EXP))
             == 0
     }) {
-        return Ok(());
+        return None;
     }
-    if let Some((index, &value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(DspError::NonFinite { what, index, value });
-    }
-    Ok(())
+    x.iter().position(|v| !v.is_finite())
 }
 
 /// Returns an [`DspError::InvalidSetting`] built from a name and a message.

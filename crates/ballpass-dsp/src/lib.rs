@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 
+mod biquad;
 pub mod correlate;
 pub mod decimate;
 pub mod detrend;

@@ -250,7 +250,7 @@ pub fn least_squares<P: Problem + ?Sized>(
         }
         iterations += 1;
         ws.jacobian(problem, &p, &r, &mut r_new)?;
-        ws.normal_equations(&r);
+        ws.normal_equations(&r)?;
 
         // gtol: cosine between r and each Jacobian column.
         let rnorm = (2.0 * cost).sqrt();
@@ -323,7 +323,7 @@ pub fn least_squares<P: Problem + ?Sized>(
 
     // Covariance at the final parameters.
     ws.jacobian(problem, &p, &r, &mut r_new)?;
-    ws.normal_equations(&r);
+    ws.normal_equations(&r)?;
     let covariance = if m > n {
         let s2 = 2.0 * cost / (m - n) as f64;
         ws.inverse_normal()
@@ -354,7 +354,7 @@ fn norm(v: &[f64]) -> f64 {
 }
 
 fn check_all_finite(what: &'static str, v: &[f64]) -> Result<()> {
-    match v.iter().position(|x| !x.is_finite()) {
+    match crate::error::first_non_finite(v) {
         Some(index) => Err(DspError::NonFinite {
             what,
             index,
@@ -419,17 +419,49 @@ impl Workspace {
                 q[j] = p[j];
             }
         }
-        check_all_finite("jacobian", &self.jac)
+        // Checked for NaN and infinity row by row in `normal_equations`,
+        // which reads the whole matrix anyway.
+        Ok(())
     }
 
     /// `a = JᵀJ`, `g = Jᵀr`, skipping zero entries of each row.
-    fn normal_equations(&mut self, r: &[f64]) {
+    ///
+    /// # Errors
+    /// [`DspError::NonFinite`] (`"jacobian"`, row-major index) for the
+    /// first NaN or infinity in the Jacobian.
+    fn normal_equations(&mut self, r: &[f64]) -> Result<()> {
+        const EXP: u64 = 0x7ff0_0000_0000_0000;
         let n = self.n;
         self.a.fill(0.0);
         self.g.fill(0.0);
-        for (row, &ri) in self.jac.chunks_exact(n).zip(r) {
+        for (i, (row, &ri)) in self.jac.chunks_exact(n).zip(r).enumerate() {
+            // Non-zero columns, 64 at a time into a bit mask (branch-free,
+            // vectorises), then one step per set bit.
             self.nz.clear();
-            self.nz.extend((0..n).filter(|&j| row[j] != 0.0));
+            for (base, block) in row.chunks(64).enumerate() {
+                let (mut bits, bad) =
+                    block
+                        .iter()
+                        .enumerate()
+                        .fold((0u64, 0u64), |(m, b), (j, &v)| {
+                            (
+                                m | (u64::from(v != 0.0) << j),
+                                b | (u64::from(v.to_bits() & EXP == EXP) << j),
+                            )
+                        });
+                if bad != 0 {
+                    let index = i * n + 64 * base + bad.trailing_zeros() as usize;
+                    return Err(DspError::NonFinite {
+                        what: "jacobian",
+                        index,
+                        value: self.jac[index],
+                    });
+                }
+                while bits != 0 {
+                    self.nz.push(64 * base + bits.trailing_zeros() as usize);
+                    bits &= bits - 1;
+                }
+            }
             for (k, &a) in self.nz.iter().enumerate() {
                 let ja = row[a];
                 self.g[a] += ja * ri;
@@ -450,6 +482,7 @@ impl Workspace {
             // damped system singular.
             self.d[j] = self.a[j * n + j].max(1e-12 * dmax).max(f64::MIN_POSITIVE);
         }
+        Ok(())
     }
 
     /// Cholesky of `a + lambda·diag(d)` (or of `a` for lambda = 0) into `l`.

@@ -259,13 +259,10 @@ fn retain_mask<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
 
 /// Rejects NaN and infinite samples; an empty signal is allowed.
 fn check_signal(x: &[f64]) -> Result<()> {
-    match x.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(DspError::NonFinite {
-            what: "x",
-            index,
-            value: x[index],
-        }),
-        None => Ok(()),
+    if x.is_empty() {
+        Ok(())
+    } else {
+        crate::error::check_finite("x", x)
     }
 }
 
@@ -403,35 +400,42 @@ fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec
     if distance <= 1 || k < 2 {
         return vec![true; k];
     }
-    // dominated[j]: some peak closer than `distance` ranks above j.
-    let mut dominated = vec![false; k];
-    let mut queue: Vec<usize> = Vec::with_capacity(64);
-    let mut head = 0;
-    for j in 0..k {
-        while head < queue.len() && peaks[j] - peaks[queue[head]] >= distance {
-            head += 1;
+    // dominated[j]: some peak closer than `distance` ranks above j. Cut the
+    // samples into blocks of `distance`: any two peaks in one block are
+    // closer than `distance`, so only the top-ranked peak of a block can be
+    // undominated, and it is if it also outranks the peaks within reach in
+    // the neighbouring blocks. One pass with rarely taken branches, then a
+    // short scan per block.
+    let mut dominated = vec![true; k];
+    let mut j = 0;
+    while j < k {
+        let block_end = (peaks[j] / distance + 1).saturating_mul(distance);
+        let mut best = j;
+        let mut e = j + 1;
+        while e < k && peaks[e] < block_end {
+            if ranks_above(priority, e, best) {
+                best = e;
+            }
+            e += 1;
         }
-        if head < queue.len() && ranks_above(priority, queue[head], j) {
-            dominated[j] = true;
+        let p = peaks[best];
+        let left = peaks[..j]
+            .iter()
+            .enumerate()
+            .rev()
+            .take_while(|&(_, &q)| p - q < distance)
+            .any(|(i, _)| ranks_above(priority, i, best));
+        let right = || {
+            peaks[e..]
+                .iter()
+                .enumerate()
+                .take_while(|&(_, &q)| q - p < distance)
+                .any(|(i, _)| ranks_above(priority, e + i, best))
+        };
+        if !left && !right() {
+            dominated[best] = false;
         }
-        while queue.len() > head && !ranks_above(priority, queue[queue.len() - 1], j) {
-            queue.pop();
-        }
-        queue.push(j);
-    }
-    queue.clear();
-    head = 0;
-    for j in (0..k).rev() {
-        while head < queue.len() && peaks[queue[head]] - peaks[j] >= distance {
-            head += 1;
-        }
-        if head < queue.len() && ranks_above(priority, queue[head], j) {
-            dominated[j] = true;
-        }
-        while queue.len() > head && !ranks_above(priority, queue[queue.len() - 1], j) {
-            queue.pop();
-        }
-        queue.push(j);
+        j = e;
     }
     // 0 = undecided, 1 = kept, 2 = removed
     let mut state = vec![0u8; k];
@@ -733,11 +737,23 @@ struct MinMaxTree<'a> {
 impl<'a> MinMaxTree<'a> {
     fn new(x: &'a [f64]) -> Self {
         fn reduce(mx: &[f64], mn: &[f64]) -> (Vec<f64>, Vec<f64>) {
-            let fmax = |c: &[f64]| c.iter().fold(c[0], |m, &v| if v > m { v } else { m });
-            let fmin = |c: &[f64]| c.iter().fold(c[0], |m, &v| if v < m { v } else { m });
+            // Finite values (checked), so max and min do not depend on the
+            // order of comparison: full units reduce pairwise (SIMD), the
+            // short last unit by a fold.
+            fn unit<const MAX: bool>(c: &[f64]) -> f64 {
+                let pick = |a: f64, b: f64| if (b > a) == MAX { b } else { a };
+                match <&[f64; TREE_B]>::try_from(c) {
+                    Ok(c) => {
+                        let h: [f64; 8] = std::array::from_fn(|i| pick(c[i], c[i + 8]));
+                        let q: [f64; 4] = std::array::from_fn(|i| pick(h[i], h[i + 4]));
+                        pick(pick(q[0], q[2]), pick(q[1], q[3]))
+                    }
+                    Err(_) => c.iter().fold(c[0], |m, &v| pick(m, v)),
+                }
+            }
             (
-                mx.chunks(TREE_B).map(fmax).collect(),
-                mn.chunks(TREE_B).map(fmin).collect(),
+                mx.chunks(TREE_B).map(unit::<true>).collect(),
+                mn.chunks(TREE_B).map(unit::<false>).collect(),
             )
         }
         let mut levels: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();

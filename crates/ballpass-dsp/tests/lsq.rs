@@ -234,6 +234,27 @@ fn bad_problems_are_errors() {
         least_squares(&nan, &[], &s),
         Err(DspError::Empty { .. })
     ));
+    // A non-finite Jacobian entry is reported at its row-major index, also
+    // past the first 64 columns (the check runs in blocks of 64).
+    for (n, row, col) in [(2, 1, 1), (70, 2, 66)] {
+        let bad_jac = FnProblem::with_jacobian(
+            n + 3,
+            |p: &[f64], r: &mut [f64]| {
+                r.iter_mut()
+                    .zip(p.iter().cycle())
+                    .for_each(|(r, p)| *r = *p)
+            },
+            move |_: &[f64], j: &mut [f64]| {
+                j.fill(1.0);
+                j[row * n + col] = f64::INFINITY;
+            },
+        );
+        let err = least_squares(&bad_jac, &vec![1.0; n], &s).unwrap_err();
+        assert!(
+            matches!(err, DspError::NonFinite { what: "jacobian", index, .. } if index == row * n + col),
+            "{err:?}"
+        );
+    }
     let empty = FnProblem::new(0, |_: &[f64], _: &mut [f64]| {});
     assert!(least_squares(&empty, &[1.0], &s).is_err());
     let neg = LeastSquares { ftol: -1.0, ..s };
