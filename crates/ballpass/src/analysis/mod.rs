@@ -511,7 +511,18 @@ pub fn analyze(
     prediction: &Prediction,
     settings: &AnalyzeSettings,
 ) -> Result<Analysis> {
-    repeats::run(recs, prediction, settings)
+    repeats::run(recs, prediction, settings, true)
+}
+
+/// [`analyze`] without the passage summaries ([`Analysis::passages`] is
+/// left empty): for callers that detect the passages themselves with their
+/// own settings (the campaigns), so the detection is not done twice.
+pub(crate) fn analyze_without_passages(
+    recs: &[Recording],
+    prediction: &Prediction,
+    settings: &AnalyzeSettings,
+) -> Result<Analysis> {
+    repeats::run(recs, prediction, settings, false)
 }
 
 /// The ball passages of one record in brief (part of `analysis.json`).

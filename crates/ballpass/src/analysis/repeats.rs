@@ -459,6 +459,7 @@ pub(crate) fn run(
     recs: &[Recording],
     pred: &Prediction,
     settings: &AnalyzeSettings,
+    with_passages: bool,
 ) -> Result<Analysis> {
     settings.validate()?;
     check_velocity(pred.velocity_mm_s)?;
@@ -701,7 +702,11 @@ pub(crate) fn run(
         velocity_error: prepared[0].velocity_error.clone(),
         repeats,
         verdict,
-        passages: super::passage_summaries(recs, pred),
+        passages: if with_passages {
+            super::passage_summaries(recs, pred)
+        } else {
+            Vec::new()
+        },
         warnings,
         correlations: corr,
         spectra: full,

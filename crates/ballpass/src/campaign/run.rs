@@ -9,7 +9,9 @@ use serde::{Deserialize, Serialize};
 use super::manifest::ManifestEntry;
 use super::record::RecordResult;
 use super::sticking::{sticking_events, StickingSettings};
-use crate::analysis::{analyze, detect_passages, AnalyzeSettings, PassageSettings, Signal};
+use crate::analysis::{
+    analyze_without_passages, detect_passages, AnalyzeSettings, PassageSettings, Signal,
+};
 use crate::bearing::{lookup, Geometry};
 use crate::error::Result;
 use crate::recording::{load, Channel, LoadOptions, Recording};
@@ -82,7 +84,10 @@ pub fn process_recording(
 ) -> Result<RecordResult> {
     let v = entry.velocity_mm_s;
     let prediction = geometry.predict(v, settings.analyze.harmonics)?;
-    let analysis = analyze(std::slice::from_ref(rec), &prediction, &settings.analyze)?;
+    // The passages are detected below with the campaign's settings; the
+    // analysis' own summary of them would be the same work twice.
+    let analysis =
+        analyze_without_passages(std::slice::from_ref(rec), &prediction, &settings.analyze)?;
     let mut warnings = analysis.warnings.clone();
 
     let passages = if rec.channel(Channel::Optical).is_some() {
