@@ -131,12 +131,42 @@ fn put_num(out: &mut [u8], pos: &mut usize, buf: &mut zmij::Buffer, v: f64) {
 /// (about 240 kB for 7 columns) stays in cache and costs no page faults.
 const CHUNK_ROWS: usize = 1024;
 
+/// Formats rows `start..end` of the table into `out` (cleared first).
+fn format_rows(
+    out: &mut Vec<u8>,
+    index: &[f64],
+    cols: &[(String, &[f64])],
+    start: usize,
+    end: usize,
+) {
+    // Each number takes at most SLOT bytes plus a separator.
+    out.resize((end - start) * (cols.len() + 1) * (SLOT + 1) + SLOT, 0);
+    let mut buf = zmij::Buffer::new();
+    let mut pos = 0;
+    for i in start..end {
+        put_num(out, &mut pos, &mut buf, index[i]);
+        for (_, col) in cols {
+            out[pos] = b',';
+            pos += 1;
+            put_num(out, &mut pos, &mut buf, col[i]);
+        }
+        out[pos] = b'\n';
+        pos += 1;
+    }
+    out.truncate(pos);
+}
+
+/// Writes the header, then the rows in chunks of [`CHUNK_ROWS`]: the
+/// chunks of one round are formatted in parallel (one reused buffer per
+/// worker thread of the rayon pool), then written in order, so the text is
+/// the same as a sequential pass.
 fn write_table<W: Write>(
     w: &mut W,
     index_name: &str,
     index: &[f64],
     cols: &[(String, &[f64])],
 ) -> std::io::Result<()> {
+    use rayon::prelude::*;
     let mut head = index_name.to_string();
     for (name, _) in cols {
         head.push(',');
@@ -144,22 +174,24 @@ fn write_table<W: Write>(
     }
     head.push('\n');
     w.write_all(head.as_bytes())?;
-    // Each number takes at most SLOT bytes plus a separator.
-    let mut out = vec![0u8; CHUNK_ROWS * (cols.len() + 1) * (SLOT + 1) + SLOT];
-    let mut buf = zmij::Buffer::new();
-    for start in (0..index.len()).step_by(CHUNK_ROWS) {
-        let mut pos = 0;
-        for i in start..(start + CHUNK_ROWS).min(index.len()) {
-            put_num(&mut out, &mut pos, &mut buf, index[i]);
-            for (_, col) in cols {
-                out[pos] = b',';
-                pos += 1;
-                put_num(&mut out, &mut pos, &mut buf, col[i]);
-            }
-            out[pos] = b'\n';
-            pos += 1;
+    let n = index.len();
+    let chunks = n.div_ceil(CHUNK_ROWS);
+    let workers = rayon::current_num_threads().clamp(1, chunks.max(1));
+    let mut bufs: Vec<Vec<u8>> = vec![Vec::new(); workers];
+    for round in (0..chunks).step_by(workers) {
+        let in_round = workers.min(chunks - round);
+        let fill = |(k, out): (usize, &mut Vec<u8>)| {
+            let start = (round + k) * CHUNK_ROWS;
+            format_rows(out, index, cols, start, (start + CHUNK_ROWS).min(n));
+        };
+        if in_round > 1 {
+            bufs[..in_round].par_iter_mut().enumerate().for_each(fill);
+        } else {
+            bufs[..in_round].iter_mut().enumerate().for_each(fill);
         }
-        w.write_all(&out[..pos])?;
+        for out in &bufs[..in_round] {
+            w.write_all(out)?;
+        }
     }
     Ok(())
 }
@@ -214,12 +246,19 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
         spectra: dir.join("spectra.csv"),
         spectra_hires: dir.join("spectra_hires.csv"),
     };
-    write_correlations(&paths.correlations, &a.correlations)?;
-    write_spectra(&paths.spectra, &a.spectra)?;
-    write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
-    write_atomic(&paths.json, |w| {
-        serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
-        w.write_all(b"\n")
-    })?;
+    // The large correlations.csv beside the three small files.
+    let (corr, rest) = rayon::join(
+        || write_correlations(&paths.correlations, &a.correlations),
+        || {
+            write_spectra(&paths.spectra, &a.spectra)?;
+            write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
+            write_atomic(&paths.json, |w| {
+                serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
+                w.write_all(b"\n")
+            })
+        },
+    );
+    corr?;
+    rest?;
     Ok(paths)
 }
