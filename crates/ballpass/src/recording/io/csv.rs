@@ -41,53 +41,19 @@ pub(crate) fn parse(
     opts: &LoadOptions,
 ) -> Result<RawTable> {
     let (mut rdr, header) = open(path, bytes, format, opts.delimiter)?;
-    let delimiter = header.delimiter;
-    let mut record = ::csv::ByteRecord::new();
-    let csv_err = |e: ::csv::Error| csv_error(path, e);
     let plan = Plan::new(path, &header, opts)?;
 
     let n_est = bytes.len() / (header.columns.len() * 8 + 1);
-    let mut time_vals: Vec<f64> = Vec::with_capacity(if plan.time.is_some() { n_est } else { 0 });
-    let mut chan_vals: Vec<Vec<f64>> = plan
-        .channels
-        .iter()
-        .map(|_| Vec::with_capacity(n_est))
-        .collect();
-    let mut lines: Vec<u64> = Vec::with_capacity(n_est);
-    let mut time_decimals: i32 = i32::MIN;
-    let ncols = header.columns.len();
-    while rdr.read_byte_record(&mut record).map_err(csv_err)? {
-        let line = record.position().map(|p| p.line()).unwrap_or(0);
-        if record.len() != ncols {
-            return Err(Error::Parse {
-                path: path.to_path_buf(),
-                line: line as usize,
-                column: None,
-                reason: format!(
-                    "{} field(s), but the header (line {}) has {ncols}; rows must all have \
-                     as many fields as the header",
-                    record.len(),
-                    header.line
-                ),
-            });
-        }
-        let cell_err = |idx: usize, reason: String| Error::Parse {
-            path: path.to_path_buf(),
-            line: line as usize,
-            column: Some(header.columns[idx].clone()),
-            reason,
-        };
-        if let Some(ti) = plan.time {
-            let cell = record[ti].trim_ascii();
-            time_vals.push(parse_number(cell, delimiter).map_err(|r| cell_err(ti, r))?);
-            time_decimals = time_decimals.max(decimals(cell));
-        }
-        for (k, &(_, idx)) in plan.channels.iter().enumerate() {
-            let cell = record[idx].trim_ascii();
-            chan_vals[k].push(parse_number(cell, delimiter).map_err(|r| cell_err(idx, r))?);
-        }
-        lines.push(line);
-    }
+    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let Rows {
+        time: time_vals,
+        channels: chan_vals,
+        lines,
+        time_decimals,
+    } = match fast_rows(body, rdr.position(), &header, &plan, n_est) {
+        Some(rows) => rows,
+        None => reader_rows(path, &mut rdr, &header, &plan, n_est)?,
+    };
     if lines.is_empty() {
         return Err(Error::Format {
             path: path.to_path_buf(),
@@ -126,6 +92,157 @@ pub(crate) fn parse(
         channels,
         locator: Locator::Lines(lines),
     })
+}
+
+/// The values of the used columns, row by row, with each row's 1-based line.
+struct Rows {
+    time: Vec<f64>,
+    channels: Vec<Vec<f64>>,
+    lines: Vec<u64>,
+    time_decimals: i32,
+}
+
+impl Rows {
+    fn with_capacity(plan: &Plan, n: usize) -> Self {
+        Self {
+            time: Vec::with_capacity(if plan.time.is_some() { n } else { 0 }),
+            channels: plan
+                .channels
+                .iter()
+                .map(|_| Vec::with_capacity(n))
+                .collect(),
+            lines: Vec::with_capacity(n),
+            time_decimals: i32::MIN,
+        }
+    }
+}
+
+/// The rows read by the general CSV reader (quotes, lone `\r` line ends),
+/// with the precise error for a bad row or cell.
+fn reader_rows(
+    path: &Path,
+    rdr: &mut ::csv::Reader<&[u8]>,
+    header: &Header,
+    plan: &Plan,
+    n_est: usize,
+) -> Result<Rows> {
+    let delimiter = header.delimiter;
+    let mut record = ::csv::ByteRecord::new();
+    let csv_err = |e: ::csv::Error| csv_error(path, e);
+    let mut rows = Rows::with_capacity(plan, n_est);
+    let ncols = header.columns.len();
+    while rdr.read_byte_record(&mut record).map_err(csv_err)? {
+        let line = record.position().map(|p| p.line()).unwrap_or(0);
+        if record.len() != ncols {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                line: line as usize,
+                column: None,
+                reason: format!(
+                    "{} field(s), but the header (line {}) has {ncols}; rows must all \
+                     have as many fields as the header",
+                    record.len(),
+                    header.line
+                ),
+            });
+        }
+        let cell_err = |idx: usize, reason: String| Error::Parse {
+            path: path.to_path_buf(),
+            line: line as usize,
+            column: Some(header.columns[idx].clone()),
+            reason,
+        };
+        if let Some(ti) = plan.time {
+            let cell = record[ti].trim_ascii();
+            rows.time
+                .push(parse_number(cell, delimiter).map_err(|r| cell_err(ti, r))?);
+            rows.time_decimals = rows.time_decimals.max(decimals(cell));
+        }
+        for (k, &(_, idx)) in plan.channels.iter().enumerate() {
+            let cell = record[idx].trim_ascii();
+            rows.channels[k].push(parse_number(cell, delimiter).map_err(|r| cell_err(idx, r))?);
+        }
+        rows.lines.push(line);
+    }
+    Ok(rows)
+}
+
+/// The rows of the common file, read without the general CSV reader: no
+/// quote anywhere, lines ended by `\n` or `\r\n`, every row with as many
+/// fields as the header and every used cell a finite number. `None` as soon
+/// as anything else is met: the caller then reads the file with the general
+/// reader, which gives the same values for such files and the precise error
+/// for bad ones. Blank lines and `#` lines are skipped as that reader does.
+fn fast_rows(
+    body: &[u8],
+    after_header: &::csv::Position,
+    header: &Header,
+    plan: &Plan,
+    n_est: usize,
+) -> Option<Rows> {
+    if body.contains(&b'"') {
+        return None;
+    }
+    let ncols = header.columns.len();
+    let delimiter = header.delimiter;
+    if delimiter == b'\r' || delimiter == b'\n' || delimiter == b'#' {
+        return None;
+    }
+    // Which used value each field feeds: time, channel k, or nothing.
+    const UNUSED: usize = usize::MAX;
+    const TIME: usize = usize::MAX - 1;
+    let mut role = vec![UNUSED; ncols];
+    if let Some(ti) = plan.time {
+        role[ti] = TIME;
+    }
+    for (k, &(_, idx)) in plan.channels.iter().enumerate() {
+        role[idx] = k;
+    }
+    let mut rows = Rows::with_capacity(plan, n_est);
+    // Line numbers as the general reader gives them: a row's line is the
+    // reader's line count where the previous record (or the header) ended,
+    // i.e. after its `\n`, or before it when the record ended with `\r\n`.
+    let start = usize::try_from(after_header.byte()).ok()?;
+    let mut row_line = after_header.line();
+    let segments = body.get(start..)?.split(|&b| b == b'\n');
+    for (this_line, raw) in (after_header.line()..).zip(segments) {
+        let (line, crlf) = match raw.strip_suffix(b"\r") {
+            Some(l) => (l, true),
+            None => (raw, false),
+        };
+        if line.is_empty() || line[0] == b'#' {
+            continue;
+        }
+        if line.contains(&b'\r') {
+            return None;
+        }
+        let line_no = row_line;
+        row_line = if crlf { this_line } else { this_line + 1 };
+        let mut fields = 0;
+        for (i, cell) in line.split(|&b| b == delimiter).enumerate() {
+            fields += 1;
+            let r = *role.get(i)?;
+            if r == UNUSED {
+                continue;
+            }
+            let cell = cell.trim_ascii();
+            let x = std::str::from_utf8(cell).ok()?.parse::<f64>().ok()?;
+            if !x.is_finite() {
+                return None;
+            }
+            if r == TIME {
+                rows.time.push(x);
+                rows.time_decimals = rows.time_decimals.max(decimals(cell));
+            } else {
+                rows.channels[r].push(x);
+            }
+        }
+        if fields != ncols {
+            return None;
+        }
+        rows.lines.push(line_no);
+    }
+    Some(rows)
 }
 
 /// Reads the header of a text recording (for `inspect` and error hints).
@@ -365,6 +482,71 @@ fn decimals(cell: &[u8]) -> i32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rows of `text` by the fast path (`None` if it declines) and by the
+    /// general reader.
+    fn both(text: &str) -> (Option<Rows>, Rows) {
+        let path = Path::new("t.csv");
+        let bytes = text.as_bytes();
+        let opts = LoadOptions::default();
+        let (mut rdr, header) = open(path, bytes, Format::Csv, None).unwrap();
+        let plan = Plan::new(path, &header, &opts).unwrap();
+        let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+        let fast = fast_rows(body, &rdr.position().clone(), &header, &plan, 4);
+        let slow = reader_rows(path, &mut rdr, &header, &plan, 4).unwrap();
+        (fast, slow)
+    }
+
+    /// The fast path reads exactly what the general reader reads (values
+    /// bit for bit, each row's line, time decimals) on files with comments,
+    /// blank lines, CRLF, a BOM, padding, unused columns, `;` and tab
+    /// delimiters, and no final newline.
+    #[test]
+    fn fast_rows_agree_with_the_csv_reader() {
+        let texts = [
+            "time_s,friction_N,optical_V\n0.0,1.5,2\n0.001,-2e-3,3.25\n",
+            "# note\n\n time_s , friction_N\r\n0.000, 1\r\n\r\n# mid\r\n0.001 ,2\r\n0.002,3",
+            "\u{FEFF}time_s;friction_N;x\n0;1;a\n1;2;b\n",
+            "time_s\tposition_mm\toptical_V\n0\t0.1\t1\n\n\n1\t0.2\t1e3\n",
+            "friction_N,unused\n1,\n",
+            "time_s,friction_N\n0,1\n# c\n\n1,2\n#\n2,3",
+        ];
+        for t in texts {
+            let (fast, slow) = both(t);
+            let fast = fast.unwrap_or_else(|| panic!("fast path declined {t:?} {:?}", slow.lines));
+            assert_eq!(fast.lines, slow.lines, "{t:?}");
+            assert_eq!(fast.time_decimals, slow.time_decimals, "{t:?}");
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast.time), bits(&slow.time), "{t:?}");
+            assert_eq!(fast.channels.len(), slow.channels.len());
+            for (a, b) in fast.channels.iter().zip(&slow.channels) {
+                assert_eq!(bits(a), bits(b), "{t:?}");
+            }
+        }
+    }
+
+    /// Quotes, lone `\r` line ends, ragged rows and bad cells are left to
+    /// the general reader (which reads or reports them).
+    #[test]
+    fn fast_rows_decline_what_they_do_not_handle() {
+        let path = Path::new("t.csv");
+        for t in [
+            "time_s,friction_N\n0,\"1\"\n",
+            "time_s,friction_N\r0,1\r1,2\r",
+            "time_s,friction_N\n0,1,2\n",
+            "time_s,friction_N\n0\n",
+            "time_s,friction_N\n0,1\n1,inf\n",
+            "time_s,friction_N\n0,1\n1,x\n",
+            "time_s,friction_N\n0,1\n1,\n",
+        ] {
+            let (rdr, header) = open(path, t.as_bytes(), Format::Csv, None).unwrap();
+            let plan = Plan::new(path, &header, &LoadOptions::default()).unwrap();
+            assert!(
+                fast_rows(t.as_bytes(), rdr.position(), &header, &plan, 4).is_none(),
+                "{t:?}"
+            );
+        }
+    }
 
     #[test]
     fn decimals_count_printed_precision() {
