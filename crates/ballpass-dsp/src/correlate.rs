@@ -5,7 +5,7 @@
 
 use std::sync::Arc;
 
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use realfft::{ComplexToReal, RealToComplex};
 use rustfft::num_complex::Complex;
 
 use crate::error::{check_finite, DspError, Result};
@@ -132,9 +132,8 @@ struct Plan {
 
 impl Plan {
     fn new(len: usize) -> Plan {
-        let mut planner = RealFftPlanner::<f64>::new();
-        let forward = planner.plan_fft_forward(len);
-        let inverse = planner.plan_fft_inverse(len);
+        let forward = crate::fftplan::forward(len);
+        let inverse = crate::fftplan::inverse(len);
         let scratch_len = forward.get_scratch_len().max(inverse.get_scratch_len());
         Plan {
             len,

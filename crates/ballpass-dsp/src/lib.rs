@@ -5,6 +5,7 @@ pub mod correlate;
 pub mod decimate;
 pub mod detrend;
 pub mod error;
+mod fftplan;
 pub mod gradient;
 pub mod iir;
 pub mod lsq;

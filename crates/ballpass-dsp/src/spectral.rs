@@ -8,7 +8,7 @@
 
 use std::sync::Arc;
 
-use realfft::{RealFftPlanner, RealToComplex};
+use realfft::RealToComplex;
 use rustfft::num_complex::Complex64;
 
 use crate::detrend::{DetrendType, Trend};
@@ -176,7 +176,7 @@ struct Engine {
 impl Engine {
     fn new(window: &Window, nperseg: usize, noverlap: usize, nfft: usize) -> Result<Engine> {
         let window = window.values(nperseg)?;
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(nfft);
+        let fft = crate::fftplan::forward(nfft);
         Ok(Engine {
             nperseg,
             noverlap,
