@@ -18,7 +18,6 @@ use serde::{Deserialize, Serialize};
 
 use ballpass_dsp::{find_peaks, Bound, FindPeaksSettings};
 
-use super::stats::{median, robust_sigma};
 use crate::error::{Error, Result};
 
 /// Settings of the sticking-event detector.
@@ -91,7 +90,7 @@ pub fn sticking_events(
     let n = friction_n.len();
     let block = ((tau_c_s * fs_hz / 2.0).round() as usize).max(8);
     let residual = detrend_by_block_medians(friction_n, block);
-    let level = robust_sigma(&residual).unwrap_or(0.0);
+    let level = robust_sigma(&residual, &mut Vec::new()).unwrap_or(0.0);
     let threshold = settings.spike_factor * level;
     let distance = (settings.min_separation_periods * tau_c_s * fs_hz).max(1.0);
     let found = find_peaks(
@@ -129,17 +128,51 @@ pub fn sticking_events(
     })
 }
 
+/// Median of the finite values of `x` (`None` if there are none), the value
+/// of [`super::stats::median`] found by selection instead of a full sort:
+/// under `total_cmp` the order statistics are unique, so the middle value
+/// (odd count) or the same two middle values averaged the same way (even
+/// count) come out bit for bit. `scratch` is reused between calls.
+fn median(x: &[f64], scratch: &mut Vec<f64>) -> Option<f64> {
+    scratch.clear();
+    scratch.extend(x.iter().copied().filter(|x| x.is_finite()));
+    let n = scratch.len();
+    if n == 0 {
+        return None;
+    }
+    let (lower, &mut mid, _) = scratch.select_nth_unstable_by(n / 2, f64::total_cmp);
+    Some(if n % 2 == 1 {
+        mid
+    } else {
+        let below = lower
+            .iter()
+            .copied()
+            .max_by(f64::total_cmp)
+            .expect("an even count leaves values below the middle");
+        0.5 * (below + mid)
+    })
+}
+
+/// `1.4826 · median(|x − median(x)|)`, the value of
+/// [`super::stats::robust_sigma`] by selection (see [`median`]).
+fn robust_sigma(x: &[f64], scratch: &mut Vec<f64>) -> Option<f64> {
+    let m = median(x, scratch)?;
+    let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
+    median(&dev, scratch).map(|d| 1.482_602_218_505_602 * d)
+}
+
 /// `x` minus a baseline made of the medians of consecutive blocks of `block`
 /// samples, linearly interpolated between block centres (robust to spikes,
 /// follows the load cell's slow drift).
 fn detrend_by_block_medians(x: &[f64], block: usize) -> Vec<f64> {
     let n = x.len();
+    let mut scratch = Vec::with_capacity(block);
     let centres_and_medians: Vec<(f64, f64)> = x
         .chunks(block)
         .enumerate()
         .map(|(b, c)| {
             let centre = (b * block) as f64 + (c.len() as f64 - 1.0) / 2.0;
-            (centre, median(c).unwrap_or(0.0))
+            (centre, median(c, &mut scratch).unwrap_or(0.0))
         })
         .collect();
     let mut out = Vec::with_capacity(n);
@@ -179,6 +212,40 @@ mod tests {
                 (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
             })
             .collect()
+    }
+
+    /// The selection median and robust σ equal the sorting ones of
+    /// `campaign::stats` bit for bit (odd and even counts, ties, NaN and
+    /// infinities dropped, signed zeros, empty input).
+    #[test]
+    fn selection_median_equals_the_sorting_median() {
+        let mut scratch = Vec::new();
+        let mut cases: Vec<Vec<f64>> = vec![
+            vec![],
+            vec![f64::NAN],
+            vec![1.0],
+            vec![2.0, 1.0],
+            vec![0.0, -0.0, 0.0, -0.0],
+            vec![3.0, f64::NAN, 1.0, f64::INFINITY, 2.0, 2.0],
+        ];
+        for n in [7, 8, 450, 451, 30_000] {
+            cases.push(noise(n, n as u64));
+            cases.push(noise(n, 3).iter().map(|v| (v * 4.0).round()).collect());
+        }
+        for x in &cases {
+            assert_eq!(
+                median(x, &mut scratch).map(f64::to_bits),
+                super::super::stats::median(x).map(f64::to_bits),
+                "{} values",
+                x.len()
+            );
+            assert_eq!(
+                robust_sigma(x, &mut scratch).map(f64::to_bits),
+                super::super::stats::robust_sigma(x).map(f64::to_bits),
+                "{} values",
+                x.len()
+            );
+        }
     }
 
     #[test]
