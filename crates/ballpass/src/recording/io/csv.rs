@@ -204,35 +204,41 @@ fn fast_rows(
     // i.e. after its `\n`, or before it when the record ended with `\r\n`.
     let start = usize::try_from(after_header.byte()).ok()?;
     let mut row_line = after_header.line();
-    let segments = body.get(start..)?.split(|&b| b == b'\n');
-    for (this_line, raw) in (after_header.line()..).zip(segments) {
-        let (line, crlf) = match raw.strip_suffix(b"\r") {
+    // One UTF-8 check for the whole body; the ASCII line ends and delimiter
+    // then split it on character boundaries.
+    if !delimiter.is_ascii() {
+        return None;
+    }
+    let delimiter = char::from(delimiter);
+    let text = std::str::from_utf8(body.get(start..)?).ok()?;
+    for (this_line, raw) in (after_header.line()..).zip(text.split('\n')) {
+        let (line, crlf) = match raw.strip_suffix('\r') {
             Some(l) => (l, true),
             None => (raw, false),
         };
-        if line.is_empty() || line[0] == b'#' {
+        if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        if line.contains(&b'\r') {
+        if line.contains('\r') {
             return None;
         }
         let line_no = row_line;
         row_line = if crlf { this_line } else { this_line + 1 };
         let mut fields = 0;
-        for (i, cell) in line.split(|&b| b == delimiter).enumerate() {
+        for (i, cell) in line.split(delimiter).enumerate() {
             fields += 1;
             let r = *role.get(i)?;
             if r == UNUSED {
                 continue;
             }
             let cell = cell.trim_ascii();
-            let x = std::str::from_utf8(cell).ok()?.parse::<f64>().ok()?;
+            let x = cell.parse::<f64>().ok()?;
             if !x.is_finite() {
                 return None;
             }
             if r == TIME {
                 rows.time.push(x);
-                rows.time_decimals = rows.time_decimals.max(decimals(cell));
+                rows.time_decimals = rows.time_decimals.max(decimals(cell.as_bytes()));
             } else {
                 rows.channels[r].push(x);
             }
