@@ -15,6 +15,7 @@ pub mod model;
 pub mod recording;
 pub mod report;
 pub mod sim;
+pub mod stats;
 
 pub use error::{Error, Result};
 

@@ -113,7 +113,7 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
          tau_p_s,tau_p_spread_s,tau_ratio,tau_ratio_spread\n",
     );
     for r in &sweep.velocities {
-        let m = |x: Option<super::stats::MeanStd>| (opt(x.map(|m| m.mean)), opt(x.map(|m| m.std)));
+        let m = |x: Option<crate::stats::MeanStd>| (opt(x.map(|m| m.mean)), opt(x.map(|m| m.std)));
         let (fc, fcs) = m(r.f_c_measured_hz);
         let (ve, ves) = m(r.velocity_error_std_um_s);
         let (tc, tcs) = m(r.tau_c_s);

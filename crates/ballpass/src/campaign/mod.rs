@@ -8,7 +8,6 @@ pub mod figures;
 pub mod manifest;
 pub mod record;
 pub mod run;
-pub mod stats;
 pub mod sticking;
 pub mod sweep;
 
