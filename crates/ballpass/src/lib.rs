@@ -11,6 +11,7 @@ pub mod bearing;
 pub mod campaign;
 pub mod demo;
 pub mod error;
+pub mod fsutil;
 pub mod model;
 pub mod recording;
 pub mod report;

@@ -16,7 +16,7 @@ use super::diagnose::Diagnosis;
 use super::record::RecordResult;
 use super::sweep::Sweep;
 use crate::error::{Error, Result};
-use crate::report::write_atomic;
+use crate::fsutil::write_atomic;
 
 fn opt(v: Option<f64>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()

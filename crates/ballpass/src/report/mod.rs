@@ -68,8 +68,8 @@ mod ticks;
 
 pub use draw::{render_png, render_svg, Rendered};
 pub use html::{
-    escape_html, render_html, write_atomic, write_report, Block, HtmlReport, Level, Report,
-    ReportFiles, ReportOptions, Section, Table, Verdict, FIGURES_DIR, REPORT_FILE,
+    escape_html, render_html, write_report, Block, HtmlReport, Level, Report, ReportFiles,
+    ReportOptions, Section, Table, Verdict, FIGURES_DIR, REPORT_FILE,
 };
 pub use spec::{
     Axis, Figure, Marker, MarkerStyle, Panel, Rgb, Scale, Series, SeriesStyle,
