@@ -225,7 +225,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     }
     analysis::write_outputs(&analysis, &a.out)?;
     if !a.no_report {
-        let report = analysis::figures::report(&analysis, recs.first())?
+        let report = ballpass::report::analysis::report(&analysis, recs.first())?
             .with_command(std::env::args().collect::<Vec<_>>().join(" "));
         let files = ballpass::report::write_report(
             &report,

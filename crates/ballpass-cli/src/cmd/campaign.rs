@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
-use ballpass::campaign::figures::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
 use ballpass::campaign::manifest::OrderedVelocity;
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
@@ -15,6 +14,7 @@ use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
     export, from_directory, read_manifest, run_batch, BatchOutcome, Manifest, ManifestEntry,
 };
+use ballpass::report::campaign::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
 use ballpass::report::{write_report, Block, Report, ReportOptions, Section};
 use clap::Args;
 use serde::Serialize;

@@ -42,7 +42,6 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
-pub mod figures;
 pub mod passage;
 pub mod preprocess;
 pub mod repeats;

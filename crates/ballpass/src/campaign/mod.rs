@@ -4,7 +4,6 @@
 pub mod batch;
 pub mod diagnose;
 pub mod export;
-pub mod figures;
 pub mod manifest;
 pub mod record;
 pub mod run;

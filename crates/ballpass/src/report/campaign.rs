@@ -1,7 +1,7 @@
 //! Report sections and figures of campaigns (thesis Figs. 29, 52, 53, 66–68).
 
-use super::diagnose::{Condition, Diagnosis};
-use super::sweep::Sweep;
+use crate::campaign::diagnose::{Condition, Diagnosis};
+use crate::campaign::sweep::Sweep;
 use crate::error::Result;
 use crate::report::kinds::{self, fmt_sig, PowerLaw, SpectrumView};
 use crate::report::{
