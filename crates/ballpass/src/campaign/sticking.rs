@@ -18,8 +18,8 @@ use serde::{Deserialize, Serialize};
 
 use ballpass_dsp::{find_peaks, Bound, FindPeaksSettings};
 
-use super::stats::{median, robust_sigma};
 use crate::error::{Error, Result};
+use crate::stats::{median, robust_sigma};
 
 /// Settings of the sticking-event detector.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
