@@ -91,10 +91,13 @@ fn read_source(a: &CampaignArgs) -> Result<Manifest> {
         let Some(p) = &a.pattern else {
             bail!("{} is a folder: give --pattern (e.g. 'v{{velocity}}_r{{repeat}}.csv') or a manifest CSV", a.source.display());
         };
+        // Without {bearing} in the pattern, the bearing is --bearing, else the
+        // profile's, else the default (sr25w), as for every other command.
+        let bearing = a.load.options()?.bearing;
         Ok(from_directory(
             &a.source,
             p,
-            a.load.bearing.bearing.as_deref(),
+            bearing.as_deref(),
             a.load.velocity,
         )?)
     } else {
