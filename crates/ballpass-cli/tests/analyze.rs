@@ -1,35 +1,19 @@
 //! End-to-end tests of `ballpass analyze`: the real binary on the parity
 //! fixture recording (8 s at 200 Hz, 18 mm/s) and on broken inputs.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-analyze-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::path::PathBuf;
+
+use common::{library_test_file, run, scratch};
 
 fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../ballpass/tests/fixtures/analyze/input.csv")
-}
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_ballpass"))
-        .args(args)
-        .output()
-        .expect("run ballpass");
-    (
-        o.status.success(),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
+    library_test_file("fixtures/analyze/input.csv")
 }
 
 #[test]
 fn writes_the_four_outputs_and_a_summary() {
-    let out = tmp("ok");
+    let out = scratch("ok");
     let rec = fixture();
     let (ok, stdout, stderr) = run(&[
         "analyze",
@@ -81,7 +65,7 @@ fn writes_the_four_outputs_and_a_summary() {
         );
     }
     // --no-report: exactly the four data files, no temporary files left.
-    let bare = tmp("bare");
+    let bare = scratch("bare");
     let (ok, _, stderr) = run(&[
         "analyze",
         rec.to_str().unwrap(),
@@ -112,7 +96,7 @@ fn writes_the_four_outputs_and_a_summary() {
 
 #[test]
 fn bad_input_is_a_one_line_error() {
-    let out = tmp("bad");
+    let out = scratch("bad");
     let rec = fixture();
     let r = rec.to_str().unwrap();
     let o = out.to_str().unwrap();
@@ -141,7 +125,7 @@ fn bad_input_is_a_one_line_error() {
 
 #[test]
 fn a_missing_channel_is_a_warning_on_stderr() {
-    let out = tmp("missing");
+    let out = scratch("missing");
     let text = std::fs::read_to_string(fixture()).unwrap();
     // Drop the optical column.
     let cut: String = text

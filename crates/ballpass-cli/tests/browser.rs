@@ -8,8 +8,12 @@
 //! CI (`CI` set), where `.ci/run` installs Debian's `chromium` and a missing
 //! browser is a failure.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+use common::{bin, run_ok};
 
 fn chromium() -> Option<PathBuf> {
     if let Some(p) = std::env::var_os("BALLPASS_CHROMIUM") {
@@ -73,16 +77,7 @@ fn demo_report_renders_in_headless_chromium() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let demo = dir.join("demo");
-    let out = Command::new(env!("CARGO_BIN_EXE_ballpass"))
-        .args(["demo", "--out"])
-        .arg(&demo)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "demo failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(bin().args(["demo", "--out"]).arg(&demo));
     let page = demo.join("report.html").canonicalize().unwrap();
 
     // Every figure file is well-formed SVG with something drawn in it.

@@ -3,39 +3,14 @@
 //! stderr naming the file (and line/column where there is one) and a
 //! non-zero exit code.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-cli-load-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::path::PathBuf;
+
+use common::{library_test_file, run_in, scratch, Run};
 
 fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../ballpass/tests/data")
-        .join(name)
-}
-
-struct Run {
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn ballpass(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_ballpass"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    Run {
-        code: out.status.code().unwrap_or(-1),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    library_test_file("data").join(name)
 }
 
 /// A 30 s, 1 kHz file with the three channels (enough periods at 9 mm/s).
@@ -80,7 +55,7 @@ fn assert_one_line_error(r: &Run, must: &[&str]) {
 fn good_csv_is_inspected_in_text_and_json() {
     let dir = scratch("good");
     std::fs::write(dir.join("run9.csv"), good_csv()).unwrap();
-    let r = ballpass(&dir, &["inspect", "run9.csv", "--velocity", "9"]);
+    let r = run_in(&dir, &["inspect", "run9.csv", "--velocity", "9"]);
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(
         r.stdout.contains("30000 samples at 1000 Hz = 30.000 s"),
@@ -92,7 +67,7 @@ fn good_csv_is_inspected_in_text_and_json() {
         "{}",
         r.stdout
     );
-    let r = ballpass(&dir, &["inspect", "run9.csv", "-v", "9", "--json"]);
+    let r = run_in(&dir, &["inspect", "run9.csv", "-v", "9", "--json"]);
     assert_eq!(r.code, 0, "{}", r.stderr);
     let j: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
     assert_eq!(j["schema"], "ballpass.inspect/1");
@@ -117,7 +92,7 @@ fn profile_maps_a_controldesk_mat_file() {
     )
     .unwrap();
     let mat = fixture("controldesk.mat");
-    let r = ballpass(
+    let r = run_in(
         &dir,
         &[
             "inspect",
@@ -140,7 +115,7 @@ fn profile_maps_a_controldesk_mat_file() {
         "fs_hz = 1000\nfriction_col = \"F\"\n",
     )
     .unwrap();
-    let r = ballpass(
+    let r = run_in(
         &dir,
         &["inspect", mat.to_str().unwrap(), "--profile", "typo.toml"],
     );
@@ -151,10 +126,10 @@ fn profile_maps_a_controldesk_mat_file() {
 fn missing_channel_is_listed_and_a_mapped_missing_column_is_an_error() {
     let dir = scratch("missing");
     std::fs::write(dir.join("a.csv"), rows(40, None)).unwrap();
-    let r = ballpass(&dir, &["inspect", "a.csv"]);
+    let r = run_in(&dir, &["inspect", "a.csv"]);
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(r.stdout.contains("missing: position_mm"), "{}", r.stdout);
-    let r = ballpass(&dir, &["inspect", "a.csv", "--position-col", "Encoder"]);
+    let r = run_in(&dir, &["inspect", "a.csv", "--position-col", "Encoder"]);
     assert_one_line_error(
         &r,
         &[
@@ -212,7 +187,7 @@ fn every_bad_text_input_gets_a_one_line_error_with_file_and_line() {
     ];
     for (name, text, must) in &cases {
         std::fs::write(dir.join(name), text).unwrap();
-        let r = ballpass(&dir, &["inspect", name]);
+        let r = run_in(&dir, &["inspect", name]);
         assert_one_line_error(&r, must);
     }
 }
@@ -228,7 +203,7 @@ fn bad_mat_files_get_one_line_errors() {
         ("v73_header.mat", "save(..., '-v7')"),
     ] {
         let p = fixture(name);
-        let r = ballpass(&dir, &["inspect", p.to_str().unwrap()]);
+        let r = run_in(&dir, &["inspect", p.to_str().unwrap()]);
         assert_one_line_error(&r, &[name, must]);
     }
 }
@@ -249,13 +224,13 @@ fn bad_velocity_and_geometry_are_refused() {
     ] {
         let mut all = vec!["inspect", "a.csv"];
         all.extend(args);
-        let r = ballpass(&dir, &all);
+        let r = run_in(&dir, &all);
         assert_one_line_error(&r, &[must]);
     }
     // Velocity and geometry are checked by predict too.
-    let r = ballpass(&dir, &["predict", "--velocity", "0"]);
+    let r = run_in(&dir, &["predict", "--velocity", "0"]);
     assert_one_line_error(&r, &["invalid velocity"]);
-    let r = ballpass(&dir, &["predict", "-v", "9", "--balls", "-2"]);
+    let r = run_in(&dir, &["predict", "-v", "9", "--balls", "-2"]);
     assert_one_line_error(&r, &["invalid balls in race"]);
 }
 
@@ -264,7 +239,7 @@ fn several_files_report_each_error_and_fail_overall() {
     let dir = scratch("several");
     std::fs::write(dir.join("good.csv"), good_csv()).unwrap();
     std::fs::write(dir.join("bad.csv"), "time_s,friction_N\n").unwrap();
-    let r = ballpass(&dir, &["inspect", "good.csv", "bad.csv"]);
+    let r = run_in(&dir, &["inspect", "good.csv", "bad.csv"]);
     assert_ne!(r.code, 0);
     assert!(r.stdout.contains("good.csv"), "{}", r.stdout);
     assert!(

@@ -1,25 +1,10 @@
 //! End-to-end tests of `ballpass model`: the real binary in a temp directory.
 
+mod common;
+
 use std::path::PathBuf;
-use std::process::Command;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-model-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_ballpass"))
-        .args(args)
-        .output()
-        .expect("run ballpass");
-    (
-        o.status.success(),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
+use common::{run, scratch_path};
 
 /// Column `name` of a CSV file as numbers.
 fn column(path: &PathBuf, name: &str) -> Vec<f64> {
@@ -37,7 +22,7 @@ fn column(path: &PathBuf, name: &str) -> Vec<f64> {
 
 #[test]
 fn pulses_writes_errata_coefficients() {
-    let d = tmp("pulses");
+    let d = scratch_path("pulses");
     let (ok, out, err) = run(&[
         "model",
         "pulses",
@@ -69,7 +54,7 @@ fn pulses_writes_errata_coefficients() {
 
 #[test]
 fn stage_writes_bode_and_velocity_response() {
-    let d = tmp("stage");
+    let d = scratch_path("stage");
     let (ok, out, err) = run(&[
         "model",
         "stage",
@@ -122,7 +107,7 @@ fn stage_writes_bode_and_velocity_response() {
 
 #[test]
 fn stage_without_loop_parameters_is_a_clear_error() {
-    let d = tmp("bad");
+    let d = scratch_path("bad");
     let (ok, _, err) = run(&[
         "model",
         "stage",
@@ -151,7 +136,7 @@ fn stage_without_loop_parameters_is_a_clear_error() {
 
 #[test]
 fn signals_reports_phase_in_words() {
-    let d = tmp("signals");
+    let d = scratch_path("signals");
     let (ok, out, err) = run(&[
         "model",
         "signals",
@@ -172,7 +157,7 @@ fn signals_reports_phase_in_words() {
 
 #[test]
 fn pulses_report_has_the_coefficients_on_a_log_axis_and_no_report_writes_none() {
-    let d = tmp("pulses-report");
+    let d = scratch_path("pulses-report");
     let (ok, _, err) = run(&["model", "pulses", "--out", d.to_str().unwrap(), "--png"]);
     assert!(ok, "{err}");
     for f in [
@@ -185,7 +170,7 @@ fn pulses_report_has_the_coefficients_on_a_log_axis_and_no_report_writes_none() 
     }
     let svg = std::fs::read_to_string(d.join("figures/gaussian_coefficients.svg")).unwrap();
     assert!(svg.contains("|C_n| / P"), "log-axis title");
-    let d2 = tmp("pulses-noreport");
+    let d2 = scratch_path("pulses-noreport");
     let (ok, _, err) = run(&[
         "model",
         "pulses",

@@ -1,28 +1,12 @@
 //! End-to-end tests of `ballpass passage`: the real binary on CSV files
 //! written in a temp directory.
 
+mod common;
+
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-passage-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_ballpass"))
-        .args(args)
-        .output()
-        .expect("run ballpass");
-    (
-        o.status.success(),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
+use common::{run, scratch};
 
 /// 20 s at 1 kHz of Gaussian pulses (FWHM = 0.155 τ_c) every τ_c at 10 mm/s
 /// on SR25W, plus a deterministic pseudo-noise of ±0.005 V.
@@ -60,7 +44,7 @@ fn write_pulses(path: &Path, with_optical: bool) -> usize {
 
 #[test]
 fn passage_writes_csv_json_and_summary() {
-    let d = tmp("ok");
+    let d = scratch("ok");
     let rec = d.join("run.csv");
     let n = write_pulses(&rec, true);
     let out = d.join("out");
@@ -107,7 +91,7 @@ fn passage_writes_csv_json_and_summary() {
 fn passage_takes_the_shared_load_flags() {
     // A headerless-time file with a renamed optical column, read through the
     // shared --fs / --optical-col flags as `inspect` does.
-    let d = tmp("load");
+    let d = scratch("load");
     let rec = d.join("run.csv");
     write_pulses(&rec, true);
     let text = std::fs::read_to_string(&rec).unwrap();
@@ -142,7 +126,7 @@ fn passage_takes_the_shared_load_flags() {
 
 #[test]
 fn record_without_optical_channel_or_pulses_is_a_clear_error() {
-    let d = tmp("bad");
+    let d = scratch("bad");
     let rec = d.join("friction_only.csv");
     write_pulses(&rec, false);
     let out = d.join("out");

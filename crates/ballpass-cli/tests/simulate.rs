@@ -1,32 +1,13 @@
 //! End-to-end tests of `ballpass simulate` and `ballpass simulate-campaign`,
 //! running the real binary in temporary folders.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+
+use std::path::Path;
 
 use ballpass::recording::{load, Channel, LoadOptions};
 use ballpass::sim::{simulate, SimSettings, Truth};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ballpass"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run_ok(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use common::{bin, run_ok, scratch};
 
 fn read_truth(p: &Path) -> Truth {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
@@ -34,7 +15,7 @@ fn read_truth(p: &Path) -> Truth {
 
 #[test]
 fn simulate_writes_the_recording_and_its_truth_reproducibly() {
-    let d = temp_dir("simulate");
+    let d = scratch("simulate");
     let a = d.join("rec.csv");
     let b = d.join("again.csv");
     let args = [
@@ -95,7 +76,7 @@ fn simulate_writes_the_recording_and_its_truth_reproducibly() {
 
 #[test]
 fn simulate_rejects_bad_input_with_one_line() {
-    let d = temp_dir("simulate-bad");
+    let d = scratch("simulate-bad");
     for (args, word) in [
         (vec!["--velocity", "0"], "velocity"),
         (vec!["--velocity", "9", "--fs", "0"], "fs"),
@@ -131,7 +112,7 @@ fn simulate_rejects_bad_input_with_one_line() {
 /// samples as the CSV of the same seed (bit for bit: both store f64).
 #[test]
 fn mat_output_holds_the_same_samples_as_csv() {
-    let d = temp_dir("mat");
+    let d = scratch("mat");
     for name in ["r.csv", "r.mat"] {
         let out = bin()
             .args([
@@ -166,7 +147,7 @@ fn mat_output_holds_the_same_samples_as_csv() {
 
 #[test]
 fn campaign_writes_the_thesis_campaign_and_manifest() {
-    let d = temp_dir("campaign");
+    let d = scratch("campaign");
     // Short records keep the test fast; the plan is the full campaign.
     run_ok(
         bin()

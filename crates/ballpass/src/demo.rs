@@ -22,7 +22,6 @@ use rayon::prelude::*;
 use crate::analysis::{self, analyze, detect_passages, Analysis, PassageAnalysis, PassageSettings};
 use crate::bearing::lookup;
 use crate::campaign::diagnose::{diagnose, Condition as Verdict, DiagnoseSettings, Diagnosis};
-use crate::campaign::figures::{diagnosis_parts, sweep_parts, FrictionTrace};
 use crate::campaign::record::RecordResult;
 use crate::campaign::run::{entry_of_simulation, process_simulation, CampaignSettings};
 use crate::campaign::sweep::{sweep, Sweep};
@@ -33,6 +32,7 @@ use crate::model::{
     VelocityResponseSettings,
 };
 use crate::recording::{Channel, Recording};
+use crate::report::campaign::{diagnosis_parts, sweep_parts, FrictionTrace};
 use crate::report::{self, Block, Level, Report, Section, Verdict as Badge};
 use crate::sim::{campaign::plan, SimSettings};
 
@@ -206,7 +206,7 @@ pub fn run_demo(settings: &DemoSettings) -> Result<Demo> {
             )),
     );
     // analyze
-    let an = analysis::figures::report(&analysis, Some(first))?;
+    let an = report::analysis::report(&analysis, Some(first))?;
     report = append(report, "Chapter 7 — analyze: five repeats at 9 mm/s", an);
     // passage
     let mut pr = Report::new("passage");

@@ -11,10 +11,12 @@ pub mod bearing;
 pub mod campaign;
 pub mod demo;
 pub mod error;
+pub mod fsutil;
 pub mod model;
 pub mod recording;
 pub mod report;
 pub mod sim;
+pub mod stats;
 
 pub use error::{Error, Result};
 

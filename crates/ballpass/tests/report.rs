@@ -213,7 +213,7 @@ fn report_is_one_self_contained_html_with_every_figure_inlined() {
     for d in [&dir, &dir.join("figures")] {
         for e in fs::read_dir(d).unwrap() {
             let name = e.unwrap().file_name().to_string_lossy().into_owned();
-            assert!(!name.contains(".tmp-"), "left over: {name}");
+            assert!(!name.ends_with(".tmp"), "left over: {name}");
         }
     }
 }

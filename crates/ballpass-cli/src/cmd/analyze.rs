@@ -11,7 +11,7 @@ use ballpass::analysis::{
 use ballpass::recording;
 use clap::{Args, ValueEnum};
 
-use crate::args::LoadArgs;
+use crate::args::{command_line, LoadArgs, ReportArgs};
 
 /// Trend removal choices.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -97,12 +97,8 @@ pub struct AnalyzeArgs {
     /// Confidence of the significance tests [default: 0.99].
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     confidence: Option<f64>,
-    /// Skip the HTML report and figures (DIR/report.html, DIR/figures/).
-    #[arg(long)]
-    no_report: bool,
-    /// Also write PNG figures beside the SVGs.
-    #[arg(long)]
-    png: bool,
+    #[command(flatten)]
+    report: ReportArgs,
     /// Print analysis.json to stdout instead of the summary.
     #[arg(long)]
     json: bool,
@@ -219,25 +215,17 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     };
     let prediction = geometry.predict(velocity, settings.harmonics)?;
     let analysis = analysis::analyze(&recs, &prediction, &settings)?;
-    let mut err = std::io::stderr().lock();
-    for w in &analysis.warnings {
-        writeln!(err, "warning: {w}")?;
+    {
+        let mut err = std::io::stderr().lock();
+        for w in &analysis.warnings {
+            writeln!(err, "warning: {w}")?;
+        }
     }
     analysis::write_outputs(&analysis, &a.out)?;
-    if !a.no_report {
-        let report = analysis::figures::report(&analysis, recs.first())?
-            .with_command(std::env::args().collect::<Vec<_>>().join(" "));
-        let files = ballpass::report::write_report(
-            &report,
-            &a.out,
-            ballpass::report::ReportOptions {
-                png: a.png,
-                ..Default::default()
-            },
-        )?;
-        for note in &files.warnings {
-            writeln!(err, "note: {note}")?;
-        }
+    if !a.report.no_report {
+        let report = ballpass::report::analysis::report(&analysis, recs.first())?
+            .with_command(command_line());
+        a.report.write(&report, &a.out)?;
     }
     let mut out = std::io::stdout().lock();
     if a.json {

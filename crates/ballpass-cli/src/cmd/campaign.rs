@@ -2,12 +2,11 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
-use ballpass::campaign::figures::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
 use ballpass::campaign::manifest::OrderedVelocity;
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
@@ -15,11 +14,12 @@ use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
     export, from_directory, read_manifest, run_batch, BatchOutcome, Manifest, ManifestEntry,
 };
-use ballpass::report::{write_report, Block, Report, ReportOptions, Section};
+use ballpass::report::campaign::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
+use ballpass::report::{Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
-use crate::args::LoadArgs;
+use crate::args::{LoadArgs, ReportArgs};
 
 /// Arguments shared by `sweep` and `diagnose`.
 #[derive(Debug, Args)]
@@ -49,12 +49,8 @@ pub struct CampaignArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     jobs: Option<usize>,
-    /// Do not write report.html and figures/.
-    #[arg(long)]
-    no_report: bool,
-    /// Also write each figure as PNG.
-    #[arg(long)]
-    png: bool,
+    #[command(flatten)]
+    report: ReportArgs,
     #[command(flatten)]
     load: LoadArgs,
 }
@@ -95,10 +91,13 @@ fn read_source(a: &CampaignArgs) -> Result<Manifest> {
         let Some(p) = &a.pattern else {
             bail!("{} is a folder: give --pattern (e.g. 'v{{velocity}}_r{{repeat}}.csv') or a manifest CSV", a.source.display());
         };
+        // Without {bearing} in the pattern, the bearing is --bearing, else the
+        // profile's, else the default (sr25w), as for every other command.
+        let bearing = a.load.options()?.bearing;
         Ok(from_directory(
             &a.source,
             p,
-            a.load.bearing.bearing.as_deref(),
+            bearing.as_deref(),
             a.load.velocity,
         )?)
     } else {
@@ -273,16 +272,15 @@ struct CampaignJson<'a, T: Serialize> {
     record_results: Vec<&'a RecordResult>,
 }
 
-fn finish_report(
+/// The campaign report: inputs and selection, the command's sections,
+/// failed records, settings, then the command's figures.
+fn campaign_report(
     title: &str,
-    command: &str,
     b: &Batch,
     parts: ReportParts,
     settings: &CampaignSettings,
-    out: &Path,
-    png: bool,
-) -> Result<PathBuf> {
-    let mut report = Report::new(title).with_command(command);
+) -> Result<Report> {
+    let mut report = Report::new(title).with_command(title);
     let mut inputs = vec![
         (
             "source".to_string(),
@@ -312,15 +310,92 @@ fn finish_report(
     for f in parts.figures {
         report = report.with_figure(f);
     }
-    let files = write_report(
-        &report,
-        out,
-        ReportOptions {
-            png,
-            ..Default::default()
+    Ok(report)
+}
+
+/// What `sweep` or `diagnose` found, to be written by [`finish`].
+struct Outputs<'a, T: Serialize> {
+    /// `ballpass sweep` or `ballpass diagnose`: the report's title.
+    title: &'static str,
+    /// Schema tag of the JSON file.
+    schema: &'static str,
+    /// Name of the JSON file.
+    json_name: &'static str,
+    /// CSV tables written after `records.csv`: file name and text.
+    tables: Vec<(&'static str, String)>,
+    /// The campaign answer, the JSON's `result`.
+    result: &'a T,
+    /// The summary lines printed after the selection notes.
+    summary: Vec<String>,
+}
+
+/// Writes `records.csv`, the command's tables, its JSON and (unless
+/// `--no-report`) the report with `parts()`, prints the summary, and fails
+/// when a record failed.
+fn finish<T: Serialize>(
+    a: &CampaignArgs,
+    b: &Batch,
+    settings: &CampaignSettings,
+    ok: &[&RecordResult],
+    o: Outputs<'_, T>,
+    parts: impl FnOnce() -> Result<ReportParts>,
+) -> Result<()> {
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    export::write_text(
+        &a.out,
+        "records.csv",
+        &export::records_csv(&b.outcome, a.harmonics),
+    )?;
+    for (name, text) in &o.tables {
+        export::write_text(&a.out, name, text)?;
+    }
+    export::write_json(
+        &a.out,
+        o.json_name,
+        &CampaignJson {
+            schema: o.schema,
+            version: ballpass::VERSION,
+            source: b.manifest.source.display().to_string(),
+            records: b.entries.len(),
+            failed: export::failures(&b.outcome),
+            selection: &b.notes,
+            settings,
+            elapsed_s: b.seconds,
+            result: o.result,
+            record_results: ok.to_vec(),
         },
     )?;
-    Ok(files.html)
+    let report = if a.report.no_report {
+        None
+    } else {
+        let report = campaign_report(o.title, b, parts()?, settings)?;
+        a.report.write(&report, &a.out)?
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} records ({} failed) in {:.2} s",
+        b.entries.len(),
+        b.outcome.n_failed(),
+        b.seconds
+    )?;
+    for n in &b.notes {
+        writeln!(out, "  {n}")?;
+    }
+    for line in &o.summary {
+        writeln!(out, "{line}")?;
+    }
+    summary_failures(b, &mut out)?;
+    writeln!(
+        out,
+        "wrote {}{}",
+        a.out.display(),
+        report
+            .map(|r| format!(" (open {})", r.html.display()))
+            .unwrap_or_default()
+    )?;
+    exit_status(b)
 }
 
 fn summary_failures(b: &Batch, out: &mut impl Write) -> Result<()> {
@@ -352,67 +427,21 @@ pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
         load.geometry.context("no geometry")?,
     );
     let s = sweep(&ok, Some(geometry.d_avg_mm()));
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
-    export::write_text(
-        &a.out,
-        "records.csv",
-        &export::records_csv(&b.outcome, a.harmonics),
-    )?;
-    export::write_text(&a.out, "sweep.csv", &export::sweep_csv(&s))?;
-    export::write_json(
-        &a.out,
-        "sweep.json",
-        &CampaignJson {
+    finish(
+        a,
+        &b,
+        &settings,
+        &ok,
+        Outputs {
+            title: "ballpass sweep",
             schema: "ballpass.sweep/1",
-            version: ballpass::VERSION,
-            source: b.manifest.source.display().to_string(),
-            records: b.entries.len(),
-            failed: export::failures(&b.outcome),
-            selection: &b.notes,
-            settings: &settings,
-            elapsed_s: b.seconds,
+            json_name: "sweep.json",
+            tables: vec![("sweep.csv", export::sweep_csv(&s))],
             result: &s,
-            record_results: ok.clone(),
+            summary: s.findings.clone(),
         },
-    )?;
-    let report = if a.no_report {
-        None
-    } else {
-        Some(finish_report(
-            "ballpass sweep",
-            "ballpass sweep",
-            &b,
-            sweep_parts(&s, "")?,
-            &settings,
-            &a.out,
-            a.png,
-        )?)
-    };
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "{} records ({} failed) in {:.2} s",
-        b.entries.len(),
-        b.outcome.n_failed(),
-        b.seconds
-    )?;
-    for n in &b.notes {
-        writeln!(out, "  {n}")?;
-    }
-    for f in &s.findings {
-        writeln!(out, "{f}")?;
-    }
-    summary_failures(&b, &mut out)?;
-    writeln!(
-        out,
-        "wrote {}{}",
-        a.out.display(),
-        report
-            .map(|r| format!(" (open {})", r.display()))
-            .unwrap_or_default()
-    )?;
-    exit_status(&b)
+        || Ok(sweep_parts(&s, "")?),
+    )
 }
 
 /// Runs `ballpass diagnose`.
@@ -433,81 +462,41 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
     let b = run(c, pick_diagnose, &settings)?;
     let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
     let d = diagnose(&ok, &ds);
-    std::fs::create_dir_all(&c.out)
-        .with_context(|| format!("cannot create {}", c.out.display()))?;
-    export::write_text(
-        &c.out,
-        "records.csv",
-        &export::records_csv(&b.outcome, c.harmonics),
-    )?;
-    export::write_text(&c.out, "diagnosis.csv", &export::diagnosis_csv(&d))?;
-    export::write_text(
-        &c.out,
-        "friction_spectra.csv",
-        &export::friction_spectra_csv(&d),
-    )?;
-    export::write_json(
-        &c.out,
-        "diagnosis.json",
-        &CampaignJson {
+    let summary = d
+        .bearings
+        .iter()
+        .map(|x| {
+            format!(
+                "#{} {:<12} {:<8} {}",
+                x.rank,
+                x.bearing,
+                x.verdict.name(),
+                x.evidence.join("; ")
+            )
+        })
+        .collect();
+    finish(
+        c,
+        &b,
+        &settings,
+        &ok,
+        Outputs {
+            title: "ballpass diagnose",
             schema: "ballpass.diagnosis/1",
-            version: ballpass::VERSION,
-            source: b.manifest.source.display().to_string(),
-            records: b.entries.len(),
-            failed: export::failures(&b.outcome),
-            selection: &b.notes,
-            settings: &settings,
-            elapsed_s: b.seconds,
+            json_name: "diagnosis.json",
+            tables: vec![
+                ("diagnosis.csv", export::diagnosis_csv(&d)),
+                ("friction_spectra.csv", export::friction_spectra_csv(&d)),
+            ],
             result: &d,
-            record_results: ok.clone(),
+            summary,
         },
-    )?;
-    let report = if c.no_report {
-        None
-    } else {
-        let f_c = ok.first().map(|r| r.f_c_predicted_hz);
-        let examples = friction_examples(&d, &b.entries, c)?;
-        Some(finish_report(
-            "ballpass diagnose",
-            "ballpass diagnose",
-            &b,
-            diagnosis_parts(&d, f_c, &examples, "")?,
-            &settings,
-            &c.out,
-            c.png,
-        )?)
-    };
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "{} records ({} failed) in {:.2} s",
-        b.entries.len(),
-        b.outcome.n_failed(),
-        b.seconds
-    )?;
-    for n in &b.notes {
-        writeln!(out, "  {n}")?;
-    }
-    for x in &d.bearings {
-        writeln!(
-            out,
-            "#{} {:<12} {:<8} {}",
-            x.rank,
-            x.bearing,
-            x.verdict.name(),
-            x.evidence.join("; ")
-        )?;
-    }
-    summary_failures(&b, &mut out)?;
-    writeln!(
-        out,
-        "wrote {}{}",
-        c.out.display(),
-        report
-            .map(|r| format!(" (open {})", r.display()))
-            .unwrap_or_default()
-    )?;
-    exit_status(&b)
+        || {
+            let f_c = ok.first().map(|r| r.f_c_predicted_hz);
+            let examples = friction_examples(&d, &b.entries, c)?;
+            Ok(diagnosis_parts(&d, f_c, &examples, "")?)
+        },
+    )
 }
 
 /// The first record's friction of the best and the worst bearing (thesis

@@ -307,7 +307,7 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
         ));
     }
     let manifest_path = a.out.join("manifest.csv");
-    write_text_atomic(&manifest_path, &manifest)?;
+    ballpass::fsutil::write_atomic(&manifest_path, manifest.as_bytes())?;
     writeln!(
         std::io::stdout().lock(),
         "wrote {} recordings with truth files and {}",
@@ -315,19 +315,4 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
         manifest_path.display()
     )?;
     Ok(())
-}
-
-/// Writes a small text file through a temporary file and a rename.
-fn write_text_atomic(path: &Path, text: &str) -> Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, text)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .with_context(|| format!("cannot write {}", path.display()))
-        .inspect_err(|_| {
-            let _ = std::fs::remove_file(&tmp);
-        })
 }

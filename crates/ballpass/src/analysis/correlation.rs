@@ -30,9 +30,9 @@ use ballpass_dsp::{CorrelateSettings, Correlator};
 use serde::Serialize;
 
 use super::preprocess::Prepared;
-use super::stats::parabolic_peak;
 use super::{pair_name, AnalyzeSettings, Signal, CROSS_PAIRS};
 use crate::error::{Error, Result};
+use crate::stats::parabolic_peak;
 
 /// The correlations of one record or the average of repeats.
 #[derive(Debug, Clone, Default, PartialEq)]

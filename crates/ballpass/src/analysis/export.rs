@@ -1,11 +1,7 @@
 //! Writing an [`Analysis`]: `analysis.json`, `correlations.csv`,
-//! `spectra.csv`, `spectra_hires.csv`, each to a temporary file renamed into
-//! place (a reader never sees half a file).
-//!
-//! The files are not `fsync`ed (unlike recordings written by
-//! [`crate::recording::io::write_csv`]): they are derived and can be
-//! recomputed, and four `fsync`s would cost more wall time than the whole
-//! analysis. The rename still guarantees all-or-nothing for readers.
+//! `spectra.csv`, `spectra_hires.csv`, each written atomically by
+//! [`crate::fsutil::write_atomic_with`] (a reader never sees half a file; no
+//! `fsync`, see [`crate::fsutil`]).
 //!
 //! CSV layout: one header row, `,`-separated, numbers in the shortest form
 //! that reads back to the same `f64` (`nan`/`inf`/`-inf` for non-finite
@@ -22,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use super::{pair_name, Analysis, Correlations, Spectra};
 use crate::error::{Error, Result};
+use crate::fsutil::write_atomic_with;
 
 /// Where [`write_outputs`] put the files.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -34,40 +31,6 @@ pub struct OutputPaths {
     pub spectra: PathBuf,
     /// `spectra_hires.csv`.
     pub spectra_hires: PathBuf,
-}
-
-/// Runs `body` on a buffered temporary file beside `path`, then renames it
-/// to `path` (no `fsync`, see the module docs); on error the temporary file
-/// is removed.
-fn write_atomic(
-    path: &Path,
-    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> Result<()> {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "output".into());
-    let k = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp = path.with_file_name(format!(".{name}.{}-{k}.tmp", std::process::id()));
-    let result = (|| {
-        let file = std::fs::File::options()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)?;
-        let mut w = std::io::BufWriter::with_capacity(1 << 16, file);
-        body(&mut w)?;
-        w.into_inner().map_err(|e| e.into_error())?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 /// A table of named columns over one index column.
@@ -226,7 +189,7 @@ pub(crate) fn write_csv(path: &Path, t: &Table<'_>) -> Result<()> {
         .iter()
         .map(|(n, v)| (n.clone(), v.as_slice()))
         .collect();
-    write_atomic(path, |w| write_table(w, t.index_name, t.index, &cols))
+    write_atomic_with(path, |w| write_table(w, t.index_name, t.index, &cols))
 }
 
 /// Writes `correlations.csv` to `path`.
@@ -235,7 +198,7 @@ pub(crate) fn write_csv(path: &Path, t: &Table<'_>) -> Result<()> {
 /// [`Error::Io`] naming the file.
 pub fn write_correlations(path: &Path, c: &Correlations) -> Result<()> {
     let cols = correlation_columns(c);
-    write_atomic(path, |w| write_table(w, "lag_s", &c.lag_s, &cols))
+    write_atomic_with(path, |w| write_table(w, "lag_s", &c.lag_s, &cols))
 }
 
 /// Writes a spectra table (`spectra.csv` layout) to `path`.
@@ -275,7 +238,7 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
         || {
             write_spectra(&paths.spectra, &a.spectra)?;
             write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
-            write_atomic(&paths.json, |w| {
+            write_atomic_with(&paths.json, |w| {
                 serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
                 w.write_all(b"\n")
             })

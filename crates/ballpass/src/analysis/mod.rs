@@ -42,12 +42,10 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
-pub mod figures;
 pub mod passage;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
-mod stats;
 mod train_fit;
 
 pub use correlation::{Correlations, MeasuredPeriod, Phase, SignalPeriod};
@@ -535,11 +533,11 @@ pub struct PassageSummary {
     /// Ball-pass frequency from the passages `1 / mean tau_c`, Hz.
     pub f_c_hz: Option<f64>,
     /// Mean and sample std of the period between passages, s.
-    pub tau_c_s: Option<passage::MeanStd>,
+    pub tau_c_s: Option<crate::stats::MeanStd>,
     /// Mean and sample std of the width at half prominence, s.
-    pub tau_p_s: Option<passage::MeanStd>,
+    pub tau_p_s: Option<crate::stats::MeanStd>,
     /// Mean and sample std of `tau_p / tau_c` (thesis: 0.155).
-    pub tau_p_over_tau_c: Option<passage::MeanStd>,
+    pub tau_p_over_tau_c: Option<crate::stats::MeanStd>,
     /// Sensor conditions found (drift, AC coupling, inverted pulses, ...).
     pub conditions: Vec<String>,
     /// Why there is no summary (no optical channel, no pulses), if so.

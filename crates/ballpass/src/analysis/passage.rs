@@ -53,6 +53,7 @@ use crate::analysis::train_fit;
 use crate::bearing::{check_velocity, Geometry};
 use crate::error::{Error, Result};
 use crate::recording::{Channel, Recording};
+use crate::stats::MeanStd;
 
 /// Most samples per ball-pass period used by the pulse-train fits.
 const FIT_SAMPLES_PER_PERIOD: f64 = 150.0;
@@ -172,33 +173,6 @@ pub struct Passage {
     pub tau_p_over_tau_c: Option<f64>,
     /// Ball spacing implied `v τ_c / 2`, mm (when the velocity is known).
     pub spacing_mm: Option<f64>,
-}
-
-/// Mean and sample standard deviation of a set of values.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct MeanStd {
-    /// Mean.
-    pub mean: f64,
-    /// Sample standard deviation (n − 1); 0 for one value.
-    pub std: f64,
-    /// How many values.
-    pub n: usize,
-}
-
-impl MeanStd {
-    fn of(v: &[f64]) -> Option<Self> {
-        if v.is_empty() {
-            return None;
-        }
-        let n = v.len();
-        let mean = v.iter().sum::<f64>() / n as f64;
-        let std = if n > 1 {
-            (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
-        } else {
-            0.0
-        };
-        Some(Self { mean, std, n })
-    }
 }
 
 /// Spread of the ball spacings against what the free space allows.

@@ -19,13 +19,13 @@ use serde::Serialize;
 use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
 use super::preprocess::{self, Prepared};
 use super::spectra::{self, HarmonicRow, Spectra};
-use super::stats::mean_std;
 use super::{
     pair_name, Absent, Analysis, AnalyzeSettings, InputInfo, SeriesInfo, Signal, Verdict, SCHEMA,
 };
 use crate::bearing::{check_velocity, Prediction};
 use crate::error::{Error, Result};
 use crate::recording::{Channel, Recording};
+use crate::stats::MeanStd;
 
 /// Scalars of one record analysed alone.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -303,12 +303,12 @@ fn average_spectra(all: &[Spectra]) -> Spectra {
 }
 
 fn spread(quantity: String, values: &[f64]) -> Option<Spread> {
-    let (mean, _) = mean_std(values, 0)?;
+    let m = MeanStd::of(values)?;
     Some(Spread {
         quantity,
         count: values.len(),
-        mean,
-        std: mean_std(values, 1).map(|(_, s)| s),
+        mean: m.mean,
+        std: (m.n > 1).then_some(m.std),
         min: values.iter().copied().fold(f64::INFINITY, f64::min),
         max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     })

@@ -49,9 +49,9 @@ use serde::Serialize;
 
 use super::correlation::pairs_for;
 use super::preprocess::Prepared;
-use super::stats::{chi2_ppf, median, parabolic_peak, welch_dof};
 use super::{pair_name, AnalyzeSettings, HiresMethod, Signal};
 use crate::error::{Error, Result};
+use crate::stats::{chi2_ppf, median, parabolic_peak, welch_dof};
 
 /// Parameters of one spectrum estimate, as resolved on the records.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

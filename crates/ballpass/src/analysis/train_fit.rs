@@ -134,6 +134,26 @@ fn solver() -> LeastSquares {
     }
 }
 
+/// Minimises the `m` residuals `resid` with the analytic Jacobian `jac`
+/// from `th0`, and returns the fit with its residuals.
+fn solve(
+    m: usize,
+    th0: &[f64],
+    resid: impl Fn(&[f64], &mut [f64]),
+    jac: impl Fn(&[f64], &mut [f64]),
+) -> ballpass_dsp::Result<Solved> {
+    let problem = FnProblem::with_jacobian(m, &resid, jac);
+    let fit = least_squares(&problem, th0, &solver())?;
+    let mut r = vec![0.0; m];
+    resid(&fit.params, &mut r);
+    Ok(Solved {
+        params: fit.params,
+        residuals: r,
+        iterations: fit.iterations,
+        converged: converged(fit.termination),
+    })
+}
+
 /// Fits the Gaussian train to samples `(t, d)` from `th0`.
 pub(crate) fn fit_gaussian(t: &[f64], d: &[f64], th0: &[f64]) -> ballpass_dsp::Result<Solved> {
     let m = t.len();
@@ -148,16 +168,7 @@ pub(crate) fn fit_gaussian(t: &[f64], d: &[f64], th0: &[f64]) -> ballpass_dsp::R
             gaussian_jacobian_row(th, t[i], row);
         }
     };
-    let problem = FnProblem::with_jacobian(m, resid, jac);
-    let fit = least_squares(&problem, th0, &solver())?;
-    let mut r = vec![0.0; m];
-    resid(&fit.params, &mut r);
-    Ok(Solved {
-        params: fit.params,
-        residuals: r,
-        iterations: fit.iterations,
-        converged: converged(fit.termination),
-    })
+    solve(m, th0, resid, jac)
 }
 
 /// Fits the rectangular train of order `order` to samples `(t, d)` from `th0`.
@@ -178,16 +189,7 @@ pub(crate) fn fit_rectangular(
             rectangular_jacobian_row(th, order, t[i], row);
         }
     };
-    let problem = FnProblem::with_jacobian(m, resid, jac);
-    let fit = least_squares(&problem, th0, &solver())?;
-    let mut r = vec![0.0; m];
-    resid(&fit.params, &mut r);
-    Ok(Solved {
-        params: fit.params,
-        residuals: r,
-        iterations: fit.iterations,
-        converged: converged(fit.termination),
-    })
+    solve(m, th0, resid, jac)
 }
 
 #[cfg(test)]

@@ -23,8 +23,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::record::RecordResult;
-use super::stats::{mean_std, median, MeanStd};
 use super::sticking::StickingSettings;
+use crate::stats::{mean_std, median, MeanStd};
 
 /// Thresholds of the diagnosis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -16,7 +16,7 @@ use super::diagnose::Diagnosis;
 use super::record::RecordResult;
 use super::sweep::Sweep;
 use crate::error::{Error, Result};
-use crate::report::write_atomic;
+use crate::fsutil::write_atomic;
 
 fn opt(v: Option<f64>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()
@@ -113,7 +113,7 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
          tau_p_s,tau_p_spread_s,tau_ratio,tau_ratio_spread\n",
     );
     for r in &sweep.velocities {
-        let m = |x: Option<super::stats::MeanStd>| (opt(x.map(|m| m.mean)), opt(x.map(|m| m.std)));
+        let m = |x: Option<crate::stats::MeanStd>| (opt(x.map(|m| m.mean)), opt(x.map(|m| m.std)));
         let (fc, fcs) = m(r.f_c_measured_hz);
         let (ve, ves) = m(r.velocity_error_std_um_s);
         let (tc, tcs) = m(r.tau_c_s);

@@ -4,11 +4,9 @@
 pub mod batch;
 pub mod diagnose;
 pub mod export;
-pub mod figures;
 pub mod manifest;
 pub mod record;
 pub mod run;
-pub mod stats;
 pub mod sticking;
 pub mod sweep;
 

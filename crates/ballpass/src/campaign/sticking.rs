@@ -129,7 +129,7 @@ pub fn sticking_events(
 }
 
 /// Median of the finite values of `x` (`None` if there are none), the value
-/// of [`super::stats::median`] found by selection instead of a full sort:
+/// of [`crate::stats::median`] found by selection instead of a full sort:
 /// under `total_cmp` the order statistics are unique, so the middle value
 /// (odd count) or the same two middle values averaged the same way (even
 /// count) come out bit for bit. `scratch` is reused between calls.
@@ -154,7 +154,7 @@ fn median(x: &[f64], scratch: &mut Vec<f64>) -> Option<f64> {
 }
 
 /// `1.4826 · median(|x − median(x)|)`, the value of
-/// [`super::stats::robust_sigma`] by selection (see [`median`]).
+/// [`crate::stats::robust_sigma`] by selection (see [`median`]).
 fn robust_sigma(x: &[f64], scratch: &mut Vec<f64>) -> Option<f64> {
     let m = median(x, scratch)?;
     let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
@@ -215,7 +215,7 @@ mod tests {
     }
 
     /// The selection median and robust σ equal the sorting ones of
-    /// `campaign::stats` bit for bit (odd and even counts, ties, NaN and
+    /// `crate::stats` bit for bit (odd and even counts, ties, NaN and
     /// infinities dropped, signed zeros, empty input).
     #[test]
     fn selection_median_equals_the_sorting_median() {
@@ -235,13 +235,13 @@ mod tests {
         for x in &cases {
             assert_eq!(
                 median(x, &mut scratch).map(f64::to_bits),
-                super::super::stats::median(x).map(f64::to_bits),
+                crate::stats::median(x).map(f64::to_bits),
                 "{} values",
                 x.len()
             );
             assert_eq!(
                 robust_sigma(x, &mut scratch).map(f64::to_bits),
-                super::super::stats::robust_sigma(x).map(f64::to_bits),
+                crate::stats::robust_sigma(x).map(f64::to_bits),
                 "{} values",
                 x.len()
             );

@@ -16,7 +16,7 @@ use serde::Serialize;
 use ballpass_dsp::lsq::{least_squares, FnProblem, LeastSquares};
 
 use super::record::RecordResult;
-use super::stats::{linear_fit, mean_std, origin_fit, LinearFit, MeanStd};
+use crate::stats::{linear_fit, mean_std, origin_fit, LinearFit, MeanStd};
 
 /// One velocity of a sweep.
 #[derive(Debug, Clone, Serialize)]

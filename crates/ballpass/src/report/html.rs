@@ -2,7 +2,6 @@
 
 use std::fmt::Write as _;
 use std::fs;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -10,6 +9,7 @@ use serde::Serialize;
 use super::draw::{render_png, render_svg};
 use super::spec::Figure;
 use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
 
 /// How good a verdict is; drawn as a coloured badge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -336,7 +336,7 @@ fn check_report(report: &Report) -> Result<()> {
 ///
 /// Every figure is drawn in memory before anything is written, so a bad
 /// figure leaves the directory untouched. Each file is written to a temporary
-/// name in its own directory, flushed and renamed into place. A previous
+/// name in its own directory and renamed into place ([`write_atomic`]). A previous
 /// `report.html` is removed before the figures are replaced and the new one
 /// is written last, so a `report.html` on disk always matches the figures
 /// beside it. Figures of earlier runs with other ids are left alone.
@@ -406,34 +406,6 @@ pub fn write_report(report: &Report, dir: &Path, options: ReportOptions) -> Resu
     }
     write_atomic(&html_path, html.as_bytes())?;
     Ok(files)
-}
-
-/// Writes `bytes` to a temporary file beside `path`, syncs it and renames it
-/// over `path`; the temporary file is removed on failure.
-///
-/// # Errors
-///
-/// [`Error::Io`] naming the file that could not be written or renamed.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        fs::rename(&tmp, path)
-    })();
-    result.map_err(|source| {
-        let _ = fs::remove_file(&tmp);
-        Error::Io {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
 }
 
 /// Escapes text for HTML element content and quoted attribute values.

@@ -20,8 +20,9 @@
 //! Ready-made figures after the thesis (stacked signals, correlations with
 //! `tau_c` markers, spectra with `f_c` harmonics, coherence, pulses with
 //! models, Bode, error bars, log-log fits, ratio with mean, fleet overlay)
-//! are in [`kinds`]; the figures and summaries of `ballpass passage` and
-//! `ballpass model` in [`passage`] and [`model`].
+//! are in [`kinds`]; the figures and summaries of `ballpass analyze` in
+//! [`analysis`], of `ballpass passage` in [`passage`], of `ballpass model` in
+//! [`model`], and of the campaigns (`sweep`, `diagnose`) in [`campaign`].
 //!
 //! Text is drawn with the embedded DejaVu Sans (`assets/fonts/`, Bitstream
 //! Vera licence) through `ab_glyph`: no fontconfig or system fonts, so PNGs
@@ -57,6 +58,8 @@
 //! # Ok::<(), ballpass::Error>(())
 //! ```
 
+pub mod analysis;
+pub mod campaign;
 mod draw;
 mod html;
 pub mod kinds;
@@ -68,8 +71,8 @@ mod ticks;
 
 pub use draw::{render_png, render_svg, Rendered};
 pub use html::{
-    escape_html, render_html, write_atomic, write_report, Block, HtmlReport, Level, Report,
-    ReportFiles, ReportOptions, Section, Table, Verdict, FIGURES_DIR, REPORT_FILE,
+    escape_html, render_html, write_report, Block, HtmlReport, Level, Report, ReportFiles,
+    ReportOptions, Section, Table, Verdict, FIGURES_DIR, REPORT_FILE,
 };
 pub use spec::{
     Axis, Figure, Marker, MarkerStyle, Panel, Rgb, Scale, Series, SeriesStyle,

@@ -188,7 +188,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
     Ok(figs)
 }
 
-fn pm(m: &crate::analysis::passage::MeanStd, sig: usize) -> String {
+fn pm(m: &crate::stats::MeanStd, sig: usize) -> String {
     format!("{} ± {}", fmt_sig(m.mean, sig), fmt_sig(m.std, 2))
 }
 

@@ -641,7 +641,7 @@ impl Truth {
     /// # Errors
     /// [`Error::Io`] naming the file.
     pub fn write_json(&self, path: &Path) -> Result<()> {
-        crate::recording::io::write_atomic(path, |w| {
+        crate::fsutil::write_atomic_with(path, |w| {
             serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
             w.write_all(b"\n")
         })

@@ -36,7 +36,7 @@ use std::sync::Once;
 
 use matrw::{MatFile, MatVariable, MatlabType};
 
-use super::{write_atomic, LoadOptions, Locator, RawColumn, RawTable};
+use super::{LoadOptions, Locator, RawColumn, RawTable};
 use crate::error::{Error, Result};
 use crate::recording::{Channel, Recording};
 
@@ -584,7 +584,7 @@ pub fn write_mat(rec: &Recording, path: &Path) -> Result<()> {
             vars.push((c.column_name(), v));
         }
     }
-    write_atomic(path, |w| {
+    crate::fsutil::write_atomic_with(path, |w| {
         let mut text = format!(
             "MATLAB 5.0 MAT-file, Platform: ballpass {}, Created by: ballpass",
             crate::VERSION

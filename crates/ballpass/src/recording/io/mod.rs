@@ -15,9 +15,8 @@
 //! [`write_csv`] writes the canonical CSV and [`write_mat`] a level-5 MAT-file;
 //! [`load`] reads either back bit for bit.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -425,13 +424,13 @@ fn check_periods(rec: &Recording, opts: &LoadOptions) -> Result<()> {
 /// into the same rate whenever it has at most 15 significant digits (any real
 /// bench rate) and into the nearest double of it otherwise.
 ///
-/// The file is written to a temporary file in the same folder and renamed
-/// into place, so a reader never sees half a file under `path`.
+/// The file is written atomically ([`crate::fsutil::write_atomic_with`]), so a
+/// reader never sees half a file under `path`.
 ///
 /// # Errors
 /// [`Error::Io`] naming the file when it cannot be written.
 pub fn write_csv(rec: &Recording, path: &Path) -> Result<()> {
-    write_atomic(path, |w| write_csv_to(rec, w))
+    crate::fsutil::write_atomic_with(path, |w| write_csv_to(rec, w))
 }
 
 /// Writes the canonical CSV of [`write_csv`] to any writer.
@@ -460,42 +459,6 @@ pub fn write_csv_to<W: Write>(rec: &Recording, w: &mut W) -> std::io::Result<()>
         w.write_all(b"\n")?;
     }
     Ok(())
-}
-
-/// Runs `body` on a buffered temporary file beside `path`, then renames it to
-/// `path`; on any error the temporary file is removed.
-pub(crate) fn write_atomic(
-    path: &Path,
-    body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> Result<()> {
-    let io_err = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let tmp = temp_path(path);
-    let result = (|| {
-        let file = File::options().write(true).create_new(true).open(&tmp)?;
-        let mut w = BufWriter::with_capacity(1 << 16, file);
-        body(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io_err)
-}
-
-fn temp_path(path: &Path) -> PathBuf {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "recording".into());
-    let k = COUNTER.fetch_add(1, Ordering::Relaxed);
-    path.with_file_name(format!(".{name}.{}-{k}.tmp", std::process::id()))
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 //! Everything is drawn from the analysis' own numbers (nothing is
 //! recomputed); the raw-signal figure needs the first recording.
 
-use super::{pair_name, Analysis, Signal};
+use crate::analysis::{pair_name, Analysis, Signal};
 use crate::error::Result;
 use crate::recording::{Channel, Recording};
 use crate::report::kinds::{self, SpectrumView, Trace};

@@ -1,7 +1,7 @@
 //! Report sections and figures of campaigns (thesis Figs. 29, 52, 53, 66–68).
 
-use super::diagnose::{Condition, Diagnosis};
-use super::sweep::Sweep;
+use crate::campaign::diagnose::{Condition, Diagnosis};
+use crate::campaign::sweep::Sweep;
 use crate::error::Result;
 use crate::report::kinds::{self, fmt_sig, PowerLaw, SpectrumView};
 use crate::report::{
@@ -17,7 +17,7 @@ pub struct ReportParts {
     pub figures: Vec<Figure>,
 }
 
-fn mean_std_cols(rows: &[(f64, Option<super::stats::MeanStd>)]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+fn mean_std_cols(rows: &[(f64, Option<crate::stats::MeanStd>)]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let mut x = Vec::new();
     let mut m = Vec::new();
     let mut s = Vec::new();
@@ -48,7 +48,7 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
         "τp (s)",
         "τp/τc",
     ]);
-    let ms = |m: Option<super::stats::MeanStd>, sig: usize| {
+    let ms = |m: Option<crate::stats::MeanStd>, sig: usize| {
         m.map(|m| format!("{} ± {}", fmt_sig(m.mean, sig), fmt_sig(m.std, 2)))
             .unwrap_or_else(|| "–".into())
     };
@@ -70,7 +70,7 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
             .with(Block::Table(table)),
     );
 
-    let ve: Vec<(f64, Option<super::stats::MeanStd>)> = sweep
+    let ve: Vec<(f64, Option<crate::stats::MeanStd>)> = sweep
         .velocities
         .iter()
         .map(|r| (r.velocity_mm_s, r.velocity_error_std_um_s))

@@ -1,34 +1,56 @@
-//! Small statistics for campaign tables: mean and spread, robust levels,
-//! least-squares lines with confidence intervals (Student's t).
+//! Small statistics shared by the analyses and the campaigns: mean and
+//! spread, medians and robust levels, least-squares lines with confidence
+//! intervals (Student's t), the chi-square distribution used by the
+//! significance tests, the equivalent degrees of freedom of a Welch estimate,
+//! and parabolic peak interpolation.
+//!
+//! Non-finite values: [`median`], [`robust_sigma`] and [`mean_std`] ignore
+//! them; [`MeanStd::of`] takes the values as they are.
 
 use serde::{Deserialize, Serialize};
 
 /// Mean and sample standard deviation (ddof = 1; 0 for a single value).
+///
+/// Serialised as `{"mean", "std", "n"}` in `analysis.json` and the campaign
+/// outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MeanStd {
     /// Arithmetic mean.
     pub mean: f64,
-    /// Sample standard deviation (n − 1 in the denominator).
+    /// Sample standard deviation (n − 1 in the denominator); 0 for one value.
     pub std: f64,
     /// Number of values.
     pub n: usize,
 }
 
-/// Mean and sample standard deviation of the finite values in `x`;
-/// `None` when there are none.
+impl MeanStd {
+    /// Mean and sample standard deviation of all of `v` (no filtering):
+    ///
+    /// ```text
+    /// mean = Σ v / n,   std = sqrt(Σ (v − mean)² / (n − 1))   (0 when n = 1)
+    /// ```
+    ///
+    /// `None` when `v` is empty.
+    pub fn of(v: &[f64]) -> Option<Self> {
+        if v.is_empty() {
+            return None;
+        }
+        let n = v.len();
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let std = if n > 1 {
+            (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+        } else {
+            0.0
+        };
+        Some(Self { mean, std, n })
+    }
+}
+
+/// Mean and sample standard deviation of the finite values in `x`
+/// ([`MeanStd::of`] after dropping NaN and ±∞); `None` when there are none.
 pub fn mean_std(x: &[f64]) -> Option<MeanStd> {
     let v: Vec<f64> = x.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return None;
-    }
-    let n = v.len();
-    let mean = v.iter().sum::<f64>() / n as f64;
-    let std = if n > 1 {
-        (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
-    } else {
-        0.0
-    };
-    Some(MeanStd { mean, std, n })
+    MeanStd::of(&v)
 }
 
 /// Median of the finite values (mean of the middle two for an even count).
@@ -266,8 +288,8 @@ fn beta_cf(a: f64, b: f64, x: f64) -> f64 {
     h
 }
 
-/// Natural log of the gamma function for x > 0 (Lanczos, g = 7, n = 9;
-/// relative error below 1e-15 over the range used here).
+/// Natural log of the gamma function `ln Γ(x)` for x > 0 (Lanczos, g = 7,
+/// 9 terms; relative error ~1e-15 over the range used here).
 pub fn ln_gamma(x: f64) -> f64 {
     const G: f64 = 7.0;
     const C: [f64; 9] = [
@@ -282,7 +304,7 @@ pub fn ln_gamma(x: f64) -> f64 {
         1.505_632_735_149_311_6e-7,
     ];
     if x < 0.5 {
-        // Reflection.
+        // Reflection: Γ(x) Γ(1-x) = π / sin(πx).
         let pi = std::f64::consts::PI;
         return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
     }
@@ -293,6 +315,149 @@ pub fn ln_gamma(x: f64) -> f64 {
         a += c / (x + i as f64);
     }
     0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// Regularised lower incomplete gamma `P(a, x) = γ(a, x) / Γ(a)` for
+/// `a > 0`, `x >= 0` (series below `a + 1`, Lentz continued fraction above;
+/// as `scipy.special.gammainc`).
+pub fn gamma_p(a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let ln_pre = a * x.ln() - x - ln_gamma(a);
+    if x < a + 1.0 {
+        let mut term = 1.0 / a;
+        let mut sum = term;
+        let mut ap = a;
+        for _ in 0..10_000 {
+            ap += 1.0;
+            term *= x / ap;
+            sum += term;
+            if term.abs() < sum.abs() * 1e-17 {
+                break;
+            }
+        }
+        (sum.ln() + ln_pre).exp().min(1.0)
+    } else {
+        // Q(a, x) by the continued fraction (modified Lentz).
+        let tiny = 1e-300;
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / tiny;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..10_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = b + an / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            let del = d * c;
+            h *= del;
+            if (del - 1.0).abs() < 1e-16 {
+                break;
+            }
+        }
+        (1.0 - (ln_pre.exp() * h)).max(0.0)
+    }
+}
+
+/// Chi-square CDF with `nu > 0` degrees of freedom: `P(nu/2, x/2)`.
+pub fn chi2_cdf(x: f64, nu: f64) -> f64 {
+    gamma_p(0.5 * nu, 0.5 * x)
+}
+
+/// Chi-square quantile: the `x` with `chi2_cdf(x, nu) = p`, for
+/// `0 < p < 1`, `nu > 0` (as `scipy.stats.chi2.ppf(p, nu)`).
+///
+/// Bracketed bisection on the CDF, finished by Newton steps on the
+/// log-density; relative accuracy ~1e-12. Returns NaN outside the domain.
+pub fn chi2_ppf(p: f64, nu: f64) -> f64 {
+    if !(p > 0.0 && p < 1.0 && nu > 0.0) {
+        return f64::NAN;
+    }
+    let mut lo = 0.0;
+    let mut hi = nu.max(1.0);
+    while chi2_cdf(hi, nu) < p {
+        lo = hi;
+        hi *= 2.0;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if chi2_cdf(mid, nu) < p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo <= 1e-13 * hi {
+            break;
+        }
+    }
+    let mut x = 0.5 * (lo + hi);
+    // Newton on F(x) - p with density f(x) = x^(k-1) e^(-x/2) / (2^k Γ(k)), k = nu/2.
+    let k = 0.5 * nu;
+    for _ in 0..3 {
+        let ln_f = (k - 1.0) * x.ln() - 0.5 * x - k * 2f64.ln() - ln_gamma(k);
+        let f = ln_f.exp();
+        if !(f.is_finite() && f > 0.0) {
+            break;
+        }
+        let step = (chi2_cdf(x, nu) - p) / f;
+        let next = x - step;
+        if !(next > lo && next < hi) {
+            break;
+        }
+        x = next;
+    }
+    x
+}
+
+/// Equivalent degrees of freedom of a Welch average of `k` segments of
+/// window `w` stepped by `step` samples (Percival & Walden 1993, Eq. 292b;
+/// Welch 1967):
+///
+/// ```text
+/// h   = w / sqrt(sum w^2)
+/// rho(m) = (sum_t h[t] h[t + m step])^2
+/// nu  = 2 k / (1 + 2 sum_{m=1}^{k-1} (1 - m/k) rho(m))
+/// ```
+///
+/// It assumes Gaussian noise whose spectrum is flat over the window's
+/// bandwidth. `k = 1` gives 2; Hann with 50 % overlap and many segments
+/// gives about `1.89 k`. Bins at DC and Nyquist (real-valued) carry half of
+/// that; they are never used for harmonics of `f_c > 0`.
+pub fn welch_dof(w: &[f64], step: usize, k: usize) -> f64 {
+    if k == 0 {
+        return 0.0;
+    }
+    let e: f64 = w.iter().map(|v| v * v).sum();
+    let mut s = 0.0;
+    for m in 1..k {
+        let shift = m * step;
+        if shift >= w.len() {
+            break;
+        }
+        let c: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / e;
+        s += (1.0 - m as f64 / k as f64) * c * c;
+    }
+    2.0 * k as f64 / (1.0 + 2.0 * s)
+}
+
+/// Vertex of the parabola through `(-1, a)`, `(0, b)`, `(1, c)`: offset in
+/// `[-0.5, 0.5]` from the middle sample and the interpolated value.
+/// A flat or degenerate triple gives offset 0.
+pub fn parabolic_peak(a: f64, b: f64, c: f64) -> (f64, f64) {
+    let den = a - 2.0 * b + c;
+    if den == 0.0 || !den.is_finite() {
+        return (0.0, b);
+    }
+    let d = (0.5 * (a - c) / den).clamp(-0.5, 0.5);
+    (d, b - 0.25 * (a - c) * d)
 }
 
 #[cfg(test)]
@@ -366,5 +531,101 @@ mod tests {
         assert_eq!((m.mean, m.std, m.n), (2.0, 1.0, 3));
         let o = origin_fit(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0]).unwrap();
         assert!((o.slope - 2.0).abs() < 1e-15 && o.slope_stderr < 1e-12);
+    }
+
+    /// `scipy.stats.chi2.ppf(p, nu)` (SciPy 1.17), printed with `repr`.
+    const PPF: [(f64, f64, f64); 10] = [
+        (2.0, 0.99, 9.21034037197618),
+        (2.0, 0.5, 1.386294361119891),
+        (10.0, 0.99, 23.209251158954356),
+        (20.0, 0.999, 45.31474661812586),
+        (3.7, 0.95, 8.99713556762768),
+        (47.3, 0.99, 72.81537344645498),
+        (200.0, 0.99, 249.4451229814416),
+        (1.0, 0.5, 0.454936423119572),
+        (0.5, 0.9, 1.5007857444736732),
+        (2000.0, 0.99966, 2221.9326794908825),
+    ];
+
+    #[test]
+    fn chi2_ppf_outside_domain_is_nan() {
+        assert!(chi2_ppf(1.0, 3.0).is_nan());
+        assert!(chi2_ppf(0.0, 3.0).is_nan());
+        assert!(chi2_ppf(0.5, 0.0).is_nan());
+        assert!(chi2_ppf(f64::NAN, 3.0).is_nan());
+    }
+
+    #[test]
+    fn chi2_ppf_matches_scipy() {
+        for (nu, p, want) in PPF {
+            let got = chi2_ppf(p, nu);
+            // The series/continued fraction are accurate to ~1e-14 and the
+            // root is polished to that; 1e-10 relative leaves margin for
+            // ln_gamma's error amplified by large nu.
+            assert!(
+                (got - want).abs() <= 1e-10 * want,
+                "chi2.ppf({p}, {nu}) = {got}, scipy {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn gamma_p_matches_scipy() {
+        // scipy.special.gammainc(a, x) (SciPy 1.17).
+        for (a, x, want) in [
+            (0.5, 0.1, 0.34527915398142317),
+            (3.0, 2.5, 0.45618688411667035),
+            (10.0, 15.0, 0.9301463393005901),
+            (100.0, 90.0, 0.15822098918643007),
+        ] {
+            let got = gamma_p(a, x);
+            // Same algorithms as Cephes; 1e-12 relative covers the
+            // accumulated rounding of up to a few hundred terms.
+            assert!((got - want).abs() <= 1e-12 * want, "P({a}, {x}) = {got}");
+        }
+    }
+
+    #[test]
+    fn welch_dof_limits() {
+        let n = 256;
+        let hann: Vec<f64> = (0..n)
+            .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())
+            .collect();
+        // One segment: a periodogram, 2 dof exactly.
+        assert_eq!(welch_dof(&hann, 128, 1), 2.0);
+        // No overlap: independent segments, 2k dof.
+        assert!((welch_dof(&hann, 256, 10) - 20.0).abs() < 1e-12);
+        // Hann 50 %: rho(1) = (sum h[t] h[t+N/2])^2 = (1/6)^2 for the
+        // periodic window, so nu -> 2k / (1 + 2/36) for large k
+        // (Percival & Walden Table 294: 1.89k).
+        let k = 10_000;
+        let nu = welch_dof(&hann, 128, k);
+        let want = 2.0 * k as f64 / (1.0 + 2.0 / 36.0 * (1.0 - 1.0 / k as f64));
+        assert!((nu - want).abs() < 1e-6 * want, "{nu} vs {want}");
+    }
+
+    #[test]
+    fn helpers() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), Some(2.5));
+        assert_eq!(median(&[]), None);
+        let m = MeanStd::of(&[1.0, 2.0, 3.0, 4.0]).unwrap();
+        assert!((m.mean - 2.5).abs() < 1e-15 && (m.std - (5.0f64 / 3.0).sqrt()).abs() < 1e-15);
+        assert_eq!(
+            MeanStd::of(&[1.0]),
+            Some(MeanStd {
+                mean: 1.0,
+                std: 0.0,
+                n: 1
+            })
+        );
+        assert!(MeanStd::of(&[]).is_none());
+        // `of` keeps non-finite values, `mean_std` drops them.
+        assert!(MeanStd::of(&[1.0, f64::NAN]).unwrap().mean.is_nan());
+        assert_eq!(median(&[f64::NAN, 1.0, 3.0]), Some(2.0));
+        // Parabola y = 1 - (x - 0.3)^2 sampled at -1, 0, 1.
+        let f = |x: f64| 1.0 - (x - 0.3) * (x - 0.3);
+        let (d, v) = parabolic_peak(f(-1.0), f(0.0), f(1.0));
+        assert!((d - 0.3).abs() < 1e-12 && (v - 1.0).abs() < 1e-12);
     }
 }

@@ -1,0 +1,152 @@
+//! Writing files atomically: the content goes to a temporary file in the
+//! same folder, which is then renamed over the target. A reader never sees
+//! half a file, and an interrupted or failed write leaves the previous file
+//! intact; the temporary file is removed on error.
+//!
+//! The temporary file is `.<name>.<pid>-<k>.tmp` beside the target, `k` a
+//! process-wide counter, so concurrent writers (threads or processes) never
+//! share one.
+//!
+//! **No `fsync`.** Every file ballpass writes (recordings it simulates or
+//! converts, analysis tables, reports, campaign outputs) can be made again
+//! from its inputs, and an `fsync` per file costs more wall time than a whole
+//! analysis. The rename still gives readers all-or-nothing; what is given up
+//! is only durability of the newest content across a power loss or OS crash.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::{Error, Result};
+
+/// Capacity of the buffer [`write_atomic_with`] hands to its body.
+const BUFFER_BYTES: usize = 1 << 16;
+
+/// Writes `bytes` to `path` atomically (see the module docs).
+///
+/// # Errors
+///
+/// [`Error::Io`] naming `path` when it has no file name or the temporary file
+/// cannot be created, written or renamed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Runs `body` on a buffered temporary file beside `path`, then renames it to
+/// `path` (see the module docs); on any error the temporary file is removed.
+///
+/// # Errors
+///
+/// [`Error::Io`] naming `path` when it has no file name, when `body` fails,
+/// or when the temporary file cannot be created, flushed or renamed.
+pub fn write_atomic_with(
+    path: &Path,
+    body: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<()> {
+    let io_err = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let tmp = temp_path(path).ok_or_else(|| {
+        io_err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a file path",
+        ))
+    })?;
+    let result = (|| {
+        let file = File::options().write(true).create_new(true).open(&tmp)?;
+        let mut w = BufWriter::with_capacity(BUFFER_BYTES, file);
+        body(&mut w)?;
+        w.into_inner().map_err(|e| e.into_error())?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io_err)
+}
+
+/// `.<name>.<pid>-<k>.tmp` beside `path`; `None` when `path` has no file name.
+fn temp_path(path: &Path) -> Option<PathBuf> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path.file_name()?.to_string_lossy().into_owned();
+    let k = COUNTER.fetch_add(1, Ordering::Relaxed);
+    Some(path.with_file_name(format!(".{name}.{}-{k}.tmp", std::process::id())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("ballpass-fsutil-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn leftovers(d: &Path) -> Vec<String> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp"))
+            .collect()
+    }
+
+    #[test]
+    fn writes_and_replaces_without_leftovers() {
+        let d = dir("replace");
+        let p = d.join("a.txt");
+        write_atomic(&p, b"first").unwrap();
+        write_atomic(&p, b"second").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"second");
+        write_atomic_with(&p, |w| writeln!(w, "third")).unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "third\n");
+        assert!(leftovers(&d).is_empty(), "{:?}", leftovers(&d));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_failing_body_keeps_the_old_file_and_removes_the_temporary() {
+        let d = dir("fail");
+        let p = d.join("a.txt");
+        write_atomic(&p, b"old").unwrap();
+        let e = write_atomic_with(&p, |w| {
+            w.write_all(b"half")?;
+            Err(std::io::Error::other("boom"))
+        })
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("a.txt") && e.to_string().contains("boom"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read(&p).unwrap(), b"old");
+        assert!(leftovers(&d).is_empty(), "{:?}", leftovers(&d));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn errors_name_the_file() {
+        let d = dir("missing");
+        let p = d.join("no-such-folder").join("a.txt");
+        let e = write_atomic(&p, b"x").unwrap_err();
+        assert!(matches!(&e, Error::Io { path, .. } if path == &p), "{e}");
+        let e = write_atomic(Path::new("/"), b"x").unwrap_err();
+        assert!(e.to_string().contains("not a file path"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn temporary_names_are_unique_and_hidden() {
+        let p = Path::new("out/x.csv");
+        let (a, b) = (temp_path(p).unwrap(), temp_path(p).unwrap());
+        assert_ne!(a, b);
+        let name = a.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            name.starts_with(".x.csv.") && name.ends_with(".tmp"),
+            "{name}"
+        );
+        assert_eq!(a.parent(), p.parent());
+    }
+}
