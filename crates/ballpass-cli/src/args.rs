@@ -291,8 +291,11 @@ impl LoadArgs {
 /// flags it flattens in.
 #[derive(Debug, Clone, Args)]
 pub struct ReportArgs {
+    /// Write the HTML report (the default; the last of --report/--no-report wins).
+    #[arg(long, overrides_with = "no_report", help_heading = "Report")]
+    pub report: bool,
     /// Do not write the HTML report (DIR/report.html and DIR/figures/*.svg).
-    #[arg(long, help_heading = "Report")]
+    #[arg(long, overrides_with = "report", help_heading = "Report")]
     pub no_report: bool,
     /// Also write every figure as PNG (DIR/figures/*.png).
     #[arg(long, conflicts_with = "no_report", help_heading = "Report")]
@@ -355,6 +358,28 @@ pub fn parse_velocities(s: &str) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[derive(Debug, clap::Parser)]
+    struct WithReport {
+        #[command(flatten)]
+        report: ReportArgs,
+    }
+
+    /// The report is on by default; `--report` and `--no-report` may both be
+    /// given (the last wins); `--png` needs the report.
+    #[test]
+    fn report_flags() {
+        use clap::Parser;
+        let p = |args: &[&str]| {
+            WithReport::try_parse_from(std::iter::once("x").chain(args.iter().copied()))
+        };
+        assert!(!p(&[]).unwrap().report.no_report);
+        assert!(p(&["--no-report"]).unwrap().report.no_report);
+        assert!(!p(&["--no-report", "--report"]).unwrap().report.no_report);
+        assert!(p(&["--report", "--no-report"]).unwrap().report.no_report);
+        assert!(p(&["--report", "--png"]).unwrap().report.png);
+        assert!(p(&["--no-report", "--png"]).is_err());
+    }
 
     #[test]
     fn velocity_ranges_are_inclusive() {
