@@ -77,6 +77,8 @@ pub struct StageTrend {
     pub damping_ratio: f64,
     /// Fitted floor (velocity-error std not explained by the balls), µm/s.
     pub floor_um_s: f64,
+    /// Fitted amplitude `A` of the model, µm/s · rad/s.
+    pub amplitude: f64,
     /// R² of the stage model over the per-velocity means.
     pub r2_stage_model: f64,
     /// R² of a straight line in v, for comparison.
@@ -85,6 +87,28 @@ pub struct StageTrend {
     pub explains_trend: bool,
     /// In words.
     pub text: String,
+}
+
+impl StageTrend {
+    /// The fitted model at a ball-pass frequency `f_c` (Hz):
+    /// `sqrt(floor² + A² ω² / ((ω_n² − ω²)² + (2 ζ ω_n ω)²))`, µm/s.
+    pub fn velocity_error_std_um_s(&self, f_c_hz: f64) -> f64 {
+        let p = [
+            self.floor_um_s,
+            self.amplitude,
+            2.0 * std::f64::consts::PI * self.natural_frequency_hz,
+            self.damping_ratio,
+        ];
+        stage_model(&p, 2.0 * std::f64::consts::PI * f_c_hz)
+    }
+}
+
+/// The stage model of [`StageTrend`] with parameters `[floor, A, ω_n, ζ]`
+/// at angular frequency `w` (rad/s).
+fn stage_model(p: &[f64], w: f64) -> f64 {
+    let (floor, a, wn, zeta) = (p[0], p[1], p[2].abs(), p[3].abs());
+    let den = (wn * wn - w * w).powi(2) + (2.0 * zeta * wn * w).powi(2);
+    (floor * floor + a * a * w * w / den.max(1e-300)).sqrt()
 }
 
 /// Everything `ballpass sweep` finds.
@@ -259,11 +283,7 @@ fn stage_trend(ve: &[(f64, f64)], f_pred: &[(f64, f64)]) -> Option<StageTrend> {
         })
         .collect();
     let (w, s): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
-    let model = |p: &[f64], w: f64| -> f64 {
-        let (floor, a, wn, zeta) = (p[0], p[1], p[2].abs(), p[3].abs());
-        let den = (wn * wn - w * w).powi(2) + (2.0 * zeta * wn * w).powi(2);
-        (floor * floor + a * a * w * w / den.max(1e-300)).sqrt()
-    };
+    let model = stage_model;
     // Start: floor = smallest std, resonance at the worst point, moderate damping.
     let (i_max, &s_max) = s.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let s_min = s.iter().copied().fold(f64::INFINITY, f64::min);
@@ -309,6 +329,7 @@ fn stage_trend(ve: &[(f64, f64)], f_pred: &[(f64, f64)]) -> Option<StageTrend> {
         natural_frequency_hz,
         damping_ratio: p[3].abs(),
         floor_um_s: p[0].abs(),
+        amplitude: p[1].abs(),
         r2_stage_model,
         r2_straight_line,
         explains_trend,
@@ -393,6 +414,18 @@ pub(crate) mod tests {
         let st = s.stage_trend.as_ref().unwrap();
         assert!(st.explains_trend, "{st:?}");
         assert!((st.natural_frequency_hz - 1.1).abs() < 0.05, "{st:?}");
+        // The stored parameters reproduce the fitted curve: at each velocity
+        // the model is within 5 % of the built-in PD shape (the data carry a
+        // ±0.2 % wiggle and the fit has four free parameters).
+        for row in &s.velocities {
+            let want = row.velocity_error_std_um_s.unwrap().mean;
+            let got = st.velocity_error_std_um_s(row.f_c_predicted_hz);
+            assert!(
+                (got - want).abs() / want < 0.05,
+                "v {}: {got} vs {want}",
+                row.velocity_mm_s
+            );
+        }
         assert!(!s.findings.is_empty());
     }
 

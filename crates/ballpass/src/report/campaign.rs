@@ -90,25 +90,11 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
             let fine: Vec<f64> = (0..200)
                 .map(|i| x[0] + (x[x.len() - 1] - x[0]) * f64::from(i) / 199.0)
                 .collect();
+            // f_c is proportional to v: one ratio maps the fine velocity grid.
             let slope = sweep.velocities[0].f_c_predicted_hz / sweep.velocities[0].velocity_mm_s;
-            let wn = 2.0 * std::f64::consts::PI * t.natural_frequency_hz;
-            // The fitted curve's amplitude is not stored; rescale the shape to
-            // the data by least squares on the measured points.
-            let shape = |v: f64| {
-                let w = 2.0 * std::f64::consts::PI * slope * v;
-                let den = (wn * wn - w * w).powi(2) + (2.0 * t.damping_ratio * wn * w).powi(2);
-                w / den.sqrt()
-            };
-            let num: f64 = x
-                .iter()
-                .zip(&m)
-                .map(|(v, y)| (y * y - t.floor_um_s.powi(2)).max(0.0).sqrt() * shape(*v))
-                .sum();
-            let den: f64 = x.iter().map(|v| shape(*v).powi(2)).sum();
-            let a = if den > 0.0 { num / den } else { 0.0 };
             let curve: Vec<f64> = fine
                 .iter()
-                .map(|v| (t.floor_um_s.powi(2) + (a * shape(*v)).powi(2)).sqrt())
+                .map(|v| t.velocity_error_std_um_s(slope * v))
                 .collect();
             if let Some(p) = fig.panels.first_mut() {
                 p.series.push(
