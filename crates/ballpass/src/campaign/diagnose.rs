@@ -145,6 +145,22 @@ pub struct Diagnosis {
     pub warnings: Vec<String>,
 }
 
+/// Power of a one-sided PSD between 0 (excluded) and `edge_hz` (included):
+/// `Σ PSD · Δf` over those bins (units of the PSD × Hz, N² for friction).
+/// Zero for fewer than two bins.
+pub fn low_band_power(freq_hz: &[f64], psd: &[f64], edge_hz: f64) -> f64 {
+    let df = match freq_hz {
+        [f0, f1, ..] => f1 - f0,
+        _ => return 0.0,
+    };
+    freq_hz
+        .iter()
+        .zip(psd)
+        .filter(|(f, _)| **f > 0.0 && **f <= edge_hz)
+        .map(|(_, p)| p * df)
+        .sum()
+}
+
 /// Diagnoses every bearing of a batch from its records' results.
 pub fn diagnose(records: &[&RecordResult], settings: &DiagnoseSettings) -> Diagnosis {
     let mut names: Vec<String> = records.iter().map(|r| r.bearing.clone()).collect();
@@ -177,17 +193,7 @@ pub fn diagnose(records: &[&RecordResult], settings: &DiagnoseSettings) -> Diagn
                 *a += p / grid.len() as f64;
             }
         }
-        let df = if freq_hz.len() > 1 {
-            freq_hz[1] - freq_hz[0]
-        } else {
-            0.0
-        };
-        let low: f64 = freq_hz
-            .iter()
-            .zip(&avg)
-            .filter(|(f, _)| **f > 0.0 && **f <= settings.low_band_hz)
-            .map(|(_, p)| p * df)
-            .sum();
+        let low = low_band_power(&freq_hz, &avg, settings.low_band_hz);
         spectra.push(avg);
         partial.push((name.clone(), mine, low));
     }
@@ -408,6 +414,16 @@ mod tests {
         assert_eq!(d.friction_psd.len(), 5);
         // The averaged spectrum of the bad bearing is its own (ranked first).
         assert!(d.friction_psd[0][10] > 50.0);
+    }
+
+    /// A flat PSD of 2 unit²/Hz on a 0.25 Hz grid holds 2 · 25 = 50 units²
+    /// between 0 and 25 Hz (the DC bin excluded, the edge bin included).
+    #[test]
+    fn low_band_power_integrates_the_band() {
+        let f: Vec<f64> = (0..200).map(|i| f64::from(i) * 0.25).collect();
+        let p = vec![2.0; 200];
+        assert_eq!(low_band_power(&f, &p, 25.0), 50.0);
+        assert_eq!(low_band_power(&f[..1], &p[..1], 25.0), 0.0);
     }
 
     #[test]

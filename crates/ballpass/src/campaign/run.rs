@@ -6,6 +6,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::diagnose::low_band_power;
 use super::manifest::ManifestEntry;
 use super::record::RecordResult;
 use super::sticking::{sticking_events, StickingSettings};
@@ -127,18 +128,7 @@ pub fn process_recording(
         Some(p) => (analysis.spectra.freq_hz.clone(), p.to_vec()),
         None => (Vec::new(), Vec::new()),
     };
-    let df = if freq.len() > 1 {
-        freq[1] - freq[0]
-    } else {
-        0.0
-    };
-    let low_band = (!psd.is_empty()).then(|| {
-        freq.iter()
-            .zip(&psd)
-            .filter(|(f, _)| **f > 0.0 && **f <= settings.low_band_hz)
-            .map(|(_, p)| p * df)
-            .sum::<f64>()
-    });
+    let low_band = (!psd.is_empty()).then(|| low_band_power(&freq, &psd, settings.low_band_hz));
 
     let tau_for_sticking = passages
         .as_ref()
