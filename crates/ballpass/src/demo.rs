@@ -31,8 +31,8 @@ use crate::model::{
     difference_responses, velocity_response, FrequencyAxis, GaussianTrain, PdLoop,
     VelocityResponseSettings,
 };
-use crate::recording::{Channel, Recording};
-use crate::report::campaign::{diagnosis_parts, sweep_parts, FrictionTrace};
+use crate::recording::Recording;
+use crate::report::campaign::{diagnosis_parts, friction_examples, sweep_parts};
 use crate::report::{self, Block, Level, Report, Section, Verdict as Badge};
 use crate::sim::{campaign::plan, SimSettings};
 
@@ -236,7 +236,12 @@ pub fn run_demo(settings: &DemoSettings) -> Result<Demo> {
         sp.figures,
     );
     // diagnose
-    let traces = friction_examples(&diagnosis, &examples);
+    let traces = friction_examples(&diagnosis, |bearing| {
+        examples
+            .iter()
+            .find(|(name, _)| name == bearing)
+            .map(|(_, r)| r.clone())
+    });
     let dp = diagnosis_parts(
         &diagnosis,
         ok_diag.first().map(|r| r.f_c_predicted_hz),
@@ -330,24 +335,6 @@ fn model_report(base: &SimSettings, prediction: &crate::bearing::Prediction) -> 
         ))
         .with_figure(report::model::velocity_response_figure(&resp));
     Ok(r)
-}
-
-fn friction_examples(d: &Diagnosis, examples: &[(String, Recording)]) -> Vec<FrictionTrace> {
-    let (Some(worst), Some(best)) = (d.bearings.first(), d.bearings.last()) else {
-        return Vec::new();
-    };
-    [best, worst]
-        .iter()
-        .filter_map(|b| {
-            let (_, rec) = examples.iter().find(|(name, _)| *name == b.bearing)?;
-            let f = rec.channel(Channel::Friction)?;
-            Some(FrictionTrace {
-                name: format!("{} ({})", b.bearing, b.verdict.name()),
-                t_s: (0..f.len()).map(|i| rec.time_s(i)).collect(),
-                friction_n: f.to_vec(),
-            })
-        })
-        .collect()
 }
 
 fn headlines(

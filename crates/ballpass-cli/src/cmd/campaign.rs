@@ -14,7 +14,9 @@ use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
     export, from_directory, read_manifest, run_batch, BatchOutcome, Manifest, ManifestEntry,
 };
-use ballpass::report::campaign::{diagnosis_parts, sweep_parts, FrictionTrace, ReportParts};
+use ballpass::report::campaign::{
+    diagnosis_parts, friction_examples, sweep_parts, FrictionTrace, ReportParts,
+};
 use ballpass::report::{Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
@@ -493,37 +495,22 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         },
         || {
             let f_c = ok.first().map(|r| r.f_c_predicted_hz);
-            let examples = friction_examples(&d, &b.entries, c)?;
+            let examples = examples(&d, &b.entries, c)?;
             Ok(diagnosis_parts(&d, f_c, &examples, "")?)
         },
     )
 }
 
-/// The first record's friction of the best and the worst bearing (thesis
-/// Fig. 66), re-read for the report only.
-fn friction_examples(
+/// Re-reads, for the report only, the first record of the best and the
+/// worst bearing (thesis Fig. 66).
+fn examples(
     d: &ballpass::campaign::diagnose::Diagnosis,
     entries: &[ManifestEntry],
     a: &CampaignArgs,
 ) -> Result<Vec<FrictionTrace>> {
-    let (Some(worst), Some(best)) = (d.bearings.first(), d.bearings.last()) else {
-        return Ok(Vec::new());
-    };
     let load = a.load.options()?;
-    let mut out = Vec::new();
-    for b in [best, worst] {
-        if let Some(e) = entries.iter().find(|e| e.bearing == b.bearing) {
-            if let Ok(rec) = ballpass::recording::load(&e.path, &load) {
-                if let Some(f) = rec.channel(ballpass::recording::Channel::Friction) {
-                    let t: Vec<f64> = (0..f.len()).map(|i| rec.time_s(i)).collect();
-                    out.push(FrictionTrace {
-                        name: format!("{} ({})", b.bearing, b.verdict.name()),
-                        t_s: t,
-                        friction_n: f.to_vec(),
-                    });
-                }
-            }
-        }
-    }
-    Ok(out)
+    Ok(friction_examples(d, |bearing| {
+        let e = entries.iter().find(|e| e.bearing == bearing)?;
+        ballpass::recording::load(&e.path, &load).ok()
+    }))
 }

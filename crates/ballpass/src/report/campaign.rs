@@ -3,6 +3,7 @@
 use crate::campaign::diagnose::{Condition, Diagnosis};
 use crate::campaign::sweep::Sweep;
 use crate::error::Result;
+use crate::recording::{Channel, Recording};
 use crate::report::kinds::{self, fmt_sig, PowerLaw, SpectrumView};
 use crate::report::{
     Axis, Block, Figure, Level, Panel, Section, Series, SeriesStyle, Table, Verdict,
@@ -236,6 +237,31 @@ pub struct FrictionTrace {
     pub t_s: Vec<f64>,
     /// Friction force, N.
     pub friction_n: Vec<f64>,
+}
+
+/// The friction of the best and the worst bearing (thesis Fig. 66): the
+/// first recording `recording_of(bearing)` gives for each, titled with the
+/// bearing and its verdict. Bearings without a recording or a friction
+/// channel are left out.
+pub fn friction_examples(
+    d: &Diagnosis,
+    mut recording_of: impl FnMut(&str) -> Option<Recording>,
+) -> Vec<FrictionTrace> {
+    let (Some(worst), Some(best)) = (d.bearings.first(), d.bearings.last()) else {
+        return Vec::new();
+    };
+    [best, worst]
+        .into_iter()
+        .filter_map(|b| {
+            let rec = recording_of(&b.bearing)?;
+            let f = rec.channel(Channel::Friction)?;
+            Some(FrictionTrace {
+                name: format!("{} ({})", b.bearing, b.verdict.name()),
+                t_s: (0..f.len()).map(|i| rec.time_s(i)).collect(),
+                friction_n: f.to_vec(),
+            })
+        })
+        .collect()
 }
 
 /// Sections and figures of a bearing diagnosis.
