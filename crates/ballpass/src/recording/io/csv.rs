@@ -651,7 +651,7 @@ mod tests {
                 .wrapping_mul(6_364_136_223_846_793_005)
                 .wrapping_add(1_442_695_040_888_963_407);
             let u = (state >> 11) as f64 / (1u64 << 53) as f64;
-            let v = (u - 0.5) * 10f64.powi((i % 13) as i32 - 6);
+            let v = (u - 0.5) * 10f64.powi((i % 13) - 6);
             body.push_str(&format!("{},{v},{:e},x{i}, {}\n", i as f64 / 1000.0, u, -u));
         }
         let head = "time_s,friction_N,position_mm,note,optical_V\n";
