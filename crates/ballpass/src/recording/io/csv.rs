@@ -205,21 +205,20 @@ fn fast_rows(
     // The general reader reads text; so does this path.
     std::str::from_utf8(text).ok()?;
     let first_line = after_header.line();
-    let plain = !text.contains(&b'\r')
-        && !text.contains(&b'#')
-        && !text.trim_ascii_end().windows(2).any(|w| w == b"\n\n")
-        && !text.starts_with(b"\n");
     let mid = text.len() / 2;
-    let split = plain
-        .then(|| text[mid..].iter().position(|&b| b == b'\n'))
-        .flatten()
+    let split = text[mid..]
+        .iter()
+        .position(|&b| b == b'\n')
         .map(|p| mid + p + 1)
         .filter(|&s| s < text.len() && text.len() >= PARALLEL_BYTES);
+    let whole = || rows_of(text, first_line, &role, delimiter, plan, n_est).map(|(rows, _)| rows);
     let Some(split) = split else {
-        return rows_of(text, first_line, &role, delimiter, plan, n_est);
+        return whole();
     };
-    // Without blank or comment lines every row's line is its own.
-    let lines_before = text[..split].iter().filter(|&&b| b == b'\n').count() as u64;
+    // The halves in parallel, the second numbered from 0; when both are
+    // plain (no blank, comment or `\r\n` line) every row's line is its
+    // own, so the second half's numbers are shifted by the first half's
+    // rows. Otherwise the text is read again in one pass.
     let (a, b) = rayon::join(
         || {
             rows_of(
@@ -231,23 +230,18 @@ fn fast_rows(
                 n_est / 2 + 1,
             )
         },
-        || {
-            rows_of(
-                &text[split..],
-                first_line + lines_before,
-                &role,
-                delimiter,
-                plan,
-                n_est / 2 + 1,
-            )
-        },
+        || rows_of(&text[split..], 0, &role, delimiter, plan, n_est / 2 + 1),
     );
-    let (mut a, b) = (a?, b?);
+    let ((mut a, a_plain), (b, b_plain)) = (a?, b?);
+    if !(a_plain && b_plain) {
+        return whole();
+    }
+    let offset = first_line + a.lines.len() as u64;
     a.time.extend_from_slice(&b.time);
     for (c, bc) in a.channels.iter_mut().zip(&b.channels) {
         c.extend_from_slice(bc);
     }
-    a.lines.extend_from_slice(&b.lines);
+    a.lines.extend(b.lines.iter().map(|l| l + offset));
     a.time_decimals = a.time_decimals.max(b.time_decimals);
     Some(a)
 }
@@ -267,8 +261,10 @@ enum Role {
 }
 
 /// The rows of `text` (whole lines; its first line is file line
-/// `first_line`) as [`fast_rows`] reads them, or `None` for anything it
-/// does not handle.
+/// `first_line`) as [`fast_rows`] reads them, and whether every line was a
+/// row ended by `\n` (no blank, comment or `\r\n` line); `None` for
+/// anything it does not handle. One pass: the cells are parsed where they
+/// start, and each row must end where its last cell does.
 fn rows_of(
     text: &[u8],
     first_line: u64,
@@ -276,8 +272,9 @@ fn rows_of(
     delimiter: u8,
     plan: &Plan,
     n_est: usize,
-) -> Option<Rows> {
+) -> Option<(Rows, bool)> {
     let mut rows = Rows::with_capacity(plan, n_est);
+    let mut plain = true;
     // Line numbers as the general reader gives them: a row's line is the
     // reader's line count where the previous record (or the header) ended,
     // i.e. after its `\n`, or before it when the record ended with `\r\n`.
@@ -285,64 +282,94 @@ fn rows_of(
     let mut this_line = first_line;
     let mut pos = 0;
     while pos < text.len() {
-        let end = text[pos..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(text.len(), |p| pos + p);
-        let raw = &text[pos..end];
-        pos = end + 1;
-        let line_here = this_line;
-        this_line += 1;
-        let (line, crlf) = match raw.strip_suffix(b"\r") {
-            Some(l) => (l, true),
-            None => (raw, false),
+        match text[pos] {
+            // A blank line (`\n` or `\r\n`).
+            b'\n' => {
+                pos += 1;
+                this_line += 1;
+                plain = false;
+                continue;
+            }
+            b'\r' if text.get(pos + 1) == Some(&b'\n') => {
+                pos += 2;
+                this_line += 1;
+                plain = false;
+                continue;
+            }
+            b'#' => {
+                plain = false;
+                let end = text[pos..].iter().position(|&b| b == b'\n');
+                let line = &text[pos..end.map_or(text.len(), |e| pos + e)];
+                if line.strip_suffix(b"\r").unwrap_or(line).contains(&b'\r') {
+                    return None;
+                }
+                pos = end.map_or(text.len(), |e| pos + e + 1);
+                this_line += 1;
+                continue;
+            }
+            _ => {}
+        }
+        let used = parse_row(&text[pos..], role, delimiter, &mut rows)?;
+        pos += used;
+        // The row ends at `\n`, `\r\n` or the end of the text.
+        let crlf = match text.get(pos) {
+            None => false,
+            Some(b'\n') => {
+                pos += 1;
+                false
+            }
+            Some(b'\r') if text.get(pos + 1) == Some(&b'\n') => {
+                pos += 2;
+                plain = false;
+                true
+            }
+            Some(_) => return None,
         };
-        if line.is_empty() || line.starts_with(b"#") {
-            continue;
-        }
-        if line.contains(&b'\r') {
-            return None;
-        }
-        let line_no = row_line;
-        row_line = if crlf { line_here } else { line_here + 1 };
-        parse_row(line, role, delimiter, &mut rows)?;
-        rows.lines.push(line_no);
+        rows.lines.push(row_line);
+        row_line = if crlf { this_line } else { this_line + 1 };
+        this_line += 1;
     }
-    Some(rows)
+    Some((rows, plain))
 }
 
-/// Parses one row's used cells into `rows`; `None` unless the row has
-/// exactly `role.len()` fields and every used cell is a finite number.
-fn parse_row(line: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Option<()> {
+/// Parses the used cells of the row starting `text` into `rows` and returns
+/// the bytes it took, up to (not including) the line end; `None` unless the
+/// row has exactly `role.len()` fields and every used cell is a finite
+/// number.
+fn parse_row(text: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Option<usize> {
+    let is_end = |b: u8| b == b'\n' || b == b'\r';
     let mut i = 0;
     for (k, &r) in role.iter().enumerate() {
         if k > 0 {
             // The previous field ended at a delimiter.
-            if line.get(i) != Some(&delimiter) {
+            if text.get(i) != Some(&delimiter) {
                 return None;
             }
             i += 1;
         }
         if r == Role::Unused {
-            i += line[i..]
+            i += text[i..]
                 .iter()
-                .position(|&b| b == delimiter)
-                .unwrap_or(line.len() - i);
+                .position(|&b| b == delimiter || is_end(b))
+                .unwrap_or(text.len() - i);
             continue;
         }
-        // Cells are trimmed of ASCII white space, as the general path does.
-        while line.get(i).is_some_and(u8::is_ascii_whitespace) {
+        // Cells are trimmed of white space, as the general path does.
+        while text
+            .get(i)
+            .is_some_and(|&b| b != delimiter && b.is_ascii_whitespace() && !is_end(b))
+        {
             i += 1;
         }
-        let (x, used) = fast_float2::parse_partial::<f64, _>(&line[i..]).ok()?;
+        let (x, used) = fast_float2::parse_partial::<f64, _>(&text[i..]).ok()?;
         if !x.is_finite() {
             return None;
         }
-        let cell = &line[i..i + used];
+        let cell = &text[i..i + used];
         i += used;
-        while line
+        while text
             .get(i)
-            .is_some_and(|&b| b != delimiter && b.is_ascii_whitespace())
+            .is_some_and(|&b| b != delimiter && b.is_ascii_whitespace() && !is_end(b))
         {
             i += 1;
         }
@@ -355,8 +382,7 @@ fn parse_row(line: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Opti
             Role::Unused => {}
         }
     }
-    // Exactly as many fields as the header.
-    (i == line.len()).then_some(())
+    Some(i)
 }
 
 /// Reads the header of a text recording (for `inspect` and error hints).
