@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 mod args;
 mod cmd;
+mod malloc;
 mod output;
 
 /// Finds and characterises the periodic disturbances that balls cause in
@@ -44,6 +45,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    malloc::keep_freed_memory();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => cmd::demo::run(&a),
