@@ -43,7 +43,7 @@ pub use sos::{
 };
 pub use spectral::{
     coherence, csd, periodogram, welch, Average, Coherence, Csd, PeriodogramSettings, Psd, Scaling,
-    Welch, WelchSettings,
+    SpectralSet, Welch, WelchSettings,
 };
 pub use window::Window;
 pub use zoom::{polyphase_average_csd, polyphase_average_psd};

@@ -737,3 +737,77 @@ fn welch_is_reusable_across_threads() {
         assert_eq!(r, welch(x, 100.0, &s).unwrap());
     }
 }
+
+/// `Welch::spectra` gives each signal's `psd` and each pair's `csd` bit for
+/// bit, for mean and median averaging, one- and two-sided, every detrend,
+/// zero padding, and a signal shorter than `nperseg`; bad inputs are errors.
+#[test]
+fn spectra_set_equals_psd_and_csd_bit_for_bit() {
+    let sig = |seed: u64, n: usize| -> Vec<f64> {
+        let mut s = seed;
+        (0..n)
+            .map(|i| {
+                s = s
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 + (0.01 * i as f64).sin()
+            })
+            .collect()
+    };
+    for n in [300, 1000, 5001] {
+        let (a, b, c) = (sig(1, n), sig(2, n), sig(3, n));
+        let signals = [&a[..], &b[..], &c[..]];
+        let pairs = [(0, 1), (0, 2), (1, 2), (2, 0)];
+        for (average, onesided, detrend, nfft) in [
+            (Average::Mean, true, DetrendType::Constant, None),
+            (Average::Mean, false, DetrendType::Linear, Some(700)),
+            (Average::Mean, true, DetrendType::None, None),
+            (Average::Median, true, DetrendType::Constant, None),
+        ] {
+            let settings = WelchSettings {
+                nperseg: 512,
+                noverlap: Some(200),
+                nfft,
+                detrend,
+                average,
+                onesided,
+                ..WelchSettings::default()
+            };
+            let mut w = Welch::new(settings).unwrap();
+            let set = w.spectra(&signals, &pairs, 1000.0).unwrap();
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let cbits = |v: &[Complex64]| {
+                v.iter()
+                    .map(|z| (z.re.to_bits(), z.im.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            for (k, x) in signals.iter().enumerate() {
+                let p = w.psd(x, 1000.0).unwrap();
+                assert_eq!(
+                    bits(&set.auto[k]),
+                    bits(&p.pxx),
+                    "n {n} {average:?} auto {k}"
+                );
+                assert_eq!(bits(&set.freq_hz), bits(&p.freq_hz));
+                assert_eq!(set.n_segments, p.n_segments);
+            }
+            for (k, &(i, j)) in pairs.iter().enumerate() {
+                let c = w.csd(signals[i], signals[j], 1000.0).unwrap();
+                assert_eq!(
+                    cbits(&set.cross[k]),
+                    cbits(&c.pxy),
+                    "n {n} {average:?} pair {k}"
+                );
+            }
+        }
+    }
+    let mut w = Welch::new(WelchSettings::default()).unwrap();
+    let x = vec![1.0; 600];
+    assert!(w.spectra(&[], &[], 1000.0).is_err());
+    assert!(w.spectra(&[&x, &x[..599]], &[(0, 1)], 1000.0).is_err());
+    assert!(w.spectra(&[&x], &[(0, 1)], 1000.0).is_err());
+    let mut bad = x.clone();
+    bad[7] = f64::NAN;
+    assert!(w.spectra(&[&x, &bad], &[], 1000.0).is_err());
+    assert!(w.spectra(&[&x], &[], 0.0).is_err());
+}

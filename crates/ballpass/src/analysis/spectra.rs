@@ -296,39 +296,48 @@ fn welch_all(
     fs_hz: f64,
     welch: &mut Welch,
 ) -> Result<(Spectra, usize)> {
-    let mut freq = Vec::new();
-    let mut auto = Vec::new();
-    let mut nseg = 0;
-    for (s, x) in signals {
-        let p = welch
-            .psd(x, fs_hz)
-            .map_err(|e| Error::dsp(format!("Welch PSD of {}", s.name()), e))?;
-        freq = p.freq_hz;
-        nseg = p.n_segments;
-        auto.push((*s, p.pxx));
-    }
     let present: Vec<Signal> = signals.iter().map(|(s, _)| *s).collect();
-    let get = |s: Signal| &signals.iter().find(|(k, _)| *k == s).expect("present").1;
-    let mut cross = Vec::new();
-    for (x, y) in pairs_for(&present).into_iter().filter(|(x, y)| x != y) {
-        let c = welch
-            .csd(get(x), get(y), fs_hz)
-            .map_err(|e| Error::dsp(format!("cross spectrum {}", pair_name(x, y)), e))?;
-        cross.push(CrossSpectrum {
+    let index = |s: Signal| present.iter().position(|&k| k == s).expect("present");
+    let pairs: Vec<(Signal, Signal)> = pairs_for(&present)
+        .into_iter()
+        .filter(|(x, y)| x != y)
+        .collect();
+    let idx: Vec<(usize, usize)> = pairs.iter().map(|&(x, y)| (index(x), index(y))).collect();
+    let xs: Vec<&[f64]> = signals.iter().map(|(_, x)| x.as_slice()).collect();
+    // One FFT per signal and segment for all the auto and cross spectra;
+    // the same numbers as `psd` per signal and `csd` per pair.
+    let set = welch.spectra(&xs, &idx, fs_hz).map_err(|e| {
+        Error::dsp(
+            format!(
+                "Welch spectra of {}",
+                present
+                    .iter()
+                    .map(|s| s.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            e,
+        )
+    })?;
+    let auto = present.iter().copied().zip(set.auto).collect();
+    let cross = pairs
+        .iter()
+        .zip(set.cross)
+        .map(|(&(x, y), pxy)| CrossSpectrum {
             x,
             y,
-            pxy: c.pxy,
+            pxy,
             coherence: Vec::new(),
-        });
-    }
+        })
+        .collect();
     Ok((
         Spectra {
             info: SpectrumInfo::default(),
-            freq_hz: freq,
+            freq_hz: set.freq_hz,
             auto,
             cross,
         },
-        nseg,
+        set.n_segments,
     ))
 }
 
