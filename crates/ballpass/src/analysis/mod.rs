@@ -34,6 +34,7 @@
 //! The optical ball passages are found by [`passage::detect_passages`].
 
 use ballpass_dsp::{DetrendType, Normalization, Window};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::bearing::Prediction;
@@ -552,7 +553,7 @@ fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<PassageSummar
         fit_pulses: 0,
         ..PassageSettings::default()
     };
-    recs.iter()
+    recs.par_iter()
         .map(|r| {
             let empty = |note: String| PassageSummary {
                 source: r.source_name(),

@@ -14,6 +14,7 @@
 //!   deviation (ddof 1).
 
 use ballpass_dsp::{CorrelateSettings, Correlator};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
@@ -560,24 +561,59 @@ pub(crate) fn run(
     }
     let filter = preprocess::lowpass_filter(settings, fs)?;
     let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut warnings)?;
-    let mut correlator = Correlator::with_lengths(
-        CorrelateSettings {
-            normalization: settings.corr_norm.to_dsp(),
+    // Each record's correlations, full and high-resolution spectra are
+    // independent of each other and of the other records', and the passage
+    // detection of all of them: all run in parallel (rayon), and the
+    // results are taken in record order, so they and the first error
+    // reported are those of a sequential pass.
+    let one = |r: &Recording| -> Result<(Prepared, Correlations, Spectra, Spectra)> {
+        let mut p = preprocess::prepare(r, pred.velocity_mm_s, settings, filter.as_ref(), trim, n)?;
+        p.signals.retain(|(s, _)| signals.contains(s));
+        let (c, (f, h)) = rayon::join(
+            || {
+                let mut correlator = Correlator::with_lengths(
+                    CorrelateSettings {
+                        normalization: settings.corr_norm.to_dsp(),
+                    },
+                    n,
+                    n,
+                );
+                correlation::compute(&p, &mut correlator, settings)
+            },
+            || {
+                rayon::join(
+                    || spectra::full(&p, settings),
+                    || spectra::hires(&p, settings, &plan),
+                )
+            },
+        );
+        Ok((p, c?, f?, h?))
+    };
+    let (per_record, passages) = rayon::join(
+        || {
+            recs.par_iter()
+                .map(one)
+                .collect::<Vec<_>>()
+                .into_iter()
+                .collect::<Result<Vec<_>>>()
         },
-        n,
-        n,
+        || {
+            if with_passages {
+                super::passage_summaries(recs, pred)
+            } else {
+                Vec::new()
+            }
+        },
     );
     let mut prepared = Vec::with_capacity(recs.len());
     let mut corrs = Vec::with_capacity(recs.len());
     let mut fulls = Vec::with_capacity(recs.len());
     let mut hires = Vec::with_capacity(recs.len());
-    for r in recs {
-        let mut p = preprocess::prepare(r, pred.velocity_mm_s, settings, filter.as_ref(), trim, n)?;
-        p.signals.retain(|(s, _)| signals.contains(s));
-        corrs.push(correlation::compute(&p, &mut correlator, settings)?);
-        fulls.push(spectra::full(&p, settings)?);
-        hires.push(spectra::hires(&p, settings, &plan)?);
+    for (p, c, f, h) in per_record? {
         prepared.push(p);
+        corrs.push(c);
+        fulls.push(f);
+        hires.push(h);
     }
     // One record: its correlations are the result (no copy).
     let corr = if corrs.len() == 1 {
@@ -702,11 +738,7 @@ pub(crate) fn run(
         velocity_error: prepared[0].velocity_error.clone(),
         repeats,
         verdict,
-        passages: if with_passages {
-            super::passage_summaries(recs, pred)
-        } else {
-            Vec::new()
-        },
+        passages,
         warnings,
         correlations: corr,
         spectra: full,
