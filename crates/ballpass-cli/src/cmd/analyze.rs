@@ -10,6 +10,7 @@ use ballpass::analysis::{
 };
 use ballpass::recording;
 use clap::{Args, ValueEnum};
+use rayon::prelude::*;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
 
@@ -195,10 +196,14 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     }
     let bearing_name = opts.bearing.clone().unwrap_or_default();
     let geometry = opts.geometry.expect("options() resolves the bearing");
+    // Repeats are read in parallel; the first failure in argument order is
+    // the one reported.
     let recs = a
         .recs
-        .iter()
+        .par_iter()
         .map(|p| recording::load(p, &opts).with_context(|| format!("loading {}", p.display())))
+        .collect::<Vec<_>>()
+        .into_iter()
         .collect::<Result<Vec<_>>>()?;
     let velocity = match a.load.velocity {
         Some(v) => v,
