@@ -69,8 +69,7 @@ pub fn spectrum_columns(s: &Spectra) -> Vec<(String, Vec<f64>)> {
 const SLOT: usize = 32;
 
 /// Writes the text of `v` at `out[*pos..]` (which has at least [`SLOT`]
-/// bytes) and advances `pos`. The fixed-size block copy avoids a `memmove`
-/// call per number, which cost as much as the formatting itself.
+/// bytes) and advances `pos`.
 fn put_num(out: &mut [u8], pos: &mut usize, buf: &mut zmij::Buffer, v: f64) {
     let s: &[u8] = if v.is_finite() {
         buf.format_finite(v).as_bytes()
@@ -81,13 +80,28 @@ fn put_num(out: &mut [u8], pos: &mut usize, buf: &mut zmij::Buffer, v: f64) {
     } else {
         b"-inf"
     };
-    let mut block = [0u8; SLOT];
-    block[..s.len()].copy_from_slice(s);
-    let dst: &mut [u8; SLOT] = (&mut out[*pos..*pos + SLOT])
-        .try_into()
-        .expect("slot length");
-    *dst = block;
+    copy_short(&mut out[*pos..*pos + SLOT], s);
     *pos += s.len();
+}
+
+/// Copies `s` (at most [`SLOT`] bytes) to the start of `dst` with two
+/// fixed-size, possibly overlapping block copies, which compile to a few
+/// register moves; a `copy_from_slice` of a variable length calls `memcpy`,
+/// which cost as much as formatting the number.
+fn copy_short(dst: &mut [u8], s: &[u8]) {
+    fn two<const K: usize>(dst: &mut [u8], s: &[u8]) {
+        let n = s.len();
+        let head: [u8; K] = s[..K].try_into().expect("K bytes");
+        let tail: [u8; K] = s[n - K..].try_into().expect("K bytes");
+        dst[..K].copy_from_slice(&head);
+        dst[n - K..n].copy_from_slice(&tail);
+    }
+    match s.len() {
+        16..=32 => two::<16>(dst, s),
+        8..=15 => two::<8>(dst, s),
+        4..=7 => two::<4>(dst, s),
+        n => dst[..n].iter_mut().zip(s).for_each(|(d, &b)| *d = b),
+    }
 }
 
 /// Rows formatted per write: small enough that the one reused buffer
@@ -251,6 +265,17 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn copy_short_copies_every_length() {
+        let src: Vec<u8> = (1..=32).collect();
+        for n in 0..=32 {
+            let mut dst = [0u8; super::SLOT];
+            super::copy_short(&mut dst, &src[..n]);
+            assert_eq!(&dst[..n], &src[..n], "{n}");
+            assert!(dst[n..].iter().all(|&b| b == 0), "{n}");
+        }
+    }
+
     use super::*;
 
     fn table(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
