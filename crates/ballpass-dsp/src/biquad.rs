@@ -262,6 +262,15 @@ const SETTLED: f64 = 8.470329472543003e-22;
 /// runs as 4 (8) chunks instead ([`Wide`]).
 const CHUNKS: usize = 2;
 
+/// The most chunks the loops of `wide` (`None`: the baseline) run.
+fn max_lanes(wide: Option<Wide>) -> usize {
+    match wide {
+        Some(Wide::Avx512(_)) => 8,
+        Some(Wide::Avx2(_)) => 4,
+        None => CHUNKS,
+    }
+}
+
 /// Shortest chunk worth the bookkeeping.
 const MIN_CHUNK: usize = 512;
 
@@ -359,12 +368,7 @@ impl Cascade {
     pub(crate) fn filter_from(&self, x: &mut [f64], zi: &[[f64; 2]], rev: bool) {
         debug_assert_eq!(zi.len(), self.coefs.len());
         let wide = simd::detect();
-        let lanes = match wide {
-            Some(Wide::Avx512(_)) => 8,
-            Some(Wide::Avx2(_)) => 4,
-            None => CHUNKS,
-        };
-        match (self.chunks(x.len(), lanes), wide) {
+        match (self.chunks(x.len(), max_lanes(wide)), wide) {
             (Some(8), Some(Wide::Avx512(isa))) => {
                 dispatch!(self, S, F, c => return filter_chunked::<_, 8, S, F>(isa, c, x, zi, rev));
             }
@@ -382,6 +386,15 @@ impl Cascade {
         }
         let mut z = zi.to_vec();
         self.filter(x, &mut z, rev);
+    }
+
+    /// Whether two signals of `n` samples run faster as the lanes of one
+    /// [`Cascade::filter_pair`] than each through
+    /// [`Cascade::filter_from`]: unless the latter splits them into more
+    /// than [`CHUNKS`] chunks.
+    pub(crate) fn pairs_pay(&self, n: usize) -> bool {
+        self.chunks(n, max_lanes(simd::detect()))
+            .is_none_or(|k| k <= CHUNKS)
     }
 
     /// Filters two signals of equal length in place as the two lanes of one
