@@ -2,25 +2,38 @@
 //!
 //! SciPy 1.17 for the same work: `tools/bench_scipy_filters.py`.
 //!
-//! Measured back to back on the shared 2-core build machine (AMD EPYC,
-//! load average ~2), one core, best of 2000 single calls; SciPy best of 7
-//! timeit repeats in the same session:
+//! Measured back to back on the shared 2-core build machine (AMD EPYC with
+//! AVX-512F), one core, best of 2000 single calls; SciPy best of 7 timeit
+//! repeats. "before" is the previous commit's build run in the same session
+//! as "ballpass" (load average ~5); the SciPy column is the quiet-machine
+//! figure (load ~2); SciPy under load ~5 in that session took 538-702 us
+//! (sosfiltfilt) and 929-1339 us (decimate), so the ratios are the
+//! conservative ones:
 //!
-//! | kernel                          | before | ballpass | SciPy 1.17 | ratio |
-//! |---------------------------------|--------|----------|------------|-------|
-//! | sosfiltfilt, 30 000 samples     | 172 us | 77 us    | 452 us     | 5.8x  |
-//! | apply_many, 3 x 30 000 (each)   | -      | 73 us    | 452 us     | 6.2x  |
-//! | decimate q=20, 30 000 (planned) | 301 us | 155 us   | 894 us     | 5.8x  |
-//! | butter(5, 20 Hz) design (crit.) | 1.1 us | 1.1 us   | 271 us     | 250x  |
+//! | kernel                          | first  | before | ballpass | SciPy 1.17 | ratio |
+//! |---------------------------------|--------|--------|----------|------------|-------|
+//! | sosfiltfilt, 30 000 samples     | 172 us | 77 us  | 37 us    | 452 us     | 12x   |
+//! | apply_many, 3 x 30 000 (each)   | -      | 73 us  | 57 us *  | 452 us     | 7.9x  |
+//! | decimate q=20, 30 000 (planned) | 301 us | 154 us | 75 us    | 894 us     | 12x   |
+//! | butter(5, 20 Hz) design (crit.) | 1.1 us | 1.1 us | 1.1 us   | 271 us     | 250x  |
+//!
+//! \* criterion mean, as `apply x3`: three fresh 240 kB outputs per call,
+//! which glibc may hand back to the OS between calls (it did in this
+//! session: ~170 000 page faults over 2000 calls of `apply x3`), so the call
+//! is bound by page faults, not filtering (37 us a signal).
 //!
 //! The filtering is a recurrence SciPy runs as the same Cython loop. Where
-//! the time went: the regrouped recurrence (half the latency chain), two
-//! chunks of one signal (or two signals) per SSE2 register with a
-//! free-response correction at the chunk seam, and 1-3 instead of 5
-//! multiplies per section for low-pass layouts (see `src/biquad.rs`). What
-//! is left is throughput-bound on two SSE2 lanes; 4-wide AVX2 lanes would
-//! need run-time CPU dispatch (`unsafe` or a dispatch crate), which this
-//! crate does not take on, and `-C target-cpu=native` is not portable.
+//! the time went: the regrouped recurrence (each feedback term subtracted
+//! last: half the latency chain), one signal split into chunks run as SIMD
+//! lanes with a free-response correction at the seams, and 2-4 instead of 5
+//! multiplies per section for low-pass layouts (see `src/biquad.rs`). The
+//! chunk count follows the CPU, detected at run time (`src/simd.rs`, the
+//! crate's one `unsafe` module): 8 chunks in AVX-512F registers (both
+//! filters here; the decimation filter's free responses outlast its 3 750-
+//! sample chunks and carry across seams), 4 with AVX2, 2 on the SSE2
+//! baseline. Beyond the filter: the padded buffer is laid out
+//! `[x | right | left]` so the result is trimmed by truncation instead of a
+//! copy, and the input is copied and checked for NaN/inf in one blocked pass.
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn benches`
 
 use ballpass_dsp::{

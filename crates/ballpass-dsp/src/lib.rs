@@ -12,6 +12,7 @@ pub mod lsq;
 pub mod lti;
 mod npcomplex;
 pub mod peaks;
+mod simd;
 pub mod sos;
 pub mod spectral;
 pub mod window;
