@@ -172,17 +172,34 @@ struct Engine {
     spec_x: Vec<Complex64>,
     spec_y: Vec<Complex64>,
     scratch: Vec<Complex64>,
-    /// Complex FFT of `nfft` points for two real segments at once.
-    pair_fft: Arc<dyn Fft<f64>>,
-    pair_buf: Vec<Complex64>,
-    pair_scratch: Vec<Complex64>,
+    /// Complex FFT of two real segments at once, planned on first use
+    /// (a single-segment periodogram never needs it).
+    pair: Option<PairFft>,
+}
+
+/// A complex FFT of `nfft` points with its buffer (see [`Engine::pair_fft`]).
+#[derive(Clone)]
+struct PairFft {
+    fft: Arc<dyn Fft<f64>>,
+    buf: Vec<Complex64>,
+    scratch: Vec<Complex64>,
+}
+
+impl PairFft {
+    fn new(nfft: usize) -> PairFft {
+        let fft = crate::fftplan::complex_forward(nfft);
+        PairFft {
+            buf: vec![Complex64::new(0.0, 0.0); nfft],
+            scratch: vec![Complex64::new(0.0, 0.0); fft.get_inplace_scratch_len()],
+            fft,
+        }
+    }
 }
 
 impl Engine {
     fn new(window: &Window, nperseg: usize, noverlap: usize, nfft: usize) -> Result<Engine> {
         let window = window.values(nperseg)?;
         let fft = crate::fftplan::forward(nfft);
-        let pair_fft = crate::fftplan::complex_forward(nfft);
         Ok(Engine {
             nperseg,
             noverlap,
@@ -195,9 +212,7 @@ impl Engine {
             spec_y: fft.make_output_vec(),
             scratch: fft.make_scratch_vec(),
             fft,
-            pair_buf: vec![Complex64::new(0.0, 0.0); nfft],
-            pair_scratch: vec![Complex64::new(0.0, 0.0); pair_fft.get_inplace_scratch_len()],
-            pair_fft,
+            pair: None,
         })
     }
 
@@ -239,7 +254,7 @@ impl Engine {
             .expect("buffer lengths come from the plan");
     }
 
-    /// FFT `W = FFT_nfft(a + i b)` into `pair_buf` of two detrended,
+    /// FFT `W = FFT_nfft(a + i b)` into the pair buffer of two detrended,
     /// windowed, zero-padded segments `a` (of `x` at `start_a`) and `b` (of
     /// `y` at `start_b`), prepared as in [`Engine::segment_fft`].
     ///
@@ -261,7 +276,9 @@ impl Engine {
         let n = self.nperseg;
         let (a, b) = (&x[start_a..start_a + n], &y[start_b..start_b + n]);
         let (ta, tb) = (Trend::fit(a, detrend), Trend::fit(b, detrend));
-        let out = self.pair_buf[..n]
+        let nfft = self.nfft;
+        let pair = self.pair.get_or_insert_with(|| PairFft::new(nfft));
+        let out = pair.buf[..n]
             .iter_mut()
             .zip(a.iter().zip(b))
             .zip(&self.window);
@@ -275,16 +292,18 @@ impl Engine {
                 *c = Complex64::new((u - ta.at(i)) * w, (v - tb.at(i)) * w)
             }),
         }
-        self.pair_buf[n..].fill(Complex64::new(0.0, 0.0));
-        self.pair_fft
-            .process_with_scratch(&mut self.pair_buf, &mut self.pair_scratch);
+        pair.buf[n..].fill(Complex64::new(0.0, 0.0));
+        pair.fft
+            .process_with_scratch(&mut pair.buf, &mut pair.scratch);
     }
 
     /// `f(&mut out[k], W[k], W[nfft - k])` for `k = 0 .. n_bins` (`W[0]`
     /// twice for `k = 0`) with `W` from the last [`Engine::pair_fft`].
     #[inline(always)]
     fn pair_bins<T>(&self, out: &mut [T], f: impl Fn(&mut T, Complex64, Complex64)) {
-        let w = &self.pair_buf;
+        let Some(w) = self.pair.as_ref().map(|p| &p.buf[..]) else {
+            return;
+        };
         let nb = self.n_bins().min(out.len());
         let (Some(o), Some(&w0)) = (out.first_mut(), w.first()) else {
             return;
