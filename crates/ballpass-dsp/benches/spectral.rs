@@ -13,7 +13,9 @@
 //! | full-lag xcorr, `correlate` (allocates)| 678 µs   | 1390 µs  | 2.1x  |
 //! | full-lag autocorrelation               | 233 µs   | 1364 µs  | 5.9x  |
 //! | welch, nperseg 4096                    | 78 µs    | 747 µs   | 9.6x  |
+//! | ... 2 segments per complex FFT (later) | 62 µs    | 731 µs   | 11.8x |
 //! | csd, nperseg 4096                      | 159 µs   | 1120 µs  | 7.0x  |
+//! | ... x + i y per complex FFT (later)    | 131 µs   | 1106 µs  | 8.4x  |
 //!
 //! Where the time goes (perf): the correlations are ~75 % RustFFT/realfft
 //! (three real transforms of length 60 000, since then 62 208 = 2^8 3^5,
@@ -24,6 +26,20 @@
 //! output (glibc returns the blocks to the OS between calls). Welch/csd are
 //! ~60 % FFT (13 or 26 transforms of 4096), the rest the per-segment
 //! mean/window pass and input checks.
+//!
+//! The two "(later)" welch/csd rows: best of 1000 single calls, load
+//! average 4-6 (two other builds running); the code before the change,
+//! timed the same way back to back, took 76 µs and 153 µs, SciPy's best
+//! repeat in the same minutes is beside them. Now one complex FFT of
+//! `x_seg + i y_seg` per segment, with `conj(X) Y` read straight off it,
+//! replaces two real FFTs, their post-processing and the product pass;
+//! what is left is the 13 complex FFTs of 4096 (~80 µs, RustFFT's AVX
+//! path), the window/detrend pass (~15 µs), the per-segment means (~9 µs),
+//! the input checks (~9 µs) and the accumulation (~20 µs). The
+//! correlation stays FFT-bound: the three transforms alone (as complex
+//! FFTs of 31 104 points, 3 x ~64 µs) exceed a 10x budget of ~136 µs; a
+//! fused "pack, multiply, repack" pass around hand-packed complex FFTs was
+//! measured and gained only ~4 %, so it was not kept.
 
 use ballpass_dsp::{CorrelateSettings, Correlation, Correlator, Welch, WelchSettings};
 use criterion::Criterion;

@@ -12,9 +12,11 @@ use std::cell::RefCell;
 use std::sync::Arc;
 
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::{Fft, FftPlanner};
 
 thread_local! {
     static PLANNER: RefCell<RealFftPlanner<f64>> = RefCell::new(RealFftPlanner::new());
+    static COMPLEX_PLANNER: RefCell<FftPlanner<f64>> = RefCell::new(FftPlanner::new());
 }
 
 /// The forward real FFT of length `len` (cached per thread).
@@ -25,4 +27,9 @@ pub(crate) fn forward(len: usize) -> Arc<dyn RealToComplex<f64>> {
 /// The inverse real FFT of length `len` (cached per thread).
 pub(crate) fn inverse(len: usize) -> Arc<dyn ComplexToReal<f64>> {
     PLANNER.with(|p| p.borrow_mut().plan_fft_inverse(len))
+}
+
+/// The forward complex FFT of length `len` (cached per thread).
+pub(crate) fn complex_forward(len: usize) -> Arc<dyn Fft<f64>> {
+    COMPLEX_PLANNER.with(|p| p.borrow_mut().plan_fft_forward(len))
 }

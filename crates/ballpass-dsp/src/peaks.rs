@@ -251,10 +251,17 @@ impl Default for PeakWidthsSettings {
     }
 }
 
+/// Keeps `v[i]` where `keep[i]` (branch-free compaction; entries beyond
+/// `keep` are dropped).
 fn retain_mask<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
     debug_assert_eq!(v.len(), keep.len());
-    let mut k = keep.iter();
-    v.retain(|_| *k.next().unwrap_or(&false));
+    let n = v.len().min(keep.len());
+    let mut w = 0;
+    for i in 0..n {
+        v[w] = v[i];
+        w += usize::from(keep[i]);
+    }
+    v.truncate(w);
 }
 
 /// Rejects NaN and infinite samples; an empty signal is allowed.
@@ -403,13 +410,22 @@ fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec
     // dominated[j]: some peak closer than `distance` ranks above j. Cut the
     // samples into blocks of `distance`: any two peaks in one block are
     // closer than `distance`, so only the top-ranked peak of a block can be
-    // undominated, and it is if it also outranks the peaks within reach in
-    // the neighbouring blocks. One pass with rarely taken branches, then a
-    // short scan per block.
-    let mut dominated = vec![true; k];
+    // undominated, and it is if it also outranks the peaks within reach,
+    // all of which lie in the two neighbouring blocks. A neighbouring
+    // block whose own top peak ranks below it holds no such peak; only
+    // when that top peak ranks above but is out of reach are the peaks
+    // within reach scanned.
+    struct Block {
+        id: usize,
+        start: usize,
+        end: usize,
+        best: usize,
+    }
+    let mut blocks = Vec::new();
     let mut j = 0;
     while j < k {
-        let block_end = (peaks[j] / distance + 1).saturating_mul(distance);
+        let id = peaks[j] / distance;
+        let block_end = (id + 1).saturating_mul(distance);
         let mut best = j;
         let mut e = j + 1;
         while e < k && peaks[e] < block_end {
@@ -418,24 +434,43 @@ fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec
             }
             e += 1;
         }
-        let p = peaks[best];
-        let left = peaks[..j]
-            .iter()
-            .enumerate()
-            .rev()
-            .take_while(|&(_, &q)| p - q < distance)
-            .any(|(i, _)| ranks_above(priority, i, best));
+        blocks.push(Block {
+            id,
+            start: j,
+            end: e,
+            best,
+        });
+        j = e;
+    }
+    let mut dominated = vec![true; k];
+    for (i, b) in blocks.iter().enumerate() {
+        let p = peaks[b.best];
+        let outranks =
+            |n: &Block| n.id.abs_diff(b.id) == 1 && ranks_above(priority, n.best, b.best);
+        let left = i.checked_sub(1).map(|i| &blocks[i]).is_some_and(|n| {
+            outranks(n)
+                && (p - peaks[n.best] < distance
+                    || peaks[n.start..b.start]
+                        .iter()
+                        .enumerate()
+                        .rev()
+                        .take_while(|&(_, &q)| p - q < distance)
+                        .any(|(o, _)| ranks_above(priority, n.start + o, b.best)))
+        });
         let right = || {
-            peaks[e..]
-                .iter()
-                .enumerate()
-                .take_while(|&(_, &q)| q - p < distance)
-                .any(|(i, _)| ranks_above(priority, e + i, best))
+            blocks.get(i + 1).is_some_and(|n| {
+                outranks(n)
+                    && (peaks[n.best] - p < distance
+                        || peaks[b.end..n.end]
+                            .iter()
+                            .enumerate()
+                            .take_while(|&(_, &q)| q - p < distance)
+                            .any(|(o, _)| ranks_above(priority, b.end + o, b.best)))
+            })
         };
         if !left && !right() {
-            dominated[best] = false;
+            dominated[b.best] = false;
         }
-        j = e;
     }
     // 0 = undecided, 1 = kept, 2 = removed
     let mut state = vec![0u8; k];

@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 use realfft::RealToComplex;
 use rustfft::num_complex::Complex64;
+use rustfft::Fft;
 
 use crate::detrend::{DetrendType, Trend};
 use crate::error::{check_finite, invalid, DspError, Result};
@@ -171,6 +172,28 @@ struct Engine {
     spec_x: Vec<Complex64>,
     spec_y: Vec<Complex64>,
     scratch: Vec<Complex64>,
+    /// Complex FFT of two real segments at once, planned on first use
+    /// (a single-segment periodogram never needs it).
+    pair: Option<PairFft>,
+}
+
+/// A complex FFT of `nfft` points with its buffer (see [`Engine::pair_fft`]).
+#[derive(Clone)]
+struct PairFft {
+    fft: Arc<dyn Fft<f64>>,
+    buf: Vec<Complex64>,
+    scratch: Vec<Complex64>,
+}
+
+impl PairFft {
+    fn new(nfft: usize) -> PairFft {
+        let fft = crate::fftplan::complex_forward(nfft);
+        PairFft {
+            buf: vec![Complex64::new(0.0, 0.0); nfft],
+            scratch: vec![Complex64::new(0.0, 0.0); fft.get_inplace_scratch_len()],
+            fft,
+        }
+    }
 }
 
 impl Engine {
@@ -189,6 +212,7 @@ impl Engine {
             spec_y: fft.make_output_vec(),
             scratch: fft.make_scratch_vec(),
             fft,
+            pair: None,
         })
     }
 
@@ -230,6 +254,67 @@ impl Engine {
             .expect("buffer lengths come from the plan");
     }
 
+    /// FFT `W = FFT_nfft(a + i b)` into the pair buffer of two detrended,
+    /// windowed, zero-padded segments `a` (of `x` at `start_a`) and `b` (of
+    /// `y` at `start_b`), prepared as in [`Engine::segment_fft`].
+    ///
+    /// With `j = nfft - k` (mod `nfft`), the segments' spectra are
+    /// `A[k] = (W[k] + conj W[j]) / 2` and `B[k] = (W[k] - conj W[j]) / (2i)`, so
+    ///
+    /// ```text
+    /// |A[k]|^2 + |B[k]|^2 = (|W[k]|^2 + |W[j]|^2) / 2
+    /// conj(A[k]) B[k]     = Im(W[k] W[j]) / 2 - i (|W[k]|^2 - |W[j]|^2) / 4
+    /// ```
+    ///
+    /// (one complex FFT instead of two real ones, and no separation pass).
+    fn pair_fft(
+        &mut self,
+        (x, start_a): (&[f64], usize),
+        (y, start_b): (&[f64], usize),
+        detrend: DetrendType,
+    ) {
+        let n = self.nperseg;
+        let (a, b) = (&x[start_a..start_a + n], &y[start_b..start_b + n]);
+        let (ta, tb) = (Trend::fit(a, detrend), Trend::fit(b, detrend));
+        let nfft = self.nfft;
+        let pair = self.pair.get_or_insert_with(|| PairFft::new(nfft));
+        let out = pair.buf[..n]
+            .iter_mut()
+            .zip(a.iter().zip(b))
+            .zip(&self.window);
+        match detrend {
+            DetrendType::None => out.for_each(|((c, (u, v)), w)| *c = Complex64::new(u * w, v * w)),
+            DetrendType::Constant => {
+                let (ma, mb) = (ta.at(0), tb.at(0));
+                out.for_each(|((c, (u, v)), w)| *c = Complex64::new((u - ma) * w, (v - mb) * w))
+            }
+            DetrendType::Linear => out.enumerate().for_each(|(i, ((c, (u, v)), w))| {
+                *c = Complex64::new((u - ta.at(i)) * w, (v - tb.at(i)) * w)
+            }),
+        }
+        pair.buf[n..].fill(Complex64::new(0.0, 0.0));
+        pair.fft
+            .process_with_scratch(&mut pair.buf, &mut pair.scratch);
+    }
+
+    /// `f(&mut out[k], W[k], W[nfft - k])` for `k = 0 .. n_bins` (`W[0]`
+    /// twice for `k = 0`) with `W` from the last [`Engine::pair_fft`].
+    #[inline(always)]
+    fn pair_bins<T>(&self, out: &mut [T], f: impl Fn(&mut T, Complex64, Complex64)) {
+        let Some(w) = self.pair.as_ref().map(|p| &p.buf[..]) else {
+            return;
+        };
+        let nb = self.n_bins().min(out.len());
+        let (Some(o), Some(&w0)) = (out.first_mut(), w.first()) else {
+            return;
+        };
+        f(o, w0, w0);
+        let upper = &w[w.len() + 1 - nb..];
+        for ((o, &wk), &wj) in out[1..nb].iter_mut().zip(&w[1..nb]).zip(upper.iter().rev()) {
+            f(o, wk, wj);
+        }
+    }
+
     /// Per-bin factor: scaling times one-sided doubling.
     fn bin_factors(&self, fs_hz: f64, scaling: Scaling, onesided: bool) -> Vec<f64> {
         let scale = match scaling {
@@ -268,7 +353,17 @@ impl Engine {
         let use_median = s.average == Average::Median && nseg > 1;
         let mut acc = vec![0.0; nb];
         let mut all = Vec::with_capacity(if use_median { nseg * nb } else { 0 });
-        for seg in 0..nseg {
+        // Mean: two segments per complex FFT (see `pair_fft`); a leftover
+        // segment (and every segment for the median) by a real FFT.
+        let paired = if use_median { 0 } else { nseg / 2 };
+        for pair in 0..paired {
+            let start = 2 * pair * step;
+            self.pair_fft((x, start), (x, start + step), s.detrend);
+            self.pair_bins(&mut acc, |a, wk, wj| {
+                *a += 0.5 * (wk.norm_sqr() + wj.norm_sqr())
+            });
+        }
+        for seg in 2 * paired..nseg {
             self.segment_fft(x, seg * step, s.detrend, false);
             if use_median {
                 all.extend(self.spec_x.iter().map(|c| c.norm_sqr()));
@@ -312,22 +407,21 @@ impl Engine {
         let use_median = s.average == Average::Median && nseg > 1;
         let mut acc = vec![Complex64::new(0.0, 0.0); nb];
         let mut all = Vec::with_capacity(if use_median { nseg * nb } else { 0 });
+        // conj(X[k]) Y[k] from W = FFT(x_seg + i y_seg); see `pair_fft`.
+        let cross = |wk: Complex64, wj: Complex64| {
+            Complex64::new(
+                0.5 * (wk.re * wj.im + wk.im * wj.re),
+                -0.25 * (wk.norm_sqr() - wj.norm_sqr()),
+            )
+        };
+        let mut seg_pxy = vec![Complex64::new(0.0, 0.0); if use_median { nb } else { 0 }];
         for seg in 0..nseg {
-            self.segment_fft(x, seg * step, s.detrend, false);
-            self.segment_fft(y, seg * step, s.detrend, true);
+            self.pair_fft((x, seg * step), (y, seg * step), s.detrend);
             if use_median {
-                all.extend(
-                    self.spec_x
-                        .iter()
-                        .zip(&self.spec_y)
-                        .map(|(a, b)| a.conj() * b),
-                );
+                self.pair_bins(&mut seg_pxy, |o, wk, wj| *o = cross(wk, wj));
+                all.extend_from_slice(&seg_pxy);
             } else {
-                // conj(a) * b, written out so that the loop vectorises.
-                for ((s, a), b) in acc.iter_mut().zip(&self.spec_x).zip(&self.spec_y) {
-                    s.re += a.re * b.re + a.im * b.im;
-                    s.im += a.re * b.im - a.im * b.re;
-                }
+                self.pair_bins(&mut acc, |o, wk, wj| *o += cross(wk, wj));
             }
         }
         let fac = self.bin_factors(fs_hz, s.scaling, s.onesided);
