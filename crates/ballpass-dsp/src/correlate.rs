@@ -244,8 +244,11 @@ impl Correlator {
         for (a, b) in plan.spec_x.iter_mut().zip(&plan.spec_y) {
             *a *= b.conj();
         }
-        inverse_to_lags(plan, x.len(), y.len(), &mut out.values);
-        self.finish(out, x, y)
+        let norm = self.norm(x, y)?;
+        let plan = self.plan.as_mut().expect("planned above");
+        inverse_to_lags(plan, x.len(), y.len(), &mut out.values, norm);
+        set_lags(out, x.len(), y.len());
+        Ok(())
     }
 
     /// Full-lag autocorrelation `z[m] = sum_n x[n + m] x[n]` (one forward
@@ -273,8 +276,11 @@ impl Correlator {
         for a in plan.spec_x.iter_mut() {
             *a = Complex::new(a.norm_sqr(), 0.0);
         }
-        inverse_to_lags(plan, x.len(), x.len(), &mut out.values);
-        self.finish(out, x, x)
+        let norm = self.norm(x, x)?;
+        let plan = self.plan.as_mut().expect("planned above");
+        inverse_to_lags(plan, x.len(), x.len(), &mut out.values, norm);
+        set_lags(out, x.len(), x.len());
+        Ok(())
     }
 
     /// Full-lag correlations `z[m] = sum_n s_a[n + m] s_b[n]` of several
@@ -354,8 +360,10 @@ impl Correlator {
                 lags: Vec::new(),
                 values: Vec::new(),
             };
-            inverse_to_lags(plan, n, n, &mut out.values);
-            self.finish(&mut out, signals[a], signals[b])?;
+            let norm = self.norm(signals[a], signals[b])?;
+            let plan = self.plan.as_mut().expect("planned above");
+            inverse_to_lags(plan, n, n, &mut out.values, norm);
+            set_lags(&mut out, n, n);
             results.push(out);
         }
         Ok(results)
@@ -383,22 +391,12 @@ impl Correlator {
         self.plan.as_mut().expect("plan was just set")
     }
 
-    /// Applies the normalisation to `out.values` and fills `out.lags`.
-    fn finish(&self, out: &mut Correlation, x: &[f64], y: &[f64]) -> Result<()> {
-        let (nx, ny) = (x.len(), y.len());
-        let values = &mut out.values;
-        match self.settings.normalization {
-            Normalization::None => {}
-            Normalization::Biased => {
-                let inv = 1.0 / nx as f64;
-                values.iter_mut().for_each(|v| *v *= inv);
-            }
-            Normalization::Unbiased => {
-                for (i, v) in values.iter_mut().enumerate() {
-                    let m = i.abs_diff(ny - 1);
-                    *v /= (nx - m) as f64;
-                }
-            }
+    /// The scaling of the lag sums for `x` and `y` (see [`Normalization`]).
+    fn norm(&self, x: &[f64], y: &[f64]) -> Result<Norm> {
+        Ok(match self.settings.normalization {
+            Normalization::None => Norm::None,
+            Normalization::Biased => Norm::Times(1.0 / x.len() as f64),
+            Normalization::Unbiased => Norm::Unbiased,
             Normalization::Coeff => {
                 let exx: f64 = x.iter().map(|v| v * v).sum();
                 let eyy: f64 = y.iter().map(|v| v * v).sum();
@@ -411,20 +409,37 @@ impl Correlator {
                         ),
                     });
                 }
-                let inv = 1.0 / (exx * eyy).sqrt();
-                values.iter_mut().for_each(|v| *v *= inv);
+                Norm::Times(1.0 / (exx * eyy).sqrt())
             }
-        }
-        let first = -(ny as i64 - 1);
+        })
+    }
+}
+
+/// How [`inverse_to_lags`] scales each lag sum after the inverse FFT's
+/// `1 / len`: the same two roundings as scaling in a second pass.
+#[derive(Debug, Clone, Copy)]
+enum Norm {
+    /// No further scaling.
+    None,
+    /// Times a constant (biased: `1 / N`; coeff: `1 / sqrt(Rxx[0] Ryy[0])`).
+    Times(f64),
+    /// Divided by the overlap `N - |m|`.
+    Unbiased,
+}
+
+/// `out.lags = -(ny-1) ..= nx-1`, rewritten only when it is not already.
+fn set_lags(out: &mut Correlation, nx: usize, ny: usize) {
+    let first = -(ny as i64 - 1);
+    let len = nx + ny - 1;
+    if out.lags.len() != len || out.lags.first() != Some(&first) {
         out.lags.clear();
         out.lags.extend(first..=(nx as i64 - 1));
-        Ok(())
     }
 }
 
 /// Inverse FFT of `plan.spec_x` (a cross-spectrum) and the rearrangement of
 /// the circular result into lags `-(ny-1) ..= nx-1`.
-fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize, out: &mut Vec<f64>) {
+fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize, out: &mut Vec<f64>, norm: Norm) {
     let len = plan.len;
     // A real signal's DC (and, for even lengths, Nyquist) bins are real;
     // clear the rounding residue so realfft accepts the spectrum.
@@ -440,8 +455,29 @@ fn inverse_to_lags(plan: &mut Plan, nx: usize, ny: usize, out: &mut Vec<f64>) {
     out.clear();
     out.reserve(nx + ny - 1);
     // Negative lags m = -(ny-1) ..= -1 sit at the end of the circular result.
-    out.extend(plan.buf[len - (ny - 1)..].iter().map(|v| v * scale));
-    out.extend(plan.buf[..nx].iter().map(|v| v * scale));
+    let (neg, pos) = (&plan.buf[len - (ny - 1)..], &plan.buf[..nx]);
+    match norm {
+        Norm::None => {
+            out.extend(neg.iter().map(|v| v * scale));
+            out.extend(pos.iter().map(|v| v * scale));
+        }
+        Norm::Times(f) => {
+            out.extend(neg.iter().map(|v| v * scale * f));
+            out.extend(pos.iter().map(|v| v * scale * f));
+        }
+        Norm::Unbiased => {
+            // Output i is lag m = i - (ny-1), with N - |m| overlapping terms.
+            out.extend(neg.iter().enumerate().map(|(i, v)| {
+                let m = (ny - 1) - i;
+                v * scale / (nx - m) as f64
+            }));
+            out.extend(
+                pos.iter()
+                    .enumerate()
+                    .map(|(m, v)| v * scale / (nx - m) as f64),
+            );
+        }
+    }
 }
 
 /// Smallest even `n >= target` whose only prime factors are 2 and 3.

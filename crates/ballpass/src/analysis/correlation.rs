@@ -100,10 +100,14 @@ pub(crate) fn compute(
     let idx = |s: Signal| signals.iter().position(|&k| k == s).expect("present");
     let index_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(x, y)| (idx(x), idx(y))).collect();
     let inputs: Vec<&[f64]> = p.signals.iter().map(|(_, v)| v.as_slice()).collect();
-    let out = correlator
+    let mut out = correlator
         .correlate_pairs(&inputs, &index_pairs)
         .map_err(|e| Error::dsp("correlations", e))?;
-    let lags = out.first().map(|c| c.lags.clone()).unwrap_or_default();
+    // Every series has the same lags; keep the first one's.
+    let lags = out
+        .first_mut()
+        .map(|c| std::mem::take(&mut c.lags))
+        .unwrap_or_default();
     let lag_s = lags.iter().map(|&m| m as f64 / p.fs_hz).collect();
     Ok(Correlations {
         fs_hz: p.fs_hz,
