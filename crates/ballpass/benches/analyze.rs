@@ -22,6 +22,19 @@
 //! formatting, fast CSV path), on an idle machine (load 1.5): whole CLI
 //! process best of 15 = 30.0 ms vs the SciPy script's best of 5 = 228 ms,
 //! 7.6x; five repeats 69 ms (2.3x one record).
+//!
+//! Session 2 (CSV parsing by `fast-float2` in two parallel halves, the old
+//! file moved aside before the rename instead of ext4 flushing 8 MB inside
+//! it, one FFT per signal and segment for all spectra, correlations, spectra
+//! and passages in parallel, AVX2/AVX-512 filter kernels), idle machine
+//! (load 0.9-1.4): `analyze 30 s` 5.6 ms, `write_outputs 30 s` 8.0 ms,
+//! `load + analyze + write` 15.5 ms, five repeats 23.4 ms, load alone
+//! 1.45 ms (`benches/load.rs`). Whole CLI process (`tools/bench_scipy_analyze.py
+//! -n 9`): best 23.9 ms vs the SciPy script's 231 ms, 9.7x; five repeats
+//! 45 ms (1.9x one record). The ~8 ms between the in-process and the
+//! process figures is a cold process's FFT planning, first-touch page faults
+//! and start-up; the text of `correlations.csv` (7.9 MB, 420 000 numbers)
+//! is half of what is left.
 
 use std::hint::black_box;
 
