@@ -593,8 +593,6 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         source_name: source.clone(),
         reason,
     };
-    // Noise at a lag of 1 sample first; refined below once the width is known.
-    let sigma1 = noise_sigma(x, 1);
     let x_range = x.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
         - x.iter().fold(f64::INFINITY, |a, &b| a.min(b));
     if x_range <= 0.0 {
@@ -608,6 +606,8 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
             let mean = x.iter().sum::<f64>() / n as f64;
             let y0: Vec<f64> = x.iter().map(|v| v - mean).collect();
             let y0 = gaussian_smooth(&y0, 2.0);
+            // Noise at a lag of 1 sample; refined below once the width is known.
+            let sigma1 = noise_sigma(x, 1);
             let thr = (settings.min_snr * sigma1).max(1e-12 * x_range);
             let c = keep_strong(candidates(&y0, thr, None, None)?, 0.5);
             if c.idx.len() < 3 {
