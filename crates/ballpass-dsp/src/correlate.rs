@@ -310,32 +310,7 @@ impl Correlator {
         signals: &[&[f64]],
         pairs: &[(usize, usize)],
     ) -> Result<Vec<Correlation>> {
-        let Some(first) = signals.first() else {
-            return Err(DspError::Empty { what: "signals" });
-        };
-        let n = first.len();
-        for s in signals {
-            check_finite("signal", s)?;
-            if s.len() != n {
-                return Err(DspError::LengthMismatch {
-                    what: "signals (correlate_pairs)",
-                    expected: n,
-                    found: s.len(),
-                });
-            }
-        }
-        if let Some(&(a, b)) = pairs
-            .iter()
-            .find(|&&(a, b)| a >= signals.len() || b >= signals.len())
-        {
-            return Err(crate::error::invalid(
-                "pairs",
-                format!(
-                    "pair ({a}, {b}) names a signal beyond the {} given",
-                    signals.len()
-                ),
-            ));
-        }
+        let n = crate::error::check_signal_set(signals, pairs, "signals (correlate_pairs)")?;
         let plan = self.plan_for(2 * n);
         let spectra: Vec<Vec<Complex<f64>>> = signals
             .iter()

@@ -116,6 +116,49 @@ pub(crate) fn all_finite(x: &[f64]) -> bool {
     acc.iter().sum::<f64>() == 0.0
 }
 
+/// Checks a set of signals and the index pairs into it that a multi-signal
+/// kernel ([`crate::Correlator::correlate_pairs`], [`crate::Welch::spectra`])
+/// takes: at least one signal, each non-empty and finite, all of one length,
+/// every pair index in range. Returns the common length.
+///
+/// # Errors
+/// [`DspError::Empty`]/[`DspError::NonFinite`] for a signal,
+/// [`DspError::LengthMismatch`] (naming `kernel`) for unequal lengths,
+/// [`DspError::InvalidSetting`] for a pair index out of range.
+pub(crate) fn check_signal_set(
+    signals: &[&[f64]],
+    pairs: &[(usize, usize)],
+    kernel: &'static str,
+) -> Result<usize> {
+    let Some(first) = signals.first() else {
+        return Err(DspError::Empty { what: "signals" });
+    };
+    let n = first.len();
+    for s in signals {
+        check_finite("signal", s)?;
+        if s.len() != n {
+            return Err(DspError::LengthMismatch {
+                what: kernel,
+                expected: n,
+                found: s.len(),
+            });
+        }
+    }
+    if let Some(&(a, b)) = pairs
+        .iter()
+        .find(|&&(a, b)| a >= signals.len() || b >= signals.len())
+    {
+        return Err(invalid(
+            "pairs",
+            format!(
+                "pair ({a}, {b}) names a signal beyond the {} given",
+                signals.len()
+            ),
+        ));
+    }
+    Ok(n)
+}
+
 /// Returns an [`DspError::InvalidSetting`] built from a name and a message.
 pub fn invalid(name: &'static str, reason: impl Into<String>) -> DspError {
     DspError::InvalidSetting {

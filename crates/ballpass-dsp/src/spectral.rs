@@ -13,7 +13,7 @@ use rustfft::num_complex::Complex64;
 use rustfft::Fft;
 
 use crate::detrend::{DetrendType, Trend};
-use crate::error::{check_finite, invalid, DspError, Result};
+use crate::error::{check_finite, check_signal_set, invalid, DspError, Result};
 use crate::window::Window;
 
 /// Units of a spectral estimate.
@@ -1057,32 +1057,7 @@ impl Welch {
         fs_hz: f64,
     ) -> Result<SpectralSet> {
         check_fs(fs_hz)?;
-        let Some(first) = signals.first() else {
-            return Err(DspError::Empty { what: "signals" });
-        };
-        let n = first.len();
-        for x in signals {
-            check_finite("x", x)?;
-            if x.len() != n {
-                return Err(DspError::LengthMismatch {
-                    what: "signals (spectra)",
-                    expected: n,
-                    found: x.len(),
-                });
-            }
-        }
-        if let Some(&(i, j)) = pairs
-            .iter()
-            .find(|&&(i, j)| i >= signals.len() || j >= signals.len())
-        {
-            return Err(invalid(
-                "pairs",
-                format!(
-                    "pair ({i}, {j}) names a signal beyond the {} given",
-                    signals.len()
-                ),
-            ));
-        }
+        let n = check_signal_set(signals, pairs, "signals (spectra)")?;
         if self.settings.average == Average::Median {
             // Medians need every segment's value; the single-spectrum
             // paths keep them. Same results, three times the FFTs.
