@@ -13,6 +13,9 @@
 //! | ... block-top distance test (later), load ~2.4:                     |
 //! | find_peaks + peak_widths   | 117 us | 111 us   | 454 us       | 4.1x  |
 //! | find_peaks                 | 88 us  | 82 us    | 293 us       | 3.6x  |
+//! | ... fused distance scan, load ~3.5 (old/new binaries alternating):  |
+//! | find_peaks + peak_widths   | 170 us | 99 us    | 470 us       | 4.7x  |
+//! | find_peaks                 | 85 us  | 68 us    | 357 us       | 5.2x  |
 //!
 //! (The later rows: criterion's fastest sample, SciPy's best repeat just
 //! before. An A/B of best-of-2000 single calls, old and new binaries
@@ -28,9 +31,18 @@
 //! into the local-maximum scan (never materialising the ~9 500 noise
 //! maxima) and one prominence tree shared by find_peaks and peak_widths.
 //!
-//! Left: the local-maximum masks over all 30 000 samples (~19 us), the
-//! ~9 500 noise maxima materialised, gathered and retained (~25 us), and
-//! the prominence tree (~17 us).
+//! The distance criterion now runs fused with the search for maxima
+//! (`peaks_by_distance`): per block of `distance` samples only the top
+//! strict maximum is found (groups of 8 samples, a max tree per group),
+//! the undominated block tops are kept, and only the maxima at least
+//! `distance` from all of them are listed for SciPy's greedy walk; the
+//! ~9 500 noise maxima are never materialised.
+//!
+//! Left (criterion's median, loaded box): the block-top scan ~26 us (not
+//! fully vectorised yet: LLVM keeps the plateau flags and the per-group
+//! compare scalar; an AVX2 instance via `simd.rs` is the next step), the
+//! prominence tree queries ~19 us per call in find_peaks and again in
+//! peak_widths, input checks ~2 us each.
 // criterion_group! generates an undocumented pub fn.
 #![allow(missing_docs)]
 

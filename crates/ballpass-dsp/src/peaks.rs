@@ -502,6 +502,227 @@ fn select_by_distance(peaks: &[usize], priority: &[f64], distance: usize) -> Vec
     state.iter().map(|&s| s == 1).collect()
 }
 
+/// `(value, index)` ranks above `other`: higher, or equal and later (the
+/// order of [`ranks_above`]).
+#[inline]
+fn outranks(a: (f64, usize), b: (f64, usize)) -> bool {
+    a.0 > b.0 || (a.0 == b.0 && a.1 > b.1)
+}
+
+/// The top-ranked strict local maximum (`x[i-1] < x[i] > x[i+1]`; highest,
+/// the later on ties) among the samples `lo..=hi`, and whether a plateau
+/// starts there (`x[i-1] < x[i] == x[i+1]`). Needs `1 <= lo` and
+/// `hi + 1 < x.len()`.
+///
+/// Per group of 8 samples, branch-free: non-maxima enter as `-inf` (which
+/// no finite sample is) and a pairwise maximum tree (exact in any order)
+/// gives the group's best value; one compare per group (`>=`, so the later
+/// group on ties) keeps the best group, in which the last maximum of that
+/// value is the top.
+fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
+    const L: usize = 8;
+    #[inline(always)]
+    fn max(a: f64, b: f64) -> f64 {
+        if b > a {
+            b
+        } else {
+            a
+        }
+    }
+    if lo > hi {
+        return (None, false);
+    }
+    let w = &x[lo - 1..=hi + 1];
+    let m = hi + 1 - lo;
+    let full = m / L * L;
+    let (mut best, mut group) = (f64::NEG_INFINITY, 0);
+    let mut any_flat = false;
+    for b in (0..full).step_by(L) {
+        let s = &w[b..b + L + 2];
+        let mv: [f64; L] = std::array::from_fn(|l| {
+            if s[l] < s[l + 1] && s[l + 1] > s[l + 2] {
+                s[l + 1]
+            } else {
+                f64::NEG_INFINITY
+            }
+        });
+        let fl: [bool; L] = std::array::from_fn(|l| s[l] < s[l + 1] && s[l + 1] == s[l + 2]);
+        let h: [f64; 4] = std::array::from_fn(|l| max(mv[l], mv[l + 4]));
+        let gm = max(max(h[0], h[2]), max(h[1], h[3]));
+        any_flat |= fl.iter().fold(false, |f, &v| f | v);
+        if gm >= best {
+            best = gm;
+            group = b;
+        }
+    }
+    let mut top = (best, group);
+    if best != f64::NEG_INFINITY {
+        for j in (group..group + L).rev() {
+            if w[j] < w[j + 1] && w[j + 1] > w[j + 2] && w[j + 1] == best {
+                top = (best, j);
+                break;
+            }
+        }
+    }
+    for j in full..m {
+        let (a, v, z) = (w[j], w[j + 1], w[j + 2]);
+        any_flat |= (a < v) & (v == z);
+        if a < v && v > z && v >= top.0 {
+            top = (v, j);
+        }
+    }
+    let top = (top.0 != f64::NEG_INFINITY).then_some((top.0, lo + top.1));
+    (top, any_flat)
+}
+
+/// Appends the flat maxima starting in `lo..=hi` as `(middle, left_edge,
+/// right_edge)`, with SciPy's look-ahead (see [`local_maxima`]); needs
+/// `1 <= lo` and `hi + 1 < x.len()`.
+fn plateaus_in(x: &[f64], lo: usize, hi: usize, flats: &mut Vec<(usize, usize, usize)>) {
+    let i_max = x.len() - 1;
+    for i in lo..=hi {
+        let b = x[i];
+        if x[i - 1] < b && x[i + 1] == b {
+            let mut ahead = i + 1;
+            while ahead < i_max && x[ahead] == b {
+                ahead += 1;
+            }
+            if x[ahead] < b {
+                flats.push(((i + ahead - 1) / 2, i, ahead - 1));
+            }
+        }
+    }
+}
+
+/// The flat maxima of `flats` (sorted by middle) whose middle lies in
+/// `lo..=hi`.
+fn flats_in(flats: &[(usize, usize, usize)], lo: usize, hi: usize) -> &[(usize, usize, usize)] {
+    let start = flats.partition_point(|f| f.0 < lo);
+    let end = flats.partition_point(|f| f.0 <= hi);
+    &flats[start..end.max(start)]
+}
+
+/// The top-ranked local maximum (strict, or a plateau's middle) in
+/// `lo..=hi`.
+fn top_in(
+    x: &[f64],
+    flats: &[(usize, usize, usize)],
+    lo: usize,
+    hi: usize,
+) -> Option<(f64, usize)> {
+    let mut top = strict_top(x, lo, hi).0;
+    for &(mid, _, _) in flats_in(flats, lo, hi) {
+        if top.is_none_or(|t| outranks((x[mid], mid), t)) {
+            top = Some((x[mid], mid));
+        }
+    }
+    top
+}
+
+/// [`local_maxima`] followed by [`select_by_distance`] on their heights,
+/// without listing the maxima that `distance` removes (`distance >= 2`).
+///
+/// The samples are cut into blocks of `distance`; only the top-ranked
+/// maximum of a block can outrank every maximum closer than `distance`,
+/// and it does if it outranks those within reach in the two neighbouring
+/// blocks (a neighbour whose own top ranks below it holds none above it).
+/// Such an undominated maximum is kept by SciPy's greedy walk and removes
+/// every maximum closer than `distance`, so the maxima listed are only the
+/// block tops and those at least `distance` from every undominated one;
+/// the latter can only remove each other, and the greedy walk on them
+/// alone decides them (as in [`select_by_distance`]).
+fn peaks_by_distance(x: &[f64], distance: usize) -> Vec<usize> {
+    let n = x.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    let last = n - 2;
+    let block = |id: usize| {
+        let lo = id.saturating_mul(distance).max(1);
+        let hi = (id + 1)
+            .saturating_mul(distance)
+            .saturating_sub(1)
+            .min(last);
+        (lo, hi)
+    };
+    let blocks = last / distance + 1;
+    let mut tops = Vec::with_capacity(blocks);
+    let mut flats = Vec::new();
+    for id in 0..blocks {
+        let (lo, hi) = block(id);
+        let (top, flat) = strict_top(x, lo, hi);
+        if flat {
+            plateaus_in(x, lo, hi, &mut flats);
+        }
+        tops.push(top);
+    }
+    for &(mid, _, _) in &flats {
+        let t = &mut tops[mid / distance];
+        if t.is_none_or(|t| outranks((x[mid], mid), t)) {
+            *t = Some((x[mid], mid));
+        }
+    }
+
+    let mut sure = Vec::new();
+    for (id, &top) in tops.iter().enumerate() {
+        let Some(t) = top else { continue };
+        let p = t.1;
+        let left = id.checked_sub(1).and_then(|i| tops[i]).is_some_and(|l| {
+            outranks(l, t)
+                && (p - l.1 < distance
+                    || top_in(x, &flats, p + 1 - distance, block(id).0 - 1)
+                        .is_some_and(|m| outranks(m, t)))
+        });
+        let right = || {
+            tops.get(id + 1).copied().flatten().is_some_and(|r| {
+                outranks(r, t)
+                    && (r.1 - p < distance
+                        || top_in(x, &flats, block(id + 1).0, (p + distance - 1).min(last))
+                            .is_some_and(|m| outranks(m, t)))
+            })
+        };
+        if !left && !right() {
+            sure.push(p);
+        }
+    }
+
+    // The maxima at least `distance` from every undominated one.
+    let mut rest = Vec::new();
+    let mut from = 1;
+    for &s in sure.iter().chain(std::iter::once(&usize::MAX)) {
+        let to = if s == usize::MAX {
+            last
+        } else {
+            match s.checked_sub(distance) {
+                Some(to) => to,
+                None => {
+                    from = s.saturating_add(distance);
+                    continue;
+                }
+            }
+        };
+        if from <= to {
+            let start = rest.len();
+            for i in from..=to {
+                if x[i - 1] < x[i] && x[i] > x[i + 1] {
+                    rest.push(i);
+                }
+            }
+            rest.extend(flats_in(&flats, from, to).iter().map(|f| f.0));
+            rest[start..].sort_unstable();
+        }
+        from = s.saturating_add(distance);
+    }
+    if !rest.is_empty() {
+        let h: Vec<f64> = rest.iter().map(|&p| x[p]).collect();
+        let keep = greedy_distance(&rest, &h, distance);
+        retain_mask(&mut rest, &keep);
+        sure.extend(rest);
+        sure.sort_unstable();
+    }
+    sure
+}
+
 /// Finds peaks of `x` that satisfy the criteria in `settings`, as
 /// `scipy.signal.find_peaks`.
 ///
@@ -549,7 +770,18 @@ pub fn find_peaks(x: &[f64], settings: &FindPeaksSettings) -> Result<Peaks> {
         }
     }
 
-    let (mut peaks, flats) = local_maxima(x);
+    // Without the filters that precede it, the distance criterion runs
+    // fused with the search for maxima.
+    let fused = distance.filter(|&d| {
+        d > 1
+            && settings.plateau_size.is_none()
+            && settings.height.is_none()
+            && settings.threshold.is_none()
+    });
+    let (mut peaks, flats) = match fused {
+        Some(d) => (peaks_by_distance(x, d), Vec::new()),
+        None => local_maxima(x),
+    };
     let mut props = PeakProperties::default();
     let mut keep: Vec<bool> = Vec::new();
 
@@ -592,7 +824,7 @@ pub fn find_peaks(x: &[f64], settings: &FindPeaksSettings) -> Result<Peaks> {
         apply(&mut peaks, &mut props, &keep);
     }
 
-    if let Some(distance) = distance {
+    if let (Some(distance), None) = (distance, fused) {
         let heights: Vec<f64> = peaks.iter().map(|&p| x[p]).collect();
         let keep = select_by_distance(&peaks, &heights, distance);
         apply(&mut peaks, &mut props, &keep);
@@ -1196,6 +1428,36 @@ mod tests {
                     assert_eq!(
                         select_by_distance(&peaks, &h, d),
                         greedy_distance(&peaks, &h, d),
+                        "len {len} levels {levels} d {d}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fused_distance_matches_maxima_then_selection() {
+        let mut s = 4242u64;
+        for len in [0, 1, 2, 3, 4, 10, 50, 300, 3000] {
+            for levels in [2, 3, 5, 1000] {
+                let mut x = lcg_levels(&mut s, len, levels);
+                if levels == 3 && len > 20 {
+                    // long plateaus, one at the end
+                    for v in &mut x[len / 3..len / 2] {
+                        *v = 7.0;
+                    }
+                    for v in &mut x[len - 10..] {
+                        *v = 9.0;
+                    }
+                }
+                let (peaks, _) = local_maxima(&x);
+                let h: Vec<f64> = peaks.iter().map(|&p| x[p]).collect();
+                for d in [2, 3, 5, 17, 100, 10_000, usize::MAX] {
+                    let mut expect = peaks.clone();
+                    retain_mask(&mut expect, &greedy_distance(&peaks, &h, d));
+                    assert_eq!(
+                        peaks_by_distance(&x, d),
+                        expect,
                         "len {len} levels {levels} d {d}"
                     );
                 }
