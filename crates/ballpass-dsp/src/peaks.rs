@@ -514,65 +514,68 @@ fn outranks(a: (f64, usize), b: (f64, usize)) -> bool {
 /// starts there (`x[i-1] < x[i] == x[i+1]`). Needs `1 <= lo` and
 /// `hi + 1 < x.len()`.
 ///
-/// Per group of 8 samples, branch-free: non-maxima enter as `-inf` (which
-/// no finite sample is) and a pairwise maximum tree (exact in any order)
-/// gives the group's best value; one compare per group (`>=`, so the later
-/// group on ties) keeps the best group, in which the last maximum of that
-/// value is the top.
+/// Two passes over groups of 8 samples. The first is branch-free: non-maxima
+/// enter as `-inf` (which no finite sample is) into 8 running maxima (exact
+/// in any order), and plateau starts as 1.0 into 8 more (flags kept as
+/// floats, so that every lane operation is a vector compare, select or
+/// maximum); the block's best value
+/// is the largest of the 8. The second walks the groups back from the end to
+/// the last maximum of that value, the top (the later one on ties).
 fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
     const L: usize = 8;
-    #[inline(always)]
-    fn max(a: f64, b: f64) -> f64 {
-        if b > a {
-            b
-        } else {
-            a
-        }
-    }
     if lo > hi {
         return (None, false);
     }
     let w = &x[lo - 1..=hi + 1];
     let m = hi + 1 - lo;
     let full = m / L * L;
-    let (mut best, mut group) = (f64::NEG_INFINITY, 0);
-    let mut any_flat = false;
+    let peak_value = |j: usize| {
+        let (a, v, z) = (w[j], w[j + 1], w[j + 2]);
+        if a < v && v > z {
+            v
+        } else {
+            f64::NEG_INFINITY
+        }
+    };
+    let mut acc = [f64::NEG_INFINITY; L];
+    let mut flat = [0.0f64; L];
     for b in (0..full).step_by(L) {
         let s = &w[b..b + L + 2];
-        let mv: [f64; L] = std::array::from_fn(|l| {
-            if s[l] < s[l + 1] && s[l + 1] > s[l + 2] {
-                s[l + 1]
-            } else {
-                f64::NEG_INFINITY
-            }
-        });
-        let fl: [bool; L] = std::array::from_fn(|l| s[l] < s[l + 1] && s[l + 1] == s[l + 2]);
-        let h: [f64; 4] = std::array::from_fn(|l| max(mv[l], mv[l + 4]));
-        let gm = max(max(h[0], h[2]), max(h[1], h[3]));
-        any_flat |= fl.iter().fold(false, |f, &v| f | v);
-        if gm >= best {
-            best = gm;
-            group = b;
+        for l in 0..L {
+            let (a, v, z) = (s[l], s[l + 1], s[l + 2]);
+            // `&`, not `&&`: no branches.
+            let up = a < v;
+            let mv = if up & (v > z) { v } else { f64::NEG_INFINITY };
+            acc[l] = if mv > acc[l] { mv } else { acc[l] };
+            let fl = if up & (v == z) { 1.0 } else { 0.0 };
+            flat[l] = if fl > flat[l] { fl } else { flat[l] };
         }
     }
-    let mut top = (best, group);
-    if best != f64::NEG_INFINITY {
-        for j in (group..group + L).rev() {
-            if w[j] < w[j + 1] && w[j + 1] > w[j + 2] && w[j + 1] == best {
-                top = (best, j);
-                break;
-            }
-        }
-    }
+    let mut best = acc.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+    let mut any_flat = flat.iter().any(|&f| f != 0.0);
+    let mut at = None;
     for j in full..m {
         let (a, v, z) = (w[j], w[j + 1], w[j + 2]);
         any_flat |= (a < v) & (v == z);
-        if a < v && v > z && v >= top.0 {
-            top = (v, j);
+        let mv = peak_value(j);
+        if mv >= best && mv != f64::NEG_INFINITY {
+            best = mv;
+            at = Some(j);
         }
     }
-    let top = (top.0 != f64::NEG_INFINITY).then_some((top.0, lo + top.1));
-    (top, any_flat)
+    if at.is_none() && best != f64::NEG_INFINITY {
+        // Most groups hold no sample equal to `best`: test that first,
+        // all 8 at once.
+        at = (0..full / L).rev().find_map(|g| {
+            let s = &w[g * L + 1..g * L + 1 + L];
+            let eq: [bool; L] = std::array::from_fn(|l| s[l] == best);
+            if !eq.iter().fold(false, |a, &e| a | e) {
+                return None;
+            }
+            (g * L..g * L + L).rev().find(|&j| peak_value(j) == best)
+        });
+    }
+    (at.map(|j| (best, lo + j)), any_flat)
 }
 
 /// Appends the flat maxima starting in `lo..=hi` as `(middle, left_edge,
