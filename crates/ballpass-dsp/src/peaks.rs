@@ -38,6 +38,7 @@
 //! ```
 
 use crate::error::{invalid, DspError, Result};
+use crate::simd::Wide;
 
 /// An interval `[min, max]` a peak property must lie in; either end may be
 /// open (`None`). SciPy's `(min, max)` tuple, or a bare number for `min`.
@@ -509,6 +510,33 @@ fn outranks(a: (f64, usize), b: (f64, usize)) -> bool {
     a.0 > b.0 || (a.0 == b.0 && a.1 > b.1)
 }
 
+/// Lanes of [`strict_top`] over `w` (samples `1..w.len() - 1` tested, a
+/// multiple of [`PEAK_LANES`] of them): per lane the largest strict local
+/// maximum (`-inf` if none) and 1.0 if a plateau starts there (else 0.0).
+/// Exact maxima, so every instance (baseline, AVX2, AVX-512 in
+/// `crate::simd`) returns the same bits.
+#[inline(always)]
+pub(crate) fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
+    const L: usize = PEAK_LANES;
+    let mut acc = [f64::NEG_INFINITY; L];
+    let mut flat = [0.0f64; L];
+    for s in w.windows(L + 2).step_by(L) {
+        for l in 0..L {
+            let (a, v, z) = (s[l], s[l + 1], s[l + 2]);
+            // `&`, not `&&`: no branches.
+            let up = a < v;
+            let mv = if up & (v > z) { v } else { f64::NEG_INFINITY };
+            acc[l] = if mv > acc[l] { mv } else { acc[l] };
+            let fl = if up & (v == z) { 1.0 } else { 0.0 };
+            flat[l] = if fl > flat[l] { fl } else { flat[l] };
+        }
+    }
+    (acc, flat)
+}
+
+/// Lanes of [`peak_lanes`].
+pub(crate) const PEAK_LANES: usize = 8;
+
 /// The top-ranked strict local maximum (`x[i-1] < x[i] > x[i+1]`; highest,
 /// the later on ties) among the samples `lo..=hi`, and whether a plateau
 /// starts there (`x[i-1] < x[i] == x[i+1]`). Needs `1 <= lo` and
@@ -522,7 +550,7 @@ fn outranks(a: (f64, usize), b: (f64, usize)) -> bool {
 /// is the largest of the 8. The second walks the groups back from the end to
 /// the last maximum of that value, the top (the later one on ties).
 fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
-    const L: usize = 8;
+    const L: usize = PEAK_LANES;
     if lo > hi {
         return (None, false);
     }
@@ -537,20 +565,11 @@ fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
             f64::NEG_INFINITY
         }
     };
-    let mut acc = [f64::NEG_INFINITY; L];
-    let mut flat = [0.0f64; L];
-    for b in (0..full).step_by(L) {
-        let s = &w[b..b + L + 2];
-        for l in 0..L {
-            let (a, v, z) = (s[l], s[l + 1], s[l + 2]);
-            // `&`, not `&&`: no branches.
-            let up = a < v;
-            let mv = if up & (v > z) { v } else { f64::NEG_INFINITY };
-            acc[l] = if mv > acc[l] { mv } else { acc[l] };
-            let fl = if up & (v == z) { 1.0 } else { 0.0 };
-            flat[l] = if fl > flat[l] { fl } else { flat[l] };
-        }
-    }
+    let (acc, flat) = match crate::simd::detect() {
+        Some(Wide::Avx512(p)) => p.peak_lanes(&w[..full + 2]),
+        Some(Wide::Avx2(p)) => p.peak_lanes(&w[..full + 2]),
+        None => peak_lanes(&w[..full + 2]),
+    };
     let mut best = acc.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
     let mut any_flat = flat.iter().any(|&f| f != 0.0);
     let mut at = None;
@@ -1464,6 +1483,33 @@ mod tests {
                         "len {len} levels {levels} d {d}"
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn wide_peak_lanes_equal_the_baseline() {
+        let Some(wide) = crate::simd::detect() else {
+            eprintln!("no AVX2 on this CPU: only the baseline runs");
+            return;
+        };
+        let mut s = 99u64;
+        for levels in [2, 3, 1000] {
+            let x = lcg_levels(&mut s, 8 * 500 + 2, levels);
+            let base = peak_lanes(&x);
+            let mut wides = vec![];
+            if let crate::simd::Wide::Avx512(p) = wide {
+                wides.push(p.peak_lanes(&x));
+                wides.push(p.avx2().peak_lanes(&x));
+            }
+            if let crate::simd::Wide::Avx2(p) = wide {
+                wides.push(p.peak_lanes(&x));
+            }
+            let bits = |(a, f): ([f64; PEAK_LANES], [f64; PEAK_LANES])| {
+                (a.map(f64::to_bits), f.map(f64::to_bits))
+            };
+            for w in wides {
+                assert_eq!(bits(w), bits(base), "levels {levels}");
             }
         }
     }

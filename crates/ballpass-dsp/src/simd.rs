@@ -16,6 +16,11 @@
 //! exactly as the baseline code does, lane for lane (the test
 //! `wide_kernels_round_as_the_baseline` checks this bitwise).
 //!
+//! The same way, `peaks::peak_lanes` (the local-maximum scan of
+//! `find_peaks` with `distance`) runs 4 or 8 samples per instruction; its
+//! lanes are exact maxima, so every instance returns the same bits
+//! (`wide_peak_lanes_equal_the_baseline`).
+//!
 //! Off x86_64, or on a CPU without AVX2, [`detect`] says `None` and the
 //! baseline path runs.
 #![allow(unsafe_code)]
@@ -23,6 +28,7 @@
 #[cfg(not(target_arch = "x86_64"))]
 use crate::biquad::Baseline;
 use crate::biquad::{Coef, Isa, Lanes};
+use crate::peaks::PEAK_LANES;
 
 /// The widest kernels the running CPU supports.
 #[derive(Debug, Clone, Copy)]
@@ -125,11 +131,36 @@ macro_rules! wide_isa {
             }
         }
 
+        impl $proof {
+            /// [`crate::peaks::peak_lanes`] compiled with the features.
+            pub(crate) fn peak_lanes(self, w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `run_lanes` above: the features were
+                // detected.
+                unsafe {
+                    $module::peak_lanes(w)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                crate::peaks::peak_lanes(w)
+            }
+        }
+
         /// The generic loops instantiated with the features enabled (they
         /// are `#[inline(always)]`, so they are compiled here).
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
+            use crate::peaks::PEAK_LANES;
+
+            /// [`crate::peaks::peak_lanes`] with the features.
+            ///
+            /// # Safety
+            /// The CPU must support the features.
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
+                crate::peaks::peak_lanes(w)
+            }
 
             /// [`crate::biquad::run_lanes`] with the features.
             ///
