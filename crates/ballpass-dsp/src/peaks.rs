@@ -730,8 +730,11 @@ fn peaks_by_distance(x: &[f64], distance: usize) -> Vec<usize> {
                     rest.push(i);
                 }
             }
-            rest.extend(flats_in(&flats, from, to).iter().map(|f| f.0));
-            rest[start..].sort_unstable();
+            let flat = flats_in(&flats, from, to);
+            if !flat.is_empty() {
+                rest.extend(flat.iter().map(|f| f.0));
+                rest[start..].sort_unstable();
+            }
         }
         from = s.saturating_add(distance);
     }
@@ -739,8 +742,20 @@ fn peaks_by_distance(x: &[f64], distance: usize) -> Vec<usize> {
         let h: Vec<f64> = rest.iter().map(|&p| x[p]).collect();
         let keep = greedy_distance(&rest, &h, distance);
         retain_mask(&mut rest, &keep);
-        sure.extend(rest);
-        sure.sort_unstable();
+        // Both increasing: merge.
+        let mut all = Vec::with_capacity(sure.len() + rest.len());
+        let (mut a, mut b) = (sure.iter().peekable(), rest.iter().peekable());
+        while let (Some(&&i), Some(&&j)) = (a.peek(), b.peek()) {
+            if i < j {
+                all.push(i);
+                a.next();
+            } else {
+                all.push(j);
+                b.next();
+            }
+        }
+        all.extend(a.chain(b));
+        return all;
     }
     sure
 }
