@@ -13,9 +13,9 @@
 //! | ... block-top distance test (later), load ~2.4:                     |
 //! | find_peaks + peak_widths   | 117 us | 111 us   | 454 us       | 4.1x  |
 //! | find_peaks                 | 88 us  | 82 us    | 293 us       | 3.6x  |
-//! | ... fused distance scan, load ~3.5 (old/new binaries alternating):  |
-//! | find_peaks + peak_widths   | 170 us | 99 us    | 470 us       | 4.7x  |
-//! | find_peaks                 | 85 us  | 68 us    | 357 us       | 5.2x  |
+//! | ... fused distance scan + AVX lanes, load ~1.2 (old/new alternating): |
+//! | find_peaks + peak_widths   | 156 us | 69 us    | 427 us       | 6.2x  |
+//! | find_peaks                 | 83 us  | 44 us    | 293 us       | 6.7x  |
 //!
 //! (The later rows: criterion's fastest sample, SciPy's best repeat just
 //! before. An A/B of best-of-2000 single calls, old and new binaries
@@ -31,18 +31,25 @@
 //! into the local-maximum scan (never materialising the ~9 500 noise
 //! maxima) and one prominence tree shared by find_peaks and peak_widths.
 //!
+//! (The old binary measured 156 us with peak_widths in this session, not
+//! the 111 us above: the figures of one row are from one session.)
 //! The distance criterion now runs fused with the search for maxima
 //! (`peaks_by_distance`): per block of `distance` samples only the top
-//! strict maximum is found (groups of 8 samples, a max tree per group),
-//! the undominated block tops are kept, and only the maxima at least
-//! `distance` from all of them are listed for SciPy's greedy walk; the
-//! ~9 500 noise maxima are never materialised.
+//! strict maximum is found (8 running maxima per lane loop, instantiated
+//! with AVX2 / AVX-512F in `simd.rs`, then a backward search for the
+//! value), the undominated block tops are kept, and only the maxima at
+//! least `distance` from all of them are listed for SciPy's greedy walk;
+//! the 9 478 maxima (226 left after `distance`) are never materialised.
+//! Per call now, from a perf profile: lane loop ~4 us, the rest of the
+//! block-top search ~5 us, input check ~2 us.
 //!
-//! Left (criterion's median, loaded box): the block-top scan ~26 us (not
-//! fully vectorised yet: LLVM keeps the plateau flags and the per-group
-//! compare scalar; an AVX2 instance via `simd.rs` is the next step), the
-//! prominence tree queries ~19 us per call in find_peaks and again in
-//! peak_widths, input checks ~2 us each.
+//! Left for 10x: the prominence tree queries, ~70 ns per peak, ~17 us in
+//! find_peaks (226 peaks after `distance`) and ~9 us again in peak_widths
+//! (149 peaks), plus ~4 us per tree build. Tried without gain: 8-ary and
+//! 4-ary trees (+-2 % / +15 %), the tree levels through the AVX dispatch
+//! (<= 2 %). Next: left/right bases of the sorted peaks by a stack of
+//! merged gap summaries (max, min) with the tree only where a gap holds a
+//! sample above the peak.
 // criterion_group! generates an undocumented pub fn.
 #![allow(missing_docs)]
 
