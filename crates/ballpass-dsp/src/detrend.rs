@@ -81,6 +81,7 @@ pub(crate) struct Trend {
 impl Trend {
     /// Least-squares constant or line through `x` (zero for `None` or an
     /// empty `x`).
+    #[inline(always)]
     pub(crate) fn fit(x: &[f64], kind: DetrendType) -> Trend {
         let n = x.len();
         let zero = Trend {
@@ -120,30 +121,69 @@ impl Trend {
 /// Sum with eight interleaved accumulators in blocks of 128, split
 /// pairwise above that (numpy's `pairwise_sum` scheme): rounding error
 /// grows like `log2(N)` and the loop vectorises.
+///
+/// The recursion `sum(x) = sum(x[..h]) + sum(x[h..])` (`h` = half the
+/// length rounded down to a multiple of 8) is run with an explicit stack,
+/// so that the function can be inlined into code compiled for wider
+/// vectors (a recursive function cannot be): the same additions in the
+/// same order as the recursive form (tested bitwise).
+#[inline(always)]
 pub(crate) fn pairwise_sum(x: &[f64]) -> f64 {
     if x.len() <= 128 {
-        let mut acc = [0.0f64; 8];
-        let chunks = x.chunks_exact(8);
-        let rem = chunks.remainder();
-        for c in chunks {
-            for (a, v) in acc.iter_mut().zip(c) {
-                *a += v;
+        return leaf_sum(x);
+    }
+    // Depth is at most log2(len / 64) < 58, so these bounds are never met.
+    const DEPTH: usize = 64;
+    // `Some((start, len))`: sum that range; `None`: add the last two sums.
+    let mut todo: [Option<(usize, usize)>; 2 * DEPTH] = [None; 2 * DEPTH];
+    let mut sums = [0.0f64; DEPTH];
+    let (mut nt, mut ns) = (1, 0);
+    todo[0] = Some((0, x.len()));
+    while nt > 0 {
+        nt -= 1;
+        match todo[nt] {
+            Some((start, len)) if len <= 128 => {
+                sums[ns] = leaf_sum(&x[start..start + len]);
+                ns += 1;
+            }
+            Some((start, len)) => {
+                let mut half = len / 2;
+                half -= half % 8;
+                // Popped in reverse: left half, right half, then the sum.
+                todo[nt] = None;
+                todo[nt + 1] = Some((start + half, len - half));
+                todo[nt + 2] = Some((start, half));
+                nt += 3;
+            }
+            None => {
+                ns -= 1;
+                sums[ns - 1] += sums[ns];
             }
         }
-        let mut s =
-            ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
-        for v in rem {
-            s += v;
-        }
-        s
-    } else {
-        let mut half = x.len() / 2;
-        half -= half % 8;
-        pairwise_sum(&x[..half]) + pairwise_sum(&x[half..])
     }
+    sums[0]
+}
+
+/// [`pairwise_sum`] of at most 128 values: eight interleaved accumulators.
+#[inline(always)]
+fn leaf_sum(x: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 8];
+    let chunks = x.chunks_exact(8);
+    let rem = chunks.remainder();
+    for c in chunks {
+        for (a, v) in acc.iter_mut().zip(c) {
+            *a += v;
+        }
+    }
+    let mut s = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+    for v in rem {
+        s += v;
+    }
+    s
 }
 
 /// `sum_i (i - c) x[i]`, vectorisable (eight accumulators).
+#[inline(always)]
 fn centered_moment(x: &[f64], c: f64) -> f64 {
     let mut acc = [0.0f64; 8];
     let chunks = x.chunks_exact(8);
@@ -178,6 +218,38 @@ mod tests {
         let m = 1.0 / 5.0;
         for (yi, bi) in y.iter().zip(b) {
             assert!((yi - (bi - m)).abs() < 1e-15);
+        }
+    }
+
+    /// The explicit-stack [`pairwise_sum`] adds as the recursive form does.
+    #[test]
+    fn pairwise_sum_equals_the_recursive_form_bitwise() {
+        fn recursive(x: &[f64]) -> f64 {
+            if x.len() <= 128 {
+                leaf_sum(x)
+            } else {
+                let mut half = x.len() / 2;
+                half -= half % 8;
+                recursive(&x[..half]) + recursive(&x[half..])
+            }
+        }
+        let mut s = 0x2545_f491_4f6c_dd1d_u64;
+        let x: Vec<f64> = (0..70_001)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.3) * 1e3
+            })
+            .collect();
+        for n in [
+            0, 1, 127, 128, 129, 136, 255, 256, 257, 1000, 4096, 4097, 30_000, 70_001,
+        ] {
+            assert_eq!(
+                pairwise_sum(&x[..n]).to_bits(),
+                recursive(&x[..n]).to_bits(),
+                "n={n}"
+            );
         }
     }
 

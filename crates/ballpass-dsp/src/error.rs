@@ -68,6 +68,7 @@ pub enum DspError {
 ///
 /// # Errors
 /// [`DspError::Empty`] or [`DspError::NonFinite`].
+#[inline(always)]
 pub fn check_finite(what: &'static str, x: &[f64]) -> Result<()> {
     if x.is_empty() {
         return Err(DspError::Empty { what });
@@ -86,6 +87,7 @@ pub fn check_finite(what: &'static str, x: &[f64]) -> Result<()> {
 ///
 /// Fast path: [`all_finite`] over blocks, so kernels can afford to check
 /// every call.
+#[inline(always)]
 pub(crate) fn first_non_finite(x: &[f64]) -> Option<usize> {
     if x.chunks(1024).all(all_finite) {
         return None;
@@ -102,6 +104,7 @@ pub(crate) fn first_non_finite(x: &[f64]) -> Option<usize> {
 /// summed in eight independent accumulators so that the loop vectorises
 /// (about twice as fast as testing the exponent bits on the SSE2
 /// baseline, which lacks 64-bit integer compares).
+#[inline(always)]
 pub(crate) fn all_finite(x: &[f64]) -> bool {
     let mut acc = [0.0f64; 8];
     let mut blocks = x.chunks_exact(8);

@@ -21,6 +21,10 @@
 //! lanes are exact maxima, so every instance returns the same bits
 //! (`wide_peak_lanes_equal_the_baseline`).
 //!
+//! [`widest`] does the same for any small closure over `#[inline(always)]`
+//! code: the csd segment loop (window, pairwise mean, cross products) and
+//! its input checks run through it (`wide_cross_sum_equals_the_baseline_bitwise`).
+//!
 //! Off x86_64, or on a CPU without AVX2, [`detect`] says `None` and the
 //! baseline path runs.
 #![allow(unsafe_code)]
@@ -70,6 +74,18 @@ pub(crate) fn detect() -> Option<Wide> {
     }
     #[cfg(not(target_arch = "x86_64"))]
     None
+}
+
+/// Runs `f` compiled for the widest vectors the CPU has (see the proof
+/// types' `run`): `f` should be a small closure calling `#[inline(always)]`
+/// code, which is then compiled with the features. Same operations, same
+/// bits: no FMA is enabled.
+pub(crate) fn widest<R>(f: impl FnOnce() -> R) -> R {
+    match detect() {
+        Some(Wide::Avx512(p)) => p.run(f),
+        Some(Wide::Avx2(p)) => p.run(f),
+        None => f(),
+    }
 }
 
 /// Proof that the running CPU has AVX2; only [`detect`] makes one.
@@ -145,12 +161,38 @@ macro_rules! wide_isa {
             }
         }
 
+        impl $proof {
+            /// Runs `f` compiled with the features: `f` (a small closure)
+            /// is inlined into a function that enables them, and with it the
+            /// `#[inline(always)]` code it calls.
+            pub(crate) fn run<R>(self, f: impl FnOnce() -> R) -> R {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `run_lanes` above: the features were
+                // detected.
+                unsafe {
+                    $module::run(f)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                f()
+            }
+        }
+
         /// The generic loops instantiated with the features enabled (they
         /// are `#[inline(always)]`, so they are compiled here).
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
             use crate::peaks::PEAK_LANES;
+
+            /// `f()` with the features.
+            ///
+            /// # Safety
+            /// The CPU must support the features.
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn run<R, F: FnOnce() -> R>(f: F) -> R {
+                f()
+            }
 
             /// [`crate::peaks::peak_lanes`] with the features.
             ///

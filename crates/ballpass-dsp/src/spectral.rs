@@ -177,6 +177,16 @@ struct Engine {
     pair: Option<PairFft>,
 }
 
+/// `conj(X[k]) Y[k]` from `W[k]` and `W[nfft - k]` of `W = FFT(x_seg + i
+/// y_seg)` (see [`Engine::pair_fft`]).
+#[inline(always)]
+fn pair_cross(wk: Complex64, wj: Complex64) -> Complex64 {
+    Complex64::new(
+        0.5 * (wk.re * wj.im + wk.im * wj.re),
+        -0.25 * (wk.norm_sqr() - wj.norm_sqr()),
+    )
+}
+
 /// A complex FFT of `nfft` points with its buffer (see [`Engine::pair_fft`]).
 #[derive(Clone)]
 struct PairFft {
@@ -267,6 +277,7 @@ impl Engine {
     /// ```
     ///
     /// (one complex FFT instead of two real ones, and no separation pass).
+    #[inline(always)]
     fn pair_fft(
         &mut self,
         (x, start_a): (&[f64], usize),
@@ -312,6 +323,24 @@ impl Engine {
         let upper = &w[w.len() + 1 - nb..];
         for ((o, &wk), &wj) in out[1..nb].iter_mut().zip(&w[1..nb]).zip(upper.iter().rev()) {
             f(o, wk, wj);
+        }
+    }
+
+    /// `acc[k] += conj(X[k]) Y[k]` over the first `nseg` segments of `x`
+    /// and `y` (mean averaging), from [`Engine::pair_fft`].
+    #[inline(always)]
+    fn cross_sum(
+        &mut self,
+        x: &[f64],
+        y: &[f64],
+        nseg: usize,
+        detrend: DetrendType,
+        acc: &mut [Complex64],
+    ) {
+        let step = self.nperseg - self.noverlap;
+        for seg in 0..nseg {
+            self.pair_fft((x, seg * step), (y, seg * step), detrend);
+            self.pair_bins(acc, |o, wk, wj| *o += pair_cross(wk, wj));
         }
     }
 
@@ -407,22 +436,18 @@ impl Engine {
         let use_median = s.average == Average::Median && nseg > 1;
         let mut acc = vec![Complex64::new(0.0, 0.0); nb];
         let mut all = Vec::with_capacity(if use_median { nseg * nb } else { 0 });
-        // conj(X[k]) Y[k] from W = FFT(x_seg + i y_seg); see `pair_fft`.
-        let cross = |wk: Complex64, wj: Complex64| {
-            Complex64::new(
-                0.5 * (wk.re * wj.im + wk.im * wj.re),
-                -0.25 * (wk.norm_sqr() - wj.norm_sqr()),
-            )
-        };
-        let mut seg_pxy = vec![Complex64::new(0.0, 0.0); if use_median { nb } else { 0 }];
-        for seg in 0..nseg {
-            self.pair_fft((x, seg * step), (y, seg * step), s.detrend);
-            if use_median {
-                self.pair_bins(&mut seg_pxy, |o, wk, wj| *o = cross(wk, wj));
+        if use_median {
+            let mut seg_pxy = vec![Complex64::new(0.0, 0.0); nb];
+            for seg in 0..nseg {
+                self.pair_fft((x, seg * step), (y, seg * step), s.detrend);
+                self.pair_bins(&mut seg_pxy, |o, wk, wj| *o = pair_cross(wk, wj));
                 all.extend_from_slice(&seg_pxy);
-            } else {
-                self.pair_bins(&mut acc, |o, wk, wj| *o += cross(wk, wj));
             }
+        } else {
+            // The segment loop with the CPU's widest vectors (the FFT has
+            // its own dispatch): the same operations in the same order, so
+            // the same bits (tested).
+            crate::simd::widest(|| self.cross_sum(x, y, nseg, s.detrend, &mut acc));
         }
         let fac = self.bin_factors(fs_hz, s.scaling, s.onesided);
         let mut p: Vec<Complex64> = if use_median {
@@ -704,8 +729,10 @@ impl Welch {
     /// As [`Welch::psd`], for `x` and `y`.
     pub fn csd(&mut self, x: &[f64], y: &[f64], fs_hz: f64) -> Result<Csd> {
         check_fs(fs_hz)?;
-        check_finite("x", x)?;
-        check_finite("y", y)?;
+        crate::simd::widest(|| {
+            check_finite("x", x)?;
+            check_finite("y", y)
+        })?;
         let n = x.len().max(y.len());
         let pad = |v: &[f64]| {
             let mut p = v.to_vec();
@@ -883,6 +910,39 @@ pub fn periodogram(x: &[f64], fs_hz: f64, settings: &PeriodogramSettings) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The csd segment loop compiled for the CPU's widest vectors adds the
+    /// same bits as the baseline build, for every detrend.
+    #[test]
+    fn wide_cross_sum_equals_the_baseline_bitwise() {
+        let mut st = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            st = st
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (st >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let x: Vec<f64> = (0..5000).map(|_| next()).collect();
+        let y: Vec<f64> = (0..5000).map(|_| next() + 0.1).collect();
+        for detrend in [
+            DetrendType::None,
+            DetrendType::Constant,
+            DetrendType::Linear,
+        ] {
+            let mut e = Engine::new(&Window::Hann, 1000, 300, 1200).unwrap();
+            let nseg = e.n_segments(x.len());
+            let mut wide = vec![Complex64::new(0.0, 0.0); e.n_bins()];
+            let mut base = wide.clone();
+            crate::simd::widest(|| e.cross_sum(&x, &y, nseg, detrend, &mut wide));
+            e.cross_sum(&x, &y, nseg, detrend, &mut base);
+            let bits = |v: &[Complex64]| {
+                v.iter()
+                    .map(|z| (z.re.to_bits(), z.im.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&wide), bits(&base), "{detrend:?}");
+        }
+    }
 
     #[test]
     fn median_bias_matches_scipy_values() {
