@@ -973,6 +973,17 @@ fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Pro
             out.left_bases.push(lb);
             out.right_bases.push(rb);
         }
+    } else if peaks.windows(2).all(|w| w[0] < w[1]) {
+        let (left, right) = match crate::simd::detect() {
+            Some(Wide::Avx512(w)) => w.bases_sorted(x, peaks, h),
+            Some(Wide::Avx2(w)) => w.bases_sorted(x, peaks, h),
+            None => bases_sorted(x, peaks, h),
+        };
+        for ((&p, (lmin, lb)), (rmin, rb)) in peaks.iter().zip(left).zip(right) {
+            out.prominences.push(x[p] - lmin.max(rmin));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
+        }
     } else {
         let tree = MinMaxTree::new(x);
         for &p in peaks {
@@ -1019,6 +1030,254 @@ fn scan_right(x: &[f64], p: usize, hi: usize) -> (f64, usize) {
         }
     }
     (vmin, base)
+}
+
+/// Lanes of the chunked runs in [`run_left`] and [`run_right`].
+const RUN: usize = 8;
+
+/// Backward run over `[lo, hi]` as SciPy's left scan with threshold `v`:
+/// the first sample `> v` met from `hi` downwards (`None` if all are
+/// `<= v`) and the minimum of the samples after it (`+inf` if none).
+/// Chunks of [`RUN`] samples without a sample `> v` only update lane
+/// minima (vectorises); the chunk holding the stop is scanned sample by
+/// sample.
+fn run_left(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+    let mut lanes = [f64::INFINITY; RUN];
+    let mut end = hi + 1;
+    while end >= lo + RUN {
+        let c: &[f64; RUN] = x[end - RUN..end].try_into().expect("RUN samples");
+        if c.iter().fold(false, |a, &y| a | (y > v)) {
+            break;
+        }
+        for (m, &y) in lanes.iter_mut().zip(c) {
+            *m = if y < *m { y } else { *m };
+        }
+        end -= RUN;
+    }
+    let mut vmin = lanes
+        .iter()
+        .fold(f64::INFINITY, |a, &m| if m < a { m } else { a });
+    for i in (lo..end).rev() {
+        if x[i] > v {
+            return (Some(i), vmin);
+        }
+        vmin = if x[i] < vmin { x[i] } else { vmin };
+    }
+    (None, vmin)
+}
+
+/// [`run_left`] mirrored: forward run over `[lo, hi]`.
+#[inline(always)]
+fn run_right(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+    let mut lanes = [f64::INFINITY; RUN];
+    let mut start = lo;
+    while start + RUN <= hi + 1 {
+        let c: &[f64; RUN] = x[start..start + RUN].try_into().expect("RUN samples");
+        if c.iter().fold(false, |a, &y| a | (y > v)) {
+            break;
+        }
+        for (m, &y) in lanes.iter_mut().zip(c) {
+            *m = if y < *m { y } else { *m };
+        }
+        start += RUN;
+    }
+    let mut vmin = lanes
+        .iter()
+        .fold(f64::INFINITY, |a, &m| if m < a { m } else { a });
+    for (i, &y) in x.iter().enumerate().take(hi + 1).skip(start) {
+        if y > v {
+            return (Some(i), vmin);
+        }
+        vmin = if y < vmin { y } else { vmin };
+    }
+    (None, vmin)
+}
+
+/// The last sample of `[a, b]` equal to `m` (`b` if none), by chunks of
+/// [`RUN`] compared at once.
+#[inline(always)]
+fn last_equal(x: &[f64], a: usize, b: usize, m: f64) -> usize {
+    let mut end = b + 1;
+    while end >= a + RUN {
+        let c: &[f64; RUN] = x[end - RUN..end].try_into().expect("RUN samples");
+        if c.iter().fold(false, |f, &y| f | (y == m)) {
+            break;
+        }
+        end -= RUN;
+    }
+    (a..end).rev().find(|&i| x[i] == m).unwrap_or(b)
+}
+
+/// The first sample of `[a, b]` equal to `m` (`a` if none).
+#[inline(always)]
+fn first_equal(x: &[f64], a: usize, b: usize, m: f64) -> usize {
+    let mut start = a;
+    while start + RUN <= b + 1 {
+        let c: &[f64; RUN] = x[start..start + RUN].try_into().expect("RUN samples");
+        if c.iter().fold(false, |f, &y| f | (y == m)) {
+            break;
+        }
+        start += RUN;
+    }
+    (start..=b).find(|&i| x[i] == m).unwrap_or(a)
+}
+
+/// Per peak, the base's value and index.
+pub(crate) type Bases = Vec<(f64, usize)>;
+
+/// Left and right bases ([`bases_left_sorted`], [`bases_right_sorted`]) of
+/// strictly increasing `peaks`; instantiated with AVX2 / AVX-512F in
+/// `crate::simd`.
+#[inline(always)]
+pub(crate) fn bases_sorted(x: &[f64], peaks: &[usize], h: usize) -> (Bases, Bases) {
+    (
+        bases_left_sorted(x, peaks, h),
+        bases_right_sorted(x, peaks, h),
+    )
+}
+
+/// A peak's finished base search, kept on the stack of
+/// [`bases_left_sorted`] / [`bases_right_sorted`]: every sample of
+/// `[lo, hi]` is `<= x[peak]` (the end at the peak), `min` is their
+/// minimum, found at `at` (nearest the peak on ties).
+#[derive(Clone, Copy)]
+struct Searched {
+    lo: usize,
+    hi: usize,
+    max: f64,
+    min: f64,
+    at: usize,
+}
+
+/// Left bases ([`scan_left`] within the window of half width `h`) of
+/// strictly increasing `peaks`, with a stack of the finished searches: a
+/// search reaching the previous peak's searched stretch, whose samples are
+/// all `<= ` that peak, takes its minimum whole if that peak is not higher
+/// (and the stretch lies in the window), else stops at that peak. Only
+/// samples no earlier search covered are read, in chunked runs, so the
+/// cost is O(n + k) instead of the tree's O(k log n). Same visiting order
+/// and strict `<` as SciPy, so the bases are identical.
+#[inline(always)]
+fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
+    let mut stack: Vec<Searched> = Vec::new();
+    let mut out = Vec::with_capacity(peaks.len());
+    for &p in peaks {
+        let v = x[p];
+        let wlo = p.saturating_sub(h);
+        // (min, where: a sample, or a run [a, b] holding its last copy)
+        let (mut vmin, mut at, mut run) = (v, p, None::<(usize, usize)>);
+        let mut pos = p; // samples [pos, p] are done
+        while pos > wlo {
+            match stack.last().copied() {
+                Some(s) if s.hi + 1 == pos => {
+                    if s.max > v {
+                        break;
+                    }
+                    stack.pop();
+                    if s.lo >= wlo {
+                        if s.min < vmin {
+                            (vmin, at, run) = (s.min, s.at, None);
+                        }
+                        pos = s.lo;
+                        continue;
+                    }
+                    // window edge inside a searched stretch: its samples
+                    // are <= v, read [wlo, s.hi] again.
+                    let (_, m) = run_left(x, wlo, s.hi, v);
+                    if m < vmin {
+                        (vmin, run) = (m, Some((wlo, s.hi)));
+                    }
+                    pos = wlo;
+                }
+                top => {
+                    let lo = top.map_or(wlo, |s| (s.hi + 1).max(wlo));
+                    let (stop, m) = run_left(x, lo, pos - 1, v);
+                    let first = stop.map_or(lo, |i| i + 1);
+                    if m < vmin {
+                        (vmin, run) = (m, Some((first, pos - 1)));
+                    }
+                    pos = first;
+                    if stop.is_some() {
+                        break;
+                    }
+                }
+            }
+        }
+        if let Some((a, b)) = run {
+            at = last_equal(x, a, b, vmin);
+        }
+        stack.push(Searched {
+            lo: pos,
+            hi: p,
+            max: v,
+            min: vmin,
+            at,
+        });
+        // x[at] rather than vmin: the same sample SciPy reads (signed zeros)
+        out.push((x[at], at));
+    }
+    out
+}
+
+/// [`bases_left_sorted`] mirrored: right bases ([`scan_right`]), the
+/// peaks taken from the last.
+#[inline(always)]
+fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
+    let n = x.len();
+    let mut stack: Vec<Searched> = Vec::new();
+    let mut out = vec![(0.0, 0); peaks.len()];
+    for (j, &p) in peaks.iter().enumerate().rev() {
+        let v = x[p];
+        let whi = (p + h).min(n - 1);
+        let (mut vmin, mut at, mut run) = (v, p, None::<(usize, usize)>);
+        let mut pos = p; // samples [p, pos] are done
+        while pos < whi {
+            match stack.last().copied() {
+                Some(s) if s.lo == pos + 1 => {
+                    if s.max > v {
+                        break;
+                    }
+                    stack.pop();
+                    if s.hi <= whi {
+                        if s.min < vmin {
+                            (vmin, at, run) = (s.min, s.at, None);
+                        }
+                        pos = s.hi;
+                        continue;
+                    }
+                    let (_, m) = run_right(x, s.lo, whi, v);
+                    if m < vmin {
+                        (vmin, run) = (m, Some((s.lo, whi)));
+                    }
+                    pos = whi;
+                }
+                top => {
+                    let hi = top.map_or(whi, |s| (s.lo - 1).min(whi));
+                    let (stop, m) = run_right(x, pos + 1, hi, v);
+                    let last = stop.map_or(hi, |i| i - 1);
+                    if m < vmin {
+                        (vmin, run) = (m, Some((pos + 1, last)));
+                    }
+                    pos = last;
+                    if stop.is_some() {
+                        break;
+                    }
+                }
+            }
+        }
+        if let Some((a, b)) = run {
+            at = first_equal(x, a, b, vmin);
+        }
+        stack.push(Searched {
+            lo: p,
+            hi: pos,
+            max: v,
+            min: vmin,
+            at,
+        });
+        out[j] = (x[at], at);
+    }
+    out
 }
 
 /// log2 of the branching factor of [`MinMaxTree`].
@@ -1448,6 +1707,80 @@ mod tests {
                         naive(&x, &peaks, half),
                         "len {len} levels {levels} half {half}"
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sorted_stack_search_matches_tree_and_scan() {
+        // Random sorted peak sets (all samples, random subsets, local maxima
+        // only) on signals with ties and plateaus (small alphabets, runs of
+        // equal values) and random walks, for windows from 1 sample to none.
+        let mut s = 4242u64;
+        let mut next = |m: u64| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % m
+        };
+        for len in (1..60).chain([200, 1000, 3000]) {
+            for kind in 0..4 {
+                let mut x: Vec<f64> = (0..len).map(|_| next(3 + 3 * kind) as f64).collect();
+                match kind {
+                    1 => {
+                        // plateaus: repeat values in runs
+                        for i in 1..len {
+                            if next(3) > 0 {
+                                x[i] = x[i - 1];
+                            }
+                        }
+                    }
+                    3 => {
+                        for i in 1..len {
+                            x[i] = x[i - 1] + x[i] - 5.0;
+                        }
+                    }
+                    _ => {}
+                }
+                let all: Vec<usize> = (0..len).collect();
+                let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
+                let (maxima, _) = local_maxima(&x);
+                for peaks in [all, some, maxima] {
+                    for half in [len, 1, 2, 3, 7, 16, 100, 1 + next(len as u64) as usize] {
+                        let h = half.min(len);
+                        let (left, right) = bases_sorted(&x, &peaks, h);
+                        let wide = match crate::simd::detect() {
+                            Some(Wide::Avx512(w)) => {
+                                assert_eq!(
+                                    w.avx2().bases_sorted(&x, &peaks, h),
+                                    (left.clone(), right.clone())
+                                );
+                                Some(w.bases_sorted(&x, &peaks, h))
+                            }
+                            Some(Wide::Avx2(w)) => Some(w.bases_sorted(&x, &peaks, h)),
+                            None => None,
+                        };
+                        assert!(wide.is_none_or(|w| w == (left.clone(), right.clone())));
+                        let mut fast = Prominences::default();
+                        for ((&p, (l, lb)), (r, rb)) in peaks.iter().zip(left).zip(right) {
+                            fast.prominences.push(x[p] - l.max(r));
+                            fast.left_bases.push(lb);
+                            fast.right_bases.push(rb);
+                        }
+                        let tree = MinMaxTree::new(&x);
+                        let mut slow = Prominences::default();
+                        for &p in &peaks {
+                            let (l, lb) = tree.base_left(p, p.saturating_sub(h));
+                            let (r, rb) = tree.base_right(p, (p + h).min(len - 1));
+                            slow.prominences.push(x[p] - l.max(r));
+                            slow.left_bases.push(lb);
+                            slow.right_bases.push(rb);
+                        }
+                        let what = format!("len {len} kind {kind} half {half} peaks {peaks:?}");
+                        assert_eq!(fast, slow, "tree: {what}");
+                        assert_eq!(fast, naive(&x, &peaks, h), "scan: {what}");
+                    }
                 }
             }
         }

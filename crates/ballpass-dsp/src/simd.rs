@@ -28,7 +28,7 @@
 #[cfg(not(target_arch = "x86_64"))]
 use crate::biquad::Baseline;
 use crate::biquad::{Coef, Isa, Lanes};
-use crate::peaks::PEAK_LANES;
+use crate::peaks::{Bases, PEAK_LANES};
 
 /// The widest kernels the running CPU supports.
 #[derive(Debug, Clone, Copy)]
@@ -147,10 +147,37 @@ macro_rules! wide_isa {
 
         /// The generic loops instantiated with the features enabled (they
         /// are `#[inline(always)]`, so they are compiled here).
+        impl $proof {
+            /// Left and right prominence bases of sorted peaks.
+            pub(crate) fn bases_sorted(
+                self,
+                x: &[f64],
+                peaks: &[usize],
+                h: usize,
+            ) -> (Bases, Bases) {
+                #[cfg(target_arch = "x86_64")]
+                unsafe {
+                    $module::bases_sorted(x, peaks, h)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                crate::peaks::bases_sorted(x, peaks, h)
+            }
+        }
+
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
-            use crate::peaks::PEAK_LANES;
+            use crate::peaks::{Bases, PEAK_LANES};
+
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn bases_sorted(
+                x: &[f64],
+                peaks: &[usize],
+                h: usize,
+            ) -> (Bases, Bases) {
+                crate::peaks::bases_sorted(x, peaks, h)
+            }
 
             /// [`crate::peaks::peak_lanes`] with the features.
             ///
