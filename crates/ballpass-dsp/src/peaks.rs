@@ -37,6 +37,7 @@
 //! # Ok::<(), ballpass_dsp::DspError>(())
 //! ```
 
+use crate::biquad::Baseline;
 use crate::error::{invalid, DspError, Result};
 use crate::simd::Wide;
 
@@ -975,9 +976,9 @@ fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Pro
         }
     } else if peaks.windows(2).all(|w| w[0] < w[1]) {
         let (left, right) = match crate::simd::detect() {
-            Some(Wide::Avx512(w)) => w.bases_sorted(x, peaks, h),
-            Some(Wide::Avx2(w)) => w.bases_sorted(x, peaks, h),
-            None => bases_sorted(x, peaks, h),
+            Some(Wide::Avx512(w)) => bases_sorted(x, peaks, h, w),
+            Some(Wide::Avx2(w)) => bases_sorted(x, peaks, h, w),
+            None => bases_sorted(x, peaks, h, Baseline),
         };
         for ((&p, (lmin, lb)), (rmin, rb)) in peaks.iter().zip(left).zip(right) {
             out.prominences.push(x[p] - lmin.max(rmin));
@@ -1032,31 +1033,74 @@ fn scan_right(x: &[f64], p: usize, hi: usize) -> (f64, usize) {
     (vmin, base)
 }
 
-/// Lanes of the chunked runs in [`run_left`] and [`run_right`].
+/// Lanes of the chunked runs in [`run_left`] and [`run_right`] (and of
+/// [`last_equal`], [`first_equal`]).
 const RUN: usize = 8;
 
-/// Backward run over `[lo, hi]` as SciPy's left scan with threshold `v`:
-/// the first sample `> v` met from `hi` downwards (`None` if all are
-/// `<= v`) and the minimum of the samples after it (`+inf` if none).
-/// Chunks of [`RUN`] samples without a sample `> v` only update lane
-/// minima (vectorises); the chunk holding the stop is scanned sample by
-/// sample.
-fn run_left(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
-    let mut lanes = [f64::INFINITY; RUN];
-    let mut end = hi + 1;
-    while end >= lo + RUN {
-        let c: &[f64; RUN] = x[end - RUN..end].try_into().expect("RUN samples");
+/// Lane minima of the chunks of `W` samples ending at `end` and going down
+/// to `lo` while no sample is `> v`; returns where the chunks stopped.
+#[inline(always)]
+fn lanes_left<const W: usize>(
+    x: &[f64],
+    lo: usize,
+    mut end: usize,
+    v: f64,
+    lanes: &mut [f64; W],
+) -> usize {
+    while end >= lo + W {
+        let c: &[f64; W] = x[end - W..end].try_into().expect("W samples");
         if c.iter().fold(false, |a, &y| a | (y > v)) {
             break;
         }
         for (m, &y) in lanes.iter_mut().zip(c) {
             *m = if y < *m { y } else { *m };
         }
-        end -= RUN;
+        end -= W;
     }
-    let mut vmin = lanes
+    end
+}
+
+/// [`lanes_left`] mirrored: chunks from `start` up to `end` (exclusive).
+#[inline(always)]
+fn lanes_right<const W: usize>(
+    x: &[f64],
+    mut start: usize,
+    end: usize,
+    v: f64,
+    lanes: &mut [f64; W],
+) -> usize {
+    while start + W <= end {
+        let c: &[f64; W] = x[start..start + W].try_into().expect("W samples");
+        if c.iter().fold(false, |a, &y| a | (y > v)) {
+            break;
+        }
+        for (m, &y) in lanes.iter_mut().zip(c) {
+            *m = if y < *m { y } else { *m };
+        }
+        start += W;
+    }
+    start
+}
+
+/// Smallest of lane minima (exact: the order does not matter).
+#[inline(always)]
+fn lanes_min(lanes: &[f64]) -> f64 {
+    lanes
         .iter()
-        .fold(f64::INFINITY, |a, &m| if m < a { m } else { a });
+        .fold(f64::INFINITY, |a, &m| if m < a { m } else { a })
+}
+
+/// Backward run over `[lo, hi]` as SciPy's left scan with threshold `v`:
+/// the first sample `> v` met from `hi` downwards (`None` if all are
+/// `<= v`) and the minimum of the samples after it (`+inf` if none).
+/// Chunks of [`RUN`] samples without a sample `> v` only update lane
+/// minima (vectorises); the rest, from the chunk holding the stop, is
+/// scanned sample by sample.
+#[inline(always)]
+pub(crate) fn run_left(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+    let mut lanes = [f64::INFINITY; RUN];
+    let end = lanes_left(x, lo, hi + 1, v, &mut lanes);
+    let mut vmin = lanes_min(&lanes);
     for i in (lo..end).rev() {
         if x[i] > v {
             return (Some(i), vmin);
@@ -1068,22 +1112,10 @@ fn run_left(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
 
 /// [`run_left`] mirrored: forward run over `[lo, hi]`.
 #[inline(always)]
-fn run_right(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+pub(crate) fn run_right(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
     let mut lanes = [f64::INFINITY; RUN];
-    let mut start = lo;
-    while start + RUN <= hi + 1 {
-        let c: &[f64; RUN] = x[start..start + RUN].try_into().expect("RUN samples");
-        if c.iter().fold(false, |a, &y| a | (y > v)) {
-            break;
-        }
-        for (m, &y) in lanes.iter_mut().zip(c) {
-            *m = if y < *m { y } else { *m };
-        }
-        start += RUN;
-    }
-    let mut vmin = lanes
-        .iter()
-        .fold(f64::INFINITY, |a, &m| if m < a { m } else { a });
+    let start = lanes_right(x, lo, hi + 1, v, &mut lanes);
+    let mut vmin = lanes_min(&lanes);
     for (i, &y) in x.iter().enumerate().take(hi + 1).skip(start) {
         if y > v {
             return (Some(i), vmin);
@@ -1123,16 +1155,32 @@ fn first_equal(x: &[f64], a: usize, b: usize, m: f64) -> usize {
 }
 
 /// Per peak, the base's value and index.
-pub(crate) type Bases = Vec<(f64, usize)>;
+type Bases = Vec<(f64, usize)>;
+
+/// [`run_left`] and [`run_right`], instantiated with AVX2 / AVX-512F in
+/// `crate::simd` (the same results: exact minima, same comparisons).
+pub(crate) trait Runs: Copy {
+    /// [`run_left`].
+    fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64);
+    /// [`run_right`].
+    fn run_right(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64);
+}
+
+impl Runs for Baseline {
+    fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+        run_left(x, lo, hi, v)
+    }
+    fn run_right(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+        run_right(x, lo, hi, v)
+    }
+}
 
 /// Left and right bases ([`bases_left_sorted`], [`bases_right_sorted`]) of
-/// strictly increasing `peaks`; instantiated with AVX2 / AVX-512F in
-/// `crate::simd`.
-#[inline(always)]
-pub(crate) fn bases_sorted(x: &[f64], peaks: &[usize], h: usize) -> (Bases, Bases) {
+/// strictly increasing `peaks`, the runs by `runs`.
+fn bases_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> (Bases, Bases) {
     (
-        bases_left_sorted(x, peaks, h),
-        bases_right_sorted(x, peaks, h),
+        bases_left_sorted(x, peaks, h, runs),
+        bases_right_sorted(x, peaks, h, runs),
     )
 }
 
@@ -1157,8 +1205,7 @@ struct Searched {
 /// samples no earlier search covered are read, in chunked runs, so the
 /// cost is O(n + k) instead of the tree's O(k log n). Same visiting order
 /// and strict `<` as SciPy, so the bases are identical.
-#[inline(always)]
-fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
+fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> Bases {
     let mut stack: Vec<Searched> = Vec::new();
     let mut out = Vec::with_capacity(peaks.len());
     for &p in peaks {
@@ -1173,25 +1220,20 @@ fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
                     if s.max > v {
                         break;
                     }
+                    // With the window's edge inside it, the stretch is
+                    // dropped and its samples in the window are read again
+                    // as a run on the next turn (all <= v, no stop).
                     stack.pop();
                     if s.lo >= wlo {
                         if s.min < vmin {
                             (vmin, at, run) = (s.min, s.at, None);
                         }
                         pos = s.lo;
-                        continue;
                     }
-                    // window edge inside a searched stretch: its samples
-                    // are <= v, read [wlo, s.hi] again.
-                    let (_, m) = run_left(x, wlo, s.hi, v);
-                    if m < vmin {
-                        (vmin, run) = (m, Some((wlo, s.hi)));
-                    }
-                    pos = wlo;
                 }
                 top => {
                     let lo = top.map_or(wlo, |s| (s.hi + 1).max(wlo));
-                    let (stop, m) = run_left(x, lo, pos - 1, v);
+                    let (stop, m) = runs.run_left(x, lo, pos - 1, v);
                     let first = stop.map_or(lo, |i| i + 1);
                     if m < vmin {
                         (vmin, run) = (m, Some((first, pos - 1)));
@@ -1221,8 +1263,7 @@ fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
 
 /// [`bases_left_sorted`] mirrored: right bases ([`scan_right`]), the
 /// peaks taken from the last.
-#[inline(always)]
-fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
+fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> Bases {
     let n = x.len();
     let mut stack: Vec<Searched> = Vec::new();
     let mut out = vec![(0.0, 0); peaks.len()];
@@ -1243,17 +1284,11 @@ fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize) -> Bases {
                             (vmin, at, run) = (s.min, s.at, None);
                         }
                         pos = s.hi;
-                        continue;
                     }
-                    let (_, m) = run_right(x, s.lo, whi, v);
-                    if m < vmin {
-                        (vmin, run) = (m, Some((s.lo, whi)));
-                    }
-                    pos = whi;
                 }
                 top => {
                     let hi = top.map_or(whi, |s| (s.lo - 1).min(whi));
-                    let (stop, m) = run_right(x, pos + 1, hi, v);
+                    let (stop, m) = runs.run_right(x, pos + 1, hi, v);
                     let last = stop.map_or(hi, |i| i - 1);
                     if m < vmin {
                         (vmin, run) = (m, Some((pos + 1, last)));
@@ -1749,16 +1784,16 @@ mod tests {
                 for peaks in [all, some, maxima] {
                     for half in [len, 1, 2, 3, 7, 16, 100, 1 + next(len as u64) as usize] {
                         let h = half.min(len);
-                        let (left, right) = bases_sorted(&x, &peaks, h);
+                        let (left, right) = bases_sorted(&x, &peaks, h, Baseline);
                         let wide = match crate::simd::detect() {
                             Some(Wide::Avx512(w)) => {
                                 assert_eq!(
-                                    w.avx2().bases_sorted(&x, &peaks, h),
+                                    bases_sorted(&x, &peaks, h, w.avx2()),
                                     (left.clone(), right.clone())
                                 );
-                                Some(w.bases_sorted(&x, &peaks, h))
+                                Some(bases_sorted(&x, &peaks, h, w))
                             }
-                            Some(Wide::Avx2(w)) => Some(w.bases_sorted(&x, &peaks, h)),
+                            Some(Wide::Avx2(w)) => Some(bases_sorted(&x, &peaks, h, w)),
                             None => None,
                         };
                         assert!(wide.is_none_or(|w| w == (left.clone(), right.clone())));

@@ -28,7 +28,7 @@
 #[cfg(not(target_arch = "x86_64"))]
 use crate::biquad::Baseline;
 use crate::biquad::{Coef, Isa, Lanes};
-use crate::peaks::{Bases, PEAK_LANES};
+use crate::peaks::PEAK_LANES;
 
 /// The widest kernels the running CPU supports.
 #[derive(Debug, Clone, Copy)]
@@ -147,36 +147,51 @@ macro_rules! wide_isa {
 
         /// The generic loops instantiated with the features enabled (they
         /// are `#[inline(always)]`, so they are compiled here).
-        impl $proof {
-            /// Left and right prominence bases of sorted peaks.
-            pub(crate) fn bases_sorted(
-                self,
-                x: &[f64],
-                peaks: &[usize],
-                h: usize,
-            ) -> (Bases, Bases) {
+        impl crate::peaks::Runs for $proof {
+            fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
                 #[cfg(target_arch = "x86_64")]
                 unsafe {
-                    $module::bases_sorted(x, peaks, h)
+                    $module::run_left(x, lo, hi, v)
                 }
                 #[cfg(not(target_arch = "x86_64"))]
-                crate::peaks::bases_sorted(x, peaks, h)
+                crate::peaks::run_left(x, lo, hi, v)
+            }
+
+            fn run_right(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+                #[cfg(target_arch = "x86_64")]
+                unsafe {
+                    $module::run_right(x, lo, hi, v)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                crate::peaks::run_right(x, lo, hi, v)
             }
         }
 
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
-            use crate::peaks::{Bases, PEAK_LANES};
+            use crate::peaks::PEAK_LANES;
 
             #[target_feature(enable = $features)]
             #[inline(never)]
-            pub(super) unsafe fn bases_sorted(
+            pub(super) unsafe fn run_left(
                 x: &[f64],
-                peaks: &[usize],
-                h: usize,
-            ) -> (Bases, Bases) {
-                crate::peaks::bases_sorted(x, peaks, h)
+                lo: usize,
+                hi: usize,
+                v: f64,
+            ) -> (Option<usize>, f64) {
+                crate::peaks::run_left(x, lo, hi, v)
+            }
+
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn run_right(
+                x: &[f64],
+                lo: usize,
+                hi: usize,
+                v: f64,
+            ) -> (Option<usize>, f64) {
+                crate::peaks::run_right(x, lo, hi, v)
             }
 
             /// [`crate::peaks::peak_lanes`] with the features.
