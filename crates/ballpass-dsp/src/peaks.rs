@@ -925,9 +925,14 @@ fn apply(peaks: &mut Vec<usize>, props: &mut PeakProperties, keep: &[bool]) {
 /// `peaks` need not be local maxima, sorted or unique (a sample that is not
 /// a maximum gets prominence 0 and itself as bases, SciPy warns). SciPy
 /// scans sample by sample up to the next higher sample, O(n) per peak on a
-/// periodic signal; here each search steps over blocks of 16, 256, ...
-/// samples (O(n) to build, O(log n) per peak) visiting them in SciPy's
-/// order, so the results are identical.
+/// periodic signal. Here strictly increasing peaks (as [`find_peaks`]
+/// returns them) reuse the searches of the peaks before them: a search
+/// reaching a neighbour's searched stretch (all samples `<=` that peak)
+/// takes its minimum whole or stops at that peak, so each sample is read
+/// about once per side, in vector chunks (O(n + k)). Other peak lists step
+/// over blocks of 16, 256, ... samples (O(n) to build, O(log n) per
+/// peak). Both visit the samples in SciPy's order with its strict `<`, so
+/// the results are identical.
 ///
 /// ```
 /// use ballpass_dsp::peak_prominences;
