@@ -16,6 +16,9 @@
 //! | ... fused distance scan + AVX lanes, load ~1.2 (old/new alternating): |
 //! | find_peaks + peak_widths   | 156 us | 69 us    | 427 us       | 6.2x  |
 //! | find_peaks                 | 83 us  | 44 us    | 293 us       | 6.7x  |
+//! | ... prominence bases of the sorted peaks by a stack, load ~1.1:     |
+//! | find_peaks + peak_widths   | 71 us  | 50 us    | 451 us       | 9.0x  |
+//! | find_peaks                 | 46 us  | 37 us    | 306 us       | 8.3x  |
 //!
 //! (The later rows: criterion's fastest sample, SciPy's best repeat just
 //! before. An A/B of best-of-2000 single calls, old and new binaries
@@ -43,13 +46,27 @@
 //! Per call now, from a perf profile: lane loop ~4 us, the rest of the
 //! block-top search ~5 us, input check ~2 us.
 //!
-//! Left for 10x: the prominence tree queries, ~70 ns per peak, ~17 us in
-//! find_peaks (226 peaks after `distance`) and ~9 us again in peak_widths
-//! (149 peaks), plus ~4 us per tree build. Tried without gain: 8-ary and
-//! 4-ary trees (+-2 % / +15 %), the tree levels through the AVX dispatch
-//! (<= 2 %). Next: left/right bases of the sorted peaks by a stack of
-//! merged gap summaries (max, min) with the tree only where a gap holds a
-//! sample above the peak.
+//! The prominence tree queries (~70 ns per peak, ~17 us in find_peaks for
+//! the 226 peaks after `distance`, ~9 us again in peak_widths for 149, plus
+//! ~4 us per tree build; 8-ary and 4-ary trees and the tree levels through
+//! the AVX dispatch gave nothing) are replaced for sorted peaks by a stack
+//! of finished searches (`bases_left_sorted`): a search that reaches the
+//! previous peak's searched stretch takes its minimum whole or stops at
+//! that peak, and only samples no search has read are scanned, in chunks
+//! of 8 (AVX2 / AVX-512F instances). Old (HEAD before) and new binaries
+//! alternating, criterion's estimate: 71-78 -> 50-52 us with peak_widths,
+//! 46-47 -> 37 us for find_peaks; SciPy 451-461 / 306-318 us, load ~1.1.
+//!
+//! Left for 10x (~45 us with peak_widths): the chunked runs still read
+//! nearly every sample once per side and call (4 x 30 000 samples, ~12 us,
+//! bound by the 4-cycle minimum chain per chunk of 8), and locating the
+//! base in a run is a second chunked search (~5 us). Tried without gain:
+//! runs of 32 with 4 chains (+40 %), branch-free stop chunks (+5 %), the
+//! equality search through the AVX dispatch (+-0). Ideas: carry the
+//! position of the lane minima in the run (no second search); per-block
+//! (max, min) summaries so that runs step over blocks whose maximum is
+//! `<= v`; share one prominence pass between find_peaks and peak_widths
+//! through `peak_widths_with_prominences` where the caller has both.
 // criterion_group! generates an undocumented pub fn.
 #![allow(missing_docs)]
 

@@ -37,6 +37,7 @@
 //! # Ok::<(), ballpass_dsp::DspError>(())
 //! ```
 
+use crate::biquad::Baseline;
 use crate::error::{invalid, DspError, Result};
 use crate::simd::Wide;
 
@@ -924,9 +925,14 @@ fn apply(peaks: &mut Vec<usize>, props: &mut PeakProperties, keep: &[bool]) {
 /// `peaks` need not be local maxima, sorted or unique (a sample that is not
 /// a maximum gets prominence 0 and itself as bases, SciPy warns). SciPy
 /// scans sample by sample up to the next higher sample, O(n) per peak on a
-/// periodic signal; here each search steps over blocks of 16, 256, ...
-/// samples (O(n) to build, O(log n) per peak) visiting them in SciPy's
-/// order, so the results are identical.
+/// periodic signal. Here strictly increasing peaks (as [`find_peaks`]
+/// returns them) reuse the searches of the peaks before them: a search
+/// reaching a neighbour's searched stretch (all samples `<=` that peak)
+/// takes its minimum whole or stops at that peak, so each sample is read
+/// about once per side, in vector chunks (O(n + k)). Other peak lists step
+/// over blocks of 16, 256, ... samples (O(n) to build, O(log n) per
+/// peak). Both visit the samples in SciPy's order with its strict `<`, so
+/// the results are identical.
 ///
 /// ```
 /// use ballpass_dsp::peak_prominences;
@@ -969,6 +975,17 @@ fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Pro
             let (lo, hi) = window(p);
             let (lmin, lb) = scan_left(x, p, lo);
             let (rmin, rb) = scan_right(x, p, hi);
+            out.prominences.push(x[p] - lmin.max(rmin));
+            out.left_bases.push(lb);
+            out.right_bases.push(rb);
+        }
+    } else if peaks.windows(2).all(|w| w[0] < w[1]) {
+        let (left, right) = match crate::simd::detect() {
+            Some(Wide::Avx512(w)) => bases_sorted(x, peaks, h, w),
+            Some(Wide::Avx2(w)) => bases_sorted(x, peaks, h, w),
+            None => bases_sorted(x, peaks, h, Baseline),
+        };
+        for ((&p, (lmin, lb)), (rmin, rb)) in peaks.iter().zip(left).zip(right) {
             out.prominences.push(x[p] - lmin.max(rmin));
             out.left_bases.push(lb);
             out.right_bases.push(rb);
@@ -1019,6 +1036,288 @@ fn scan_right(x: &[f64], p: usize, hi: usize) -> (f64, usize) {
         }
     }
     (vmin, base)
+}
+
+/// Lanes of the chunked runs in [`run_left`] and [`run_right`] (and of
+/// [`last_equal`], [`first_equal`]).
+const RUN: usize = 8;
+
+/// Lane minima of the chunks of `W` samples ending at `end` and going down
+/// to `lo` while no sample is `> v`; returns where the chunks stopped.
+#[inline(always)]
+fn lanes_left<const W: usize>(
+    x: &[f64],
+    lo: usize,
+    mut end: usize,
+    v: f64,
+    lanes: &mut [f64; W],
+) -> usize {
+    while end >= lo + W {
+        let c: &[f64; W] = x[end - W..end].try_into().expect("W samples");
+        if c.iter().fold(false, |a, &y| a | (y > v)) {
+            break;
+        }
+        for (m, &y) in lanes.iter_mut().zip(c) {
+            *m = if y < *m { y } else { *m };
+        }
+        end -= W;
+    }
+    end
+}
+
+/// [`lanes_left`] mirrored: chunks from `start` up to `end` (exclusive).
+#[inline(always)]
+fn lanes_right<const W: usize>(
+    x: &[f64],
+    mut start: usize,
+    end: usize,
+    v: f64,
+    lanes: &mut [f64; W],
+) -> usize {
+    while start + W <= end {
+        let c: &[f64; W] = x[start..start + W].try_into().expect("W samples");
+        if c.iter().fold(false, |a, &y| a | (y > v)) {
+            break;
+        }
+        for (m, &y) in lanes.iter_mut().zip(c) {
+            *m = if y < *m { y } else { *m };
+        }
+        start += W;
+    }
+    start
+}
+
+/// Smallest of lane minima (exact: the order does not matter).
+#[inline(always)]
+fn lanes_min(lanes: &[f64]) -> f64 {
+    lanes
+        .iter()
+        .fold(f64::INFINITY, |a, &m| if m < a { m } else { a })
+}
+
+/// Backward run over `[lo, hi]` as SciPy's left scan with threshold `v`:
+/// the first sample `> v` met from `hi` downwards (`None` if all are
+/// `<= v`) and the minimum of the samples after it (`+inf` if none).
+/// Chunks of [`RUN`] samples without a sample `> v` only update lane
+/// minima (vectorises); the rest, from the chunk holding the stop, is
+/// scanned sample by sample.
+#[inline(always)]
+pub(crate) fn run_left(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+    let mut lanes = [f64::INFINITY; RUN];
+    let end = lanes_left(x, lo, hi + 1, v, &mut lanes);
+    let mut vmin = lanes_min(&lanes);
+    for i in (lo..end).rev() {
+        if x[i] > v {
+            return (Some(i), vmin);
+        }
+        vmin = if x[i] < vmin { x[i] } else { vmin };
+    }
+    (None, vmin)
+}
+
+/// [`run_left`] mirrored: forward run over `[lo, hi]`.
+#[inline(always)]
+pub(crate) fn run_right(x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+    let mut lanes = [f64::INFINITY; RUN];
+    let start = lanes_right(x, lo, hi + 1, v, &mut lanes);
+    let mut vmin = lanes_min(&lanes);
+    for (i, &y) in x.iter().enumerate().take(hi + 1).skip(start) {
+        if y > v {
+            return (Some(i), vmin);
+        }
+        vmin = if y < vmin { y } else { vmin };
+    }
+    (None, vmin)
+}
+
+/// The last sample of `[a, b]` equal to `m` (`b` if none), by chunks of
+/// [`RUN`] compared at once.
+#[inline(always)]
+fn last_equal(x: &[f64], a: usize, b: usize, m: f64) -> usize {
+    let mut end = b + 1;
+    while end >= a + RUN {
+        let c: &[f64; RUN] = x[end - RUN..end].try_into().expect("RUN samples");
+        if c.iter().fold(false, |f, &y| f | (y == m)) {
+            break;
+        }
+        end -= RUN;
+    }
+    (a..end).rev().find(|&i| x[i] == m).unwrap_or(b)
+}
+
+/// The first sample of `[a, b]` equal to `m` (`a` if none).
+#[inline(always)]
+fn first_equal(x: &[f64], a: usize, b: usize, m: f64) -> usize {
+    let mut start = a;
+    while start + RUN <= b + 1 {
+        let c: &[f64; RUN] = x[start..start + RUN].try_into().expect("RUN samples");
+        if c.iter().fold(false, |f, &y| f | (y == m)) {
+            break;
+        }
+        start += RUN;
+    }
+    (start..=b).find(|&i| x[i] == m).unwrap_or(a)
+}
+
+/// Per peak, the base's value and index.
+type Bases = Vec<(f64, usize)>;
+
+/// [`run_left`] and [`run_right`], instantiated with AVX2 / AVX-512F in
+/// `crate::simd` (the same results: exact minima, same comparisons).
+pub(crate) trait Runs: Copy {
+    /// [`run_left`].
+    fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64);
+    /// [`run_right`].
+    fn run_right(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64);
+}
+
+impl Runs for Baseline {
+    fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+        run_left(x, lo, hi, v)
+    }
+    fn run_right(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+        run_right(x, lo, hi, v)
+    }
+}
+
+/// Left and right bases ([`bases_left_sorted`], [`bases_right_sorted`]) of
+/// strictly increasing `peaks`, the runs by `runs`.
+fn bases_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> (Bases, Bases) {
+    (
+        bases_left_sorted(x, peaks, h, runs),
+        bases_right_sorted(x, peaks, h, runs),
+    )
+}
+
+/// A peak's finished base search, kept on the stack of
+/// [`bases_left_sorted`] / [`bases_right_sorted`]: every sample of
+/// `[lo, hi]` is `<= x[peak]` (the end at the peak), `min` is their
+/// minimum, found at `at` (nearest the peak on ties).
+#[derive(Clone, Copy)]
+struct Searched {
+    lo: usize,
+    hi: usize,
+    max: f64,
+    min: f64,
+    at: usize,
+}
+
+/// Left bases ([`scan_left`] within the window of half width `h`) of
+/// strictly increasing `peaks`, with a stack of the finished searches: a
+/// search reaching the previous peak's searched stretch, whose samples are
+/// all `<= ` that peak, takes its minimum whole if that peak is not higher
+/// (and the stretch lies in the window), else stops at that peak. Only
+/// samples no earlier search covered are read, in chunked runs, so the
+/// cost is O(n + k) instead of the tree's O(k log n). Same visiting order
+/// and strict `<` as SciPy, so the bases are identical.
+fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> Bases {
+    let mut stack: Vec<Searched> = Vec::new();
+    let mut out = Vec::with_capacity(peaks.len());
+    for &p in peaks {
+        let v = x[p];
+        let wlo = p.saturating_sub(h);
+        // (min, where: a sample, or a run [a, b] holding its last copy)
+        let (mut vmin, mut at, mut run) = (v, p, None::<(usize, usize)>);
+        let mut pos = p; // samples [pos, p] are done
+        while pos > wlo {
+            match stack.last().copied() {
+                Some(s) if s.hi + 1 == pos => {
+                    if s.max > v {
+                        break;
+                    }
+                    // With the window's edge inside it, the stretch is
+                    // dropped and its samples in the window are read again
+                    // as a run on the next turn (all <= v, no stop).
+                    stack.pop();
+                    if s.lo >= wlo {
+                        if s.min < vmin {
+                            (vmin, at, run) = (s.min, s.at, None);
+                        }
+                        pos = s.lo;
+                    }
+                }
+                top => {
+                    let lo = top.map_or(wlo, |s| (s.hi + 1).max(wlo));
+                    let (stop, m) = runs.run_left(x, lo, pos - 1, v);
+                    let first = stop.map_or(lo, |i| i + 1);
+                    if m < vmin {
+                        (vmin, run) = (m, Some((first, pos - 1)));
+                    }
+                    pos = first;
+                    if stop.is_some() {
+                        break;
+                    }
+                }
+            }
+        }
+        if let Some((a, b)) = run {
+            at = last_equal(x, a, b, vmin);
+        }
+        stack.push(Searched {
+            lo: pos,
+            hi: p,
+            max: v,
+            min: vmin,
+            at,
+        });
+        // x[at] rather than vmin: the same sample SciPy reads (signed zeros)
+        out.push((x[at], at));
+    }
+    out
+}
+
+/// [`bases_left_sorted`] mirrored: right bases ([`scan_right`]), the
+/// peaks taken from the last.
+fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> Bases {
+    let n = x.len();
+    let mut stack: Vec<Searched> = Vec::new();
+    let mut out = vec![(0.0, 0); peaks.len()];
+    for (j, &p) in peaks.iter().enumerate().rev() {
+        let v = x[p];
+        let whi = (p + h).min(n - 1);
+        let (mut vmin, mut at, mut run) = (v, p, None::<(usize, usize)>);
+        let mut pos = p; // samples [p, pos] are done
+        while pos < whi {
+            match stack.last().copied() {
+                Some(s) if s.lo == pos + 1 => {
+                    if s.max > v {
+                        break;
+                    }
+                    stack.pop();
+                    if s.hi <= whi {
+                        if s.min < vmin {
+                            (vmin, at, run) = (s.min, s.at, None);
+                        }
+                        pos = s.hi;
+                    }
+                }
+                top => {
+                    let hi = top.map_or(whi, |s| (s.lo - 1).min(whi));
+                    let (stop, m) = runs.run_right(x, pos + 1, hi, v);
+                    let last = stop.map_or(hi, |i| i - 1);
+                    if m < vmin {
+                        (vmin, run) = (m, Some((pos + 1, last)));
+                    }
+                    pos = last;
+                    if stop.is_some() {
+                        break;
+                    }
+                }
+            }
+        }
+        if let Some((a, b)) = run {
+            at = first_equal(x, a, b, vmin);
+        }
+        stack.push(Searched {
+            lo: p,
+            hi: pos,
+            max: v,
+            min: vmin,
+            at,
+        });
+        out[j] = (x[at], at);
+    }
+    out
 }
 
 /// log2 of the branching factor of [`MinMaxTree`].
@@ -1448,6 +1747,80 @@ mod tests {
                         naive(&x, &peaks, half),
                         "len {len} levels {levels} half {half}"
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sorted_stack_search_matches_tree_and_scan() {
+        // Random sorted peak sets (all samples, random subsets, local maxima
+        // only) on signals with ties and plateaus (small alphabets, runs of
+        // equal values) and random walks, for windows from 1 sample to none.
+        let mut s = 4242u64;
+        let mut next = |m: u64| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % m
+        };
+        for len in (1..60).chain([200, 1000, 3000]) {
+            for kind in 0..4 {
+                let mut x: Vec<f64> = (0..len).map(|_| next(3 + 3 * kind) as f64).collect();
+                match kind {
+                    1 => {
+                        // plateaus: repeat values in runs
+                        for i in 1..len {
+                            if next(3) > 0 {
+                                x[i] = x[i - 1];
+                            }
+                        }
+                    }
+                    3 => {
+                        for i in 1..len {
+                            x[i] = x[i - 1] + x[i] - 5.0;
+                        }
+                    }
+                    _ => {}
+                }
+                let all: Vec<usize> = (0..len).collect();
+                let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
+                let (maxima, _) = local_maxima(&x);
+                for peaks in [all, some, maxima] {
+                    for half in [len, 1, 2, 3, 7, 16, 100, 1 + next(len as u64) as usize] {
+                        let h = half.min(len);
+                        let (left, right) = bases_sorted(&x, &peaks, h, Baseline);
+                        let wide = match crate::simd::detect() {
+                            Some(Wide::Avx512(w)) => {
+                                assert_eq!(
+                                    bases_sorted(&x, &peaks, h, w.avx2()),
+                                    (left.clone(), right.clone())
+                                );
+                                Some(bases_sorted(&x, &peaks, h, w))
+                            }
+                            Some(Wide::Avx2(w)) => Some(bases_sorted(&x, &peaks, h, w)),
+                            None => None,
+                        };
+                        assert!(wide.is_none_or(|w| w == (left.clone(), right.clone())));
+                        let mut fast = Prominences::default();
+                        for ((&p, (l, lb)), (r, rb)) in peaks.iter().zip(left).zip(right) {
+                            fast.prominences.push(x[p] - l.max(r));
+                            fast.left_bases.push(lb);
+                            fast.right_bases.push(rb);
+                        }
+                        let tree = MinMaxTree::new(&x);
+                        let mut slow = Prominences::default();
+                        for &p in &peaks {
+                            let (l, lb) = tree.base_left(p, p.saturating_sub(h));
+                            let (r, rb) = tree.base_right(p, (p + h).min(len - 1));
+                            slow.prominences.push(x[p] - l.max(r));
+                            slow.left_bases.push(lb);
+                            slow.right_bases.push(rb);
+                        }
+                        let what = format!("len {len} kind {kind} half {half} peaks {peaks:?}");
+                        assert_eq!(fast, slow, "tree: {what}");
+                        assert_eq!(fast, naive(&x, &peaks, h), "scan: {what}");
+                    }
                 }
             }
         }

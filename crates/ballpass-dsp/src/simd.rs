@@ -179,6 +179,30 @@ macro_rules! wide_isa {
 
         /// The generic loops instantiated with the features enabled (they
         /// are `#[inline(always)]`, so they are compiled here).
+        impl crate::peaks::Runs for $proof {
+            fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `run_lanes` above: the features were
+                // detected.
+                unsafe {
+                    $module::run_left(x, lo, hi, v)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                crate::peaks::run_left(x, lo, hi, v)
+            }
+
+            fn run_right(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as in `run_lanes` above: the features were
+                // detected.
+                unsafe {
+                    $module::run_right(x, lo, hi, v)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                crate::peaks::run_right(x, lo, hi, v)
+            }
+        }
+
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
@@ -192,6 +216,28 @@ macro_rules! wide_isa {
             #[inline(never)]
             pub(super) unsafe fn run<R, F: FnOnce() -> R>(f: F) -> R {
                 f()
+            }
+
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn run_left(
+                x: &[f64],
+                lo: usize,
+                hi: usize,
+                v: f64,
+            ) -> (Option<usize>, f64) {
+                crate::peaks::run_left(x, lo, hi, v)
+            }
+
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn run_right(
+                x: &[f64],
+                lo: usize,
+                hi: usize,
+                v: f64,
+            ) -> (Option<usize>, f64) {
+                crate::peaks::run_right(x, lo, hi, v)
             }
 
             /// [`crate::peaks::peak_lanes`] with the features.
