@@ -177,8 +177,6 @@ macro_rules! wide_isa {
             }
         }
 
-        /// The generic loops instantiated with the features enabled (they
-        /// are `#[inline(always)]`, so they are compiled here).
         impl crate::peaks::Runs for $proof {
             fn run_left(self, x: &[f64], lo: usize, hi: usize, v: f64) -> (Option<usize>, f64) {
                 #[cfg(target_arch = "x86_64")]
@@ -203,6 +201,8 @@ macro_rules! wide_isa {
             }
         }
 
+        /// The generic loops instantiated with the features enabled (they
+        /// are `#[inline(always)]`, so they are compiled here).
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
