@@ -20,7 +20,9 @@ that both see the same machine) and prints the ratio.
 
 Session 2 figures (idle machine, load ~1, simulated campaign of 150 records):
 sweep 0.31 s + diagnose 0.16 s = 0.48 s vs SciPy 7.73 s, 16.1x (earlier run:
-0.49 s vs 7.54 s, 15.4x).
+0.49 s vs 7.54 s, 15.4x). On the session's final main (peaks and csd work
+merged), three runs, load ~1.5: 0.46 / 0.50 / 0.48 s vs 8.74 / 8.80 / 8.30 s,
+19.0x / 17.5x / 17.5x (the SciPy loop's own time varies by 15 % between runs).
 """
 import csv
 import json

@@ -34,7 +34,8 @@
 //! 45 ms (1.9x one record). The ~8 ms between the in-process and the
 //! process figures is a cold process's FFT planning, first-touch page faults
 //! and start-up; the text of `correlations.csv` (7.9 MB, 420 000 numbers)
-//! is half of what is left.
+//! is half of what is left. On the session's final main (load ~1.5): best
+//! 22.3 ms vs SciPy 253 ms, 11.3x; five repeats 44 ms.
 
 use std::hint::black_box;
 
