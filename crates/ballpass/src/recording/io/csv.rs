@@ -206,11 +206,11 @@ fn fast_rows(
     std::str::from_utf8(text).ok()?;
     let first_line = after_header.line();
     let mid = text.len() / 2;
-    let split = text[mid..]
-        .iter()
-        .position(|&b| b == b'\n')
+    let split = (text.len() >= PARALLEL_BYTES)
+        .then(|| text[mid..].iter().position(|&b| b == b'\n'))
+        .flatten()
         .map(|p| mid + p + 1)
-        .filter(|&s| s < text.len() && text.len() >= PARALLEL_BYTES);
+        .filter(|&s| s < text.len());
     let whole = || rows_of(text, first_line, &role, delimiter, plan, n_est).map(|(rows, _)| rows);
     let Some(split) = split else {
         return whole();
@@ -355,24 +355,15 @@ fn parse_row(text: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Opti
             continue;
         }
         // Cells are trimmed of white space, as the general path does.
-        while text
-            .get(i)
-            .is_some_and(|&b| b != delimiter && b.is_ascii_whitespace() && !is_end(b))
-        {
-            i += 1;
-        }
+        let blank = |b: u8| b != delimiter && b.is_ascii_whitespace() && !is_end(b);
+        i += text[i..].iter().take_while(|&&b| blank(b)).count();
         let (x, used) = fast_float2::parse_partial::<f64, _>(&text[i..]).ok()?;
         if !x.is_finite() {
             return None;
         }
         let cell = &text[i..i + used];
         i += used;
-        while text
-            .get(i)
-            .is_some_and(|&b| b != delimiter && b.is_ascii_whitespace() && !is_end(b))
-        {
-            i += 1;
-        }
+        i += text[i..].iter().take_while(|&&b| blank(b)).count();
         match r {
             Role::Time => {
                 rows.time.push(x);
