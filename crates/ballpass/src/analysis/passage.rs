@@ -1032,10 +1032,9 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
 /// directly.
 const FFT_TAPS: usize = 64;
 
-/// Convolution with a unit-area Gaussian of `sigma` samples (truncated at
-/// 4σ), with the signal mirrored at both ends.
-fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
-    let n = x.len();
+/// The unit-area Gaussian of `sigma` samples truncated at 4σ (and to fit a
+/// signal of `n` samples): its half-length and its `2 half + 1` taps.
+fn gaussian_kernel(sigma: f64, n: usize) -> (usize, Vec<f64>) {
     let half = ((4.0 * sigma).ceil() as usize).min(n.saturating_sub(1));
     let mut k: Vec<f64> = (0..=2 * half)
         .map(|i| {
@@ -1045,6 +1044,14 @@ fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
         .collect();
     let sum: f64 = k.iter().sum();
     k.iter_mut().for_each(|v| *v /= sum);
+    (half, k)
+}
+
+/// Convolution with a unit-area Gaussian of `sigma` samples (truncated at
+/// 4σ), with the signal mirrored at both ends.
+fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
+    let n = x.len();
+    let (half, k) = gaussian_kernel(sigma, n);
     let at = |i: isize| -> f64 {
         let n = n as isize;
         let j = if i < 0 {
@@ -1276,15 +1283,7 @@ mod tests {
     fn gaussian_smooth_equals_the_plain_sum() {
         fn plain(x: &[f64], sigma: f64) -> Vec<f64> {
             let n = x.len();
-            let half = ((4.0 * sigma).ceil() as usize).min(n.saturating_sub(1));
-            let mut k: Vec<f64> = (0..=2 * half)
-                .map(|i| {
-                    let u = (i as f64 - half as f64) / sigma;
-                    (-0.5 * u * u).exp()
-                })
-                .collect();
-            let sum: f64 = k.iter().sum();
-            k.iter_mut().for_each(|v| *v /= sum);
+            let (half, k) = gaussian_kernel(sigma, n);
             let at = |i: isize| -> f64 {
                 let n = n as isize;
                 let j = if i < 0 {
@@ -1320,7 +1319,7 @@ mod tests {
             let x: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
             let got = gaussian_smooth(&x, sigma);
             let want = plain(&x, sigma);
-            let taps = 2 * ((4.0 * sigma).ceil() as usize).min(n.saturating_sub(1)) + 1;
+            let taps = gaussian_kernel(sigma, n).1.len();
             if taps > FFT_TAPS && n > taps {
                 // By FFT: the same sums, rounded differently. The outputs are
                 // O(0.1) for unit noise; 1e-13 absolute is ~1000 ulp of them.
