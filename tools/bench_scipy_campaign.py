@@ -24,10 +24,13 @@ sweep 0.31 s + diagnose 0.16 s = 0.48 s vs SciPy 7.73 s, 16.1x (earlier run:
 merged), three runs, load ~1.5: 0.46 / 0.50 / 0.48 s vs 8.74 / 8.80 / 8.30 s,
 19.0x / 17.5x / 17.5x (the SciPy loop's own time varies by 15 % between runs).
 """
+import argparse
 import csv
 import json
 import pathlib
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -74,9 +77,6 @@ def one(path, velocity):
 
 def ballpass_best(binary, manifest, n):
     """Best wall time of `sweep` and of `diagnose` over n runs each."""
-    import subprocess
-    import tempfile
-
     best = {}
     with tempfile.TemporaryDirectory() as out:
         for _ in range(n):
@@ -94,8 +94,6 @@ def ballpass_best(binary, manifest, n):
 
 
 def main():
-    import argparse
-
     ap = argparse.ArgumentParser()
     ap.add_argument("manifest")
     ap.add_argument("--ballpass", help="ballpass binary to time beside SciPy")
