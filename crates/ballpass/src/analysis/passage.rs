@@ -1028,8 +1028,8 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
 }
 
 /// Kernels longer than this many taps are applied by FFT (the same sums,
-/// rounded differently: within ~1e-15 of the signal's scale), shorter ones
-/// directly.
+/// rounded differently; `gaussian_smooth_equals_the_plain_sum` bounds the
+/// difference at 1e-13 for unit-scale noise), shorter ones directly.
 const FFT_TAPS: usize = 64;
 
 /// The unit-area Gaussian of `sigma` samples truncated at 4σ (and to fit a
