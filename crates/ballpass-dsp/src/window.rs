@@ -88,10 +88,39 @@ impl Window {
 
 /// `a0 + a1 cos(fac)` with `fac = linspace(-pi, pi, n + 1)[:n]`, as SciPy's
 /// `_general_cosine_impl(n, [a0, a1], sym=False)`.
+///
+/// The last few windows made on a thread are kept and copied out again: a
+/// campaign builds the same 4096-point window for every record, and the
+/// `n` cosines cost ten times the copy.
 fn general_cosine_periodic(n: usize, a0: f64, a1: f64) -> Vec<f64> {
+    use std::cell::RefCell;
+    /// Windows kept per thread.
+    const KEEP: usize = 4;
+    type Key = (u64, u64, usize);
+    thread_local! {
+        static RECENT: RefCell<Vec<(Key, Vec<f64>)>> = const { RefCell::new(Vec::new()) };
+    }
     if n <= 1 {
         return vec![1.0; n];
     }
+    let key = (a0.to_bits(), a1.to_bits(), n);
+    if let Some(w) =
+        RECENT.with_borrow(|r| r.iter().find(|(k, _)| *k == key).map(|(_, w)| w.clone()))
+    {
+        return w;
+    }
+    let w = compute_general_cosine_periodic(n, a0, a1);
+    RECENT.with_borrow_mut(|r| {
+        if r.len() == KEEP {
+            r.remove(0);
+        }
+        r.push((key, w.clone()));
+    });
+    w
+}
+
+/// [`general_cosine_periodic`] computed.
+fn compute_general_cosine_periodic(n: usize, a0: f64, a1: f64) -> Vec<f64> {
     // numpy.linspace(start, stop, m): i * ((stop - start) / (m - 1)) + start,
     // with m - 1 = n here (the extended symmetric window).
     let step = (2.0 * std::f64::consts::PI) / n as f64;
@@ -117,6 +146,20 @@ mod tests {
             for (i, v) in w.iter().enumerate() {
                 let s = (std::f64::consts::PI * i as f64 / n as f64).sin();
                 assert!((v - s * s).abs() < 1e-15, "n={n} i={i}");
+            }
+        }
+    }
+
+    #[test]
+    fn kept_windows_equal_computed_ones() {
+        // More distinct windows than are kept, each asked for twice, in an
+        // order that evicts: every answer equals a fresh computation.
+        for round in 0..3 {
+            for n in [16usize, 17, 4096, 31, 64, 16] {
+                for (a0, a1) in [(0.5, 0.5), (0.54, 0.46)] {
+                    let w = general_cosine_periodic(n, a0, a1);
+                    assert_eq!(w, compute_general_cosine_periodic(n, a0, a1), "{round} {n}");
+                }
             }
         }
     }
