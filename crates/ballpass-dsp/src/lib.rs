@@ -6,6 +6,7 @@ pub mod decimate;
 pub mod detrend;
 pub mod error;
 mod fftplan;
+pub mod fir;
 pub mod gradient;
 pub mod iir;
 pub mod lsq;
@@ -24,6 +25,7 @@ pub use correlate::{
 pub use decimate::{decimate, DecimateSettings, Decimator};
 pub use detrend::{detrend, detrend_in_place, DetrendType};
 pub use error::{check_finite, invalid, DspError, Result};
+pub use fir::correlate_valid;
 pub use gradient::{gradient, gradient_with_edge_order, EdgeOrder, Spacing};
 pub use iir::{
     butter, butter_zpk, cheby1, cheby1_zpk, zpk2sos, ButterSettings, Cheby1Settings, FilterBand,

@@ -1080,31 +1080,18 @@ fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
             return c.values[k.len() - 1..k.len() - 1 + n].to_vec();
         }
     }
-    let mut out: Vec<f64> = Vec::with_capacity(n);
-    // Where the kernel lies inside the signal, eight outputs at a time read
-    // one contiguous window: each output is still the sum of `w_j x_(i+j)`
-    // in the order of `j` from the same start (the value `sum()` gives), so
-    // the results are those of the general expression bit for bit; the
-    // eight independent sums just keep the adders busy.
-    const LANES: usize = 8;
+    // Where the kernel lies inside the signal, outputs `lo..hi` are the
+    // plain sums of `w_j x_(i-half+j)` in the order of `j` (the value `edge`
+    // gives), computed side by side with the CPU's vectors.
     let lo = half.min(n);
     let hi = n.saturating_sub(half).max(lo);
+    let mut out: Vec<f64> = Vec::with_capacity(n);
     out.extend((0..lo).map(edge));
-    let zero: f64 = std::iter::empty::<f64>().sum();
-    let mut i = lo;
-    while i + LANES <= hi {
-        let win = &x[i - half..i + LANES - 1 + half + 1];
-        let mut acc = [zero; LANES];
-        for (j, &w) in k.iter().enumerate() {
-            let v: &[f64; LANES] = win[j..j + LANES].try_into().expect("window of LANES");
-            for (a, &v) in acc.iter_mut().zip(v) {
-                *a += w * v;
-            }
-        }
-        out.extend(acc);
-        i += LANES;
+    match (hi > lo).then(|| ballpass_dsp::correlate_valid(&x[lo - half..hi + half], &k)) {
+        Some(Ok(inner)) => out.extend(inner),
+        _ => out.extend((lo..hi).map(edge)),
     }
-    out.extend((i..n).map(edge));
+    out.extend((hi..n).map(edge));
     out
 }
 
