@@ -184,9 +184,6 @@ fn fast_rows(
     plan: &Plan,
     n_est: usize,
 ) -> Option<Rows> {
-    if body.contains(&b'"') {
-        return None;
-    }
     let ncols = header.columns.len();
     let delimiter = header.delimiter;
     if delimiter == b'\r' || delimiter == b'\n' || delimiter == b'#' || !delimiter.is_ascii() {
@@ -202,8 +199,11 @@ fn fast_rows(
     }
     let start = usize::try_from(after_header.byte()).ok()?;
     let text = body.get(start..)?;
-    // The general reader reads text; so does this path.
-    std::str::from_utf8(text).ok()?;
+    // No quote anywhere (the body's are looked for by `rows_of`, in the
+    // only bytes it does not parse as numbers).
+    if body[..start].contains(&b'"') {
+        return None;
+    }
     let first_line = after_header.line();
     let mid = text.len() / 2;
     let split = (text.len() >= PARALLEL_BYTES)
@@ -300,7 +300,7 @@ fn rows_of(
                 plain = false;
                 let end = text[pos..].iter().position(|&b| b == b'\n');
                 let line = &text[pos..end.map_or(text.len(), |e| pos + e)];
-                if line.strip_suffix(b"\r").unwrap_or(line).contains(&b'\r') {
+                if line.strip_suffix(b"\r").unwrap_or(line).contains(&b'\r') || !plain_text(line) {
                     return None;
                 }
                 pos = end.map_or(text.len(), |e| pos + e + 1);
@@ -348,10 +348,14 @@ fn parse_row(text: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Opti
             i += 1;
         }
         if r == Role::Unused {
-            i += text[i..]
+            let len = text[i..]
                 .iter()
                 .position(|&b| b == delimiter || is_end(b))
                 .unwrap_or(text.len() - i);
+            if !plain_text(&text[i..i + len]) {
+                return None;
+            }
+            i += len;
             continue;
         }
         // Cells are trimmed of white space, as the general path does.
@@ -374,6 +378,15 @@ fn parse_row(text: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Opti
         }
     }
     Some(i)
+}
+
+/// Whether bytes that [`rows_of`] skips (a comment line, an unused field)
+/// are text without a quote: the general reader reads text and gives
+/// quotes their CSV meaning. Everything else `rows_of` accepts (numbers,
+/// white space, delimiters, line ends) is ASCII by construction, so these
+/// checks stand for a check of the whole body.
+fn plain_text(skipped: &[u8]) -> bool {
+    !skipped.contains(&b'"') && std::str::from_utf8(skipped).is_ok()
 }
 
 /// Reads the header of a text recording (for `inspect` and error hints).
@@ -709,6 +722,10 @@ mod tests {
             "time_s,friction_N\n0,1\n1,inf\n",
             "time_s,friction_N\n0,1\n1,x\n",
             "time_s,friction_N\n0,1\n1,\n",
+            // Quotes where no number is parsed: a comment, an unused field.
+            "time_s,friction_N\n# a \"quoted\" note\n0,1\n",
+            "time_s,friction_N,note\n0,1,\"a, b\"\n",
+            "\"time_s\",friction_N\n0,1\n",
         ] {
             let (rdr, header) = open(path, t.as_bytes(), Format::Csv, None).unwrap();
             let plan = Plan::new(path, &header, &LoadOptions::default()).unwrap();
@@ -716,6 +733,33 @@ mod tests {
                 fast_rows(t.as_bytes(), rdr.position(), &header, &plan, 4).is_none(),
                 "{t:?}"
             );
+        }
+    }
+
+    /// Bytes that are not text, where no number is parsed (a comment, an
+    /// unused field), send the file to the general reader too.
+    #[test]
+    fn fast_rows_decline_bytes_that_are_not_text() {
+        let path = Path::new("t.csv");
+        for t in [
+            &b"time_s,friction_N,note\n0,1,ok\n1,2,\xFF\n"[..],
+            &b"time_s,friction_N\n0,1\n# \xC3\n1,2\n"[..],
+        ] {
+            let (rdr, header) = open(path, t, Format::Csv, None).unwrap();
+            let plan = Plan::new(path, &header, &LoadOptions::default()).unwrap();
+            assert!(
+                fast_rows(t, rdr.position(), &header, &plan, 4).is_none(),
+                "{t:?}"
+            );
+        }
+        // The same files as text are read.
+        for t in [
+            &b"time_s,friction_N,note\n0,1,ok\n1,2,\xC3\xA9\n"[..],
+            &b"time_s,friction_N\n0,1\n# \xC3\xA9\n1,2\n"[..],
+        ] {
+            let (rdr, header) = open(path, t, Format::Csv, None).unwrap();
+            let plan = Plan::new(path, &header, &LoadOptions::default()).unwrap();
+            assert!(fast_rows(t, rdr.position(), &header, &plan, 4).is_some());
         }
     }
 
