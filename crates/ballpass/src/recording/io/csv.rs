@@ -219,17 +219,10 @@ fn fast_rows(
     // plain (no blank, comment or `\r\n` line) every row's line is its
     // own, so the second half's numbers are shifted by the first half's
     // rows. Otherwise the text is read again in one pass.
+    // The first half's vectors have room for the whole, so that the join
+    // below does not move them.
     let (a, b) = rayon::join(
-        || {
-            rows_of(
-                &text[..split],
-                first_line,
-                &role,
-                delimiter,
-                plan,
-                n_est / 2 + 1,
-            )
-        },
+        || rows_of(&text[..split], first_line, &role, delimiter, plan, n_est),
         || rows_of(&text[split..], 0, &role, delimiter, plan, n_est / 2 + 1),
     );
     let ((mut a, a_plain), (b, b_plain)) = (a?, b?);
