@@ -53,7 +53,7 @@ use crate::analysis::train_fit;
 use crate::bearing::{check_velocity, Geometry};
 use crate::error::{Error, Result};
 use crate::recording::{Channel, Recording};
-use crate::stats::MeanStd;
+use crate::stats::{from_order_key, order_key, percentile_of_keys, MeanStd};
 
 /// Most samples per ball-pass period used by the pulse-train fits.
 const FIT_SAMPLES_PER_PERIOD: f64 = 150.0;
@@ -410,10 +410,15 @@ fn noise_sigma(x: &[f64], lag: usize) -> f64 {
     if x.len() <= lag + 1 {
         return 0.0;
     }
-    let mut d: Vec<f64> = x.windows(lag + 1).map(|w| w[lag] - w[0]).collect();
-    let med = median(&mut d);
-    let mut dev: Vec<f64> = d.iter().map(|v| (v - med).abs()).collect();
-    median(&mut dev) / (0.674_489_750_196_081_7 * std::f64::consts::SQRT_2)
+    let mut keys: Vec<i64> = x
+        .windows(lag + 1)
+        .map(|w| order_key(w[lag] - w[0]))
+        .collect();
+    let med = percentile_of_keys(&mut keys, 50.0);
+    for k in keys.iter_mut() {
+        *k = order_key((from_order_key(*k) - med).abs());
+    }
+    percentile_of_keys(&mut keys, 50.0) / (0.674_489_750_196_081_7 * std::f64::consts::SQRT_2)
 }
 
 /// Non-robust fallback of [`noise_sigma`]: `rms(x[n+lag] − x[n]) / √2`.
@@ -431,24 +436,14 @@ fn rms_difference_sigma(x: &[f64], lag: usize) -> f64 {
         .sqrt()
 }
 
-fn median(v: &mut [f64]) -> f64 {
+fn median(v: &[f64]) -> f64 {
     percentile(v, 50.0)
 }
 
-/// Linear-interpolated percentile (numpy's default), reorders `v`.
-fn percentile(v: &mut [f64], q: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let pos = q / 100.0 * (v.len() - 1) as f64;
-    let lo = pos.floor() as usize;
-    let frac = pos - lo as f64;
-    let (_, &mut a, rest) = v.select_nth_unstable_by(lo, f64::total_cmp);
-    if frac == 0.0 || rest.is_empty() {
-        return a;
-    }
-    let b = rest.iter().copied().fold(f64::INFINITY, f64::min);
-    a + frac * (b - a)
+/// Linear-interpolated percentile (numpy's default) of `v`.
+fn percentile(v: &[f64], q: f64) -> f64 {
+    let mut keys: Vec<i64> = v.iter().map(|&x| order_key(x)).collect();
+    percentile_of_keys(&mut keys, q)
 }
 
 /// Running percentile over `window` samples, evaluated every `window / 4`
@@ -461,15 +456,15 @@ fn running_percentile(x: &[f64], window: usize, q: f64) -> Vec<f64> {
     if *centres.last().unwrap_or(&0) != n - 1 {
         centres.push(n - 1);
     }
-    let mut buf = Vec::with_capacity(window);
+    let mut keys = Vec::with_capacity(window);
     let levels: Vec<f64> = centres
         .iter()
         .map(|&c| {
             let lo = c.saturating_sub(window / 2);
             let hi = (c + window / 2 + 1).min(n);
-            buf.clear();
-            buf.extend_from_slice(&x[lo..hi]);
-            percentile(&mut buf, q)
+            keys.clear();
+            keys.extend(x[lo..hi].iter().map(|&v| order_key(v)));
+            percentile_of_keys(&mut keys, q)
         })
         .collect();
     let mut out = vec![0.0; n];
@@ -538,8 +533,7 @@ fn keep_strong(c: Candidates, rel: f64) -> Candidates {
     if c.idx.is_empty() {
         return c;
     }
-    let mut p = c.prominence.clone();
-    let p75 = percentile(&mut p, 75.0);
+    let p75 = percentile(&c.prominence, 75.0);
     let keep: Vec<bool> = c.prominence.iter().map(|&v| v >= rel * p75).collect();
     let f = |v: Vec<f64>| -> Vec<f64> {
         v.into_iter()
@@ -618,12 +612,12 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
                     settings.min_snr
                 )));
             }
-            let mut gaps: Vec<f64> = c
+            let gaps: Vec<f64> = c
                 .idx
                 .windows(2)
                 .map(|w| (w[1] - w[0]) as f64 / fs)
                 .collect();
-            (median(&mut gaps), "pulses")
+            (median(&gaps), "pulses")
         }
     };
     let tau_samples = tau_guide * fs;
@@ -673,11 +667,10 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     let down = candidates(&neg, threshold0, Some(distance), wlen)?;
     // Reference pulse size: the 75th percentile of the larger family.
     let p75 = |c: &Candidates| {
-        let mut p = c.prominence.clone();
-        if p.is_empty() {
+        if c.prominence.is_empty() {
             0.0
         } else {
-            percentile(&mut p, 75.0)
+            percentile(&c.prominence, 75.0)
         }
     };
     let (p_up, p_down) = (p75(&up), p75(&down));
@@ -695,11 +688,10 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     // Upward pulses are passages. Downward ones are inverted passages only
     // when they stand apart from every upward pulse (an AC-coupling dip
     // follows its pulse closely) and are about as narrow as the pulses.
-    let mut widths_up = up.width.clone();
-    let w_up = if widths_up.is_empty() {
+    let w_up = if up.width.is_empty() {
         f64::NAN
     } else {
-        median(&mut widths_up)
+        median(&up.width)
     };
     let mut events: Vec<(usize, i8, f64, f64, f64, f64)> = Vec::new(); // idx, pol, prom, width, lip, rip
     for i in 0..up.idx.len() {
@@ -788,8 +780,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     let amp_stats = MeanStd::of(&col(&|p| Some(p.amplitude_v))).unwrap_or(tau_c_stats);
     // Missed passages make a period twice as long; measure f_c on the
     // periods that are not gaps.
-    let mut sorted = tau_c_all.clone();
-    let med_tau = median(&mut sorted);
+    let med_tau = median(&tau_c_all);
     let regular: Vec<f64> = tau_c_all
         .iter()
         .copied()
@@ -799,16 +790,16 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     let f_c = 1.0 / tau_c_stats.mean;
 
     let mut conditions = Vec::new();
-    let mut amps: Vec<f64> = passages.iter().map(|p| p.amplitude_v).collect();
-    let med_amp = median(&mut amps);
+    let amps: Vec<f64> = passages.iter().map(|p| p.amplitude_v).collect();
+    let med_amp = median(&amps);
 
     // Baseline drift: the level between the pulses, taken at the same places
     // of every regular gap (mid and late in the stretch free of pulses), varies
     // from gap to gap. A response locked to the pulses (AC-coupling recovery,
     // pulse tails) repeats in every gap and cancels; a drift does not. Works
     // for drifts slower or faster than the ball-pass period.
-    let mut widths_all: Vec<f64> = events.iter().map(|e| e.3).collect();
-    let fwhm_samples = median(&mut widths_all);
+    let widths_all: Vec<f64> = events.iter().map(|e| e.3).collect();
+    let fwhm_samples = median(&widths_all);
     let centres: Vec<f64> = events.iter().map(|e| 0.5 * (e.4 + e.5)).collect();
     let mut levels: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for w in centres.windows(2) {
@@ -882,7 +873,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     }
     if asym.len() >= 3 {
         let positive = asym.iter().filter(|a| **a > 0.0).count() as f64 / asym.len() as f64;
-        let med = median(&mut asym.clone());
+        let med = median(&asym);
         // Consistency: AC coupling gives every pulse the same dip; a level
         // that drifts across the pulses gives dips and rises at random.
         // Student's t of the mean dip must exceed 3.
@@ -1159,7 +1150,7 @@ fn fit_trains(
     let k = settings.fit_pulses.min(passages.len());
     let used = &passages[..k];
     let tau0 = {
-        let mut t: Vec<f64> = used
+        let t: Vec<f64> = used
             .iter()
             .filter_map(|p| p.tau_c_s)
             .take(k.saturating_sub(1))
@@ -1167,7 +1158,7 @@ fn fit_trains(
         if t.is_empty() {
             passages[1].time_s - passages[0].time_s
         } else {
-            median(&mut t)
+            median(&t)
         }
     };
     let from = (used[0].time_s - 0.5 * tau0).max(t_start);
@@ -1196,8 +1187,8 @@ fn fit_trains(
         ));
         return fits;
     }
-    let mut widths: Vec<f64> = used.iter().map(|p| p.tau_p_s).collect();
-    let tau_p0 = median(&mut widths);
+    let widths: Vec<f64> = used.iter().map(|p| p.tau_p_s).collect();
+    let tau_p0 = median(&widths);
     let sigma0 = tau_p0 / FWHM_PER_SIGMA;
 
     // Gaussian: θ = [S, t0, τ, σ, P_0 .. P_{k−1}], started from the
@@ -1664,9 +1655,9 @@ mod tests {
 
     #[test]
     fn helpers_are_right() {
-        let mut v = vec![3.0, 1.0, 2.0, 4.0];
+        let v = vec![3.0, 1.0, 2.0, 4.0];
         // numpy.percentile([1,2,3,4], 25) = 1.75
-        assert!((percentile(&mut v, 25.0) - 1.75).abs() < 1e-15);
+        assert!((percentile(&v, 25.0) - 1.75).abs() < 1e-15);
         let mut rng = Rng(5);
         let x: Vec<f64> = (0..100_000).map(|_| 2.0 * rng.normal()).collect();
         // MAD estimate of σ = 2 from 1e5 samples: standard error ≈ 1.1 %.

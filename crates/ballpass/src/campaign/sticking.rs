@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 use ballpass_dsp::{find_peaks, Bound, FindPeaksSettings};
 
 use crate::error::{Error, Result};
+use crate::stats::{median_of_keys, order_key};
 
 /// Settings of the sticking-event detector.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -129,33 +130,18 @@ pub fn sticking_events(
 }
 
 /// Median of the finite values of `x` (`None` if there are none), the value
-/// of [`crate::stats::median`] found by selection instead of a full sort:
-/// under `total_cmp` the order statistics are unique, so the middle value
-/// (odd count) or the same two middle values averaged the same way (even
-/// count) come out bit for bit. `scratch` is reused between calls.
-fn median(x: &[f64], scratch: &mut Vec<f64>) -> Option<f64> {
+/// of [`crate::stats::median`] found by selection on order keys instead of
+/// a full sort (bit for bit the same, see [`crate::stats::median_of_keys`]).
+/// `scratch` is reused between calls.
+fn median(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
     scratch.clear();
-    scratch.extend(x.iter().copied().filter(|x| x.is_finite()));
-    let n = scratch.len();
-    if n == 0 {
-        return None;
-    }
-    let (lower, &mut mid, _) = scratch.select_nth_unstable_by(n / 2, f64::total_cmp);
-    Some(if n % 2 == 1 {
-        mid
-    } else {
-        let below = lower
-            .iter()
-            .copied()
-            .max_by(f64::total_cmp)
-            .expect("an even count leaves values below the middle");
-        0.5 * (below + mid)
-    })
+    scratch.extend(x.iter().filter(|x| x.is_finite()).map(|&v| order_key(v)));
+    median_of_keys(scratch)
 }
 
 /// `1.4826 · median(|x − median(x)|)`, the value of
 /// [`crate::stats::robust_sigma`] by selection (see [`median`]).
-fn robust_sigma(x: &[f64], scratch: &mut Vec<f64>) -> Option<f64> {
+fn robust_sigma(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
     let m = median(x, scratch)?;
     let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
     median(&dev, scratch).map(|d| 1.482_602_218_505_602 * d)
