@@ -514,10 +514,10 @@ fn outranks(a: (f64, usize), b: (f64, usize)) -> bool {
 /// Lanes of [`strict_top`] over `w` (samples `1..w.len() - 1` tested, a
 /// multiple of [`PEAK_LANES`] of them): per lane the largest strict local
 /// maximum (`-inf` if none) and 1.0 if a plateau starts there (else 0.0).
-/// Exact maxima, so every instance (baseline, AVX2, AVX-512 in
-/// `crate::simd`) returns the same bits.
+/// Exact maxima, so every instance (baseline, or compiled with AVX2 /
+/// AVX-512F through `crate::simd::widest`) returns the same bits.
 #[inline(always)]
-pub(crate) fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
+fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
     const L: usize = PEAK_LANES;
     let mut acc = [f64::NEG_INFINITY; L];
     let mut flat = [0.0f64; L];
@@ -536,7 +536,7 @@ pub(crate) fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
 }
 
 /// Lanes of [`peak_lanes`].
-pub(crate) const PEAK_LANES: usize = 8;
+const PEAK_LANES: usize = 8;
 
 /// The top-ranked strict local maximum (`x[i-1] < x[i] > x[i+1]`; highest,
 /// the later on ties) among the samples `lo..=hi`, and whether a plateau
@@ -550,6 +550,9 @@ pub(crate) const PEAK_LANES: usize = 8;
 /// maximum); the block's best value
 /// is the largest of the 8. The second walks the groups back from the end to
 /// the last maximum of that value, the top (the later one on ties).
+/// Inlined into the block loop of [`peaks_by_distance`], which runs
+/// through `crate::simd::widest` (one call per signal, not per block).
+#[inline(always)]
 fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
     const L: usize = PEAK_LANES;
     if lo > hi {
@@ -566,11 +569,7 @@ fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
             f64::NEG_INFINITY
         }
     };
-    let (acc, flat) = match crate::simd::detect() {
-        Some(Wide::Avx512(p)) => p.peak_lanes(&w[..full + 2]),
-        Some(Wide::Avx2(p)) => p.peak_lanes(&w[..full + 2]),
-        None => peak_lanes(&w[..full + 2]),
-    };
+    let (acc, flat) = peak_lanes(&w[..full + 2]);
     let mut best = acc.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
     let mut any_flat = flat.iter().any(|&f| f != 0.0);
     let mut at = None;
@@ -671,14 +670,16 @@ fn peaks_by_distance(x: &[f64], distance: usize) -> Vec<usize> {
     let blocks = last / distance + 1;
     let mut tops = Vec::with_capacity(blocks);
     let mut flats = Vec::new();
-    for id in 0..blocks {
-        let (lo, hi) = block(id);
-        let (top, flat) = strict_top(x, lo, hi);
-        if flat {
-            plateaus_in(x, lo, hi, &mut flats);
+    crate::simd::widest(|| {
+        for id in 0..blocks {
+            let (lo, hi) = block(id);
+            let (top, flat) = strict_top(x, lo, hi);
+            if flat {
+                plateaus_in(x, lo, hi, &mut flats);
+            }
+            tops.push(top);
         }
-        tops.push(top);
-    }
+    });
     for &(mid, _, _) in &flats {
         let t = &mut tops[mid / distance];
         if t.is_none_or(|t| outranks((x[mid], mid), t)) {
@@ -2081,11 +2082,11 @@ mod tests {
             let base = peak_lanes(&x);
             let mut wides = vec![];
             if let crate::simd::Wide::Avx512(p) = wide {
-                wides.push(p.peak_lanes(&x));
-                wides.push(p.avx2().peak_lanes(&x));
+                wides.push(p.run(|| peak_lanes(&x)));
+                wides.push(p.avx2().run(|| peak_lanes(&x)));
             }
             if let crate::simd::Wide::Avx2(p) = wide {
-                wides.push(p.peak_lanes(&x));
+                wides.push(p.run(|| peak_lanes(&x)));
             }
             let bits = |(a, f): ([f64; PEAK_LANES], [f64; PEAK_LANES])| {
                 (a.map(f64::to_bits), f.map(f64::to_bits))
