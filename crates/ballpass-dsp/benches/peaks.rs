@@ -19,6 +19,27 @@
 //! | ... prominence bases of the sorted peaks by a stack, load ~1.1:     |
 //! | find_peaks + peak_widths   | 71 us  | 50 us    | 451 us       | 9.0x  |
 //! | find_peaks                 | 46 us  | 37 us    | 306 us       | 8.3x  |
+//! | ... wide finite check, block loop through `widest`, unlocated bases in peak_widths, load ~4.3: |
+//! | find_peaks + peak_widths   | 50.6 us | 42.0 us | 452 us       | 10.8x |
+//! | find_peaks                 | 35.4 us | 35-37 us | 304 us      | 8.3x  |
+//! | ... same binaries, the box's slow phase a minute later, load ~4.4:  |
+//! | find_peaks + peak_widths   | 74-76 us | 63.6-64.5 us | 851 us  | 13.3x |
+//! | find_peaks                 | 54-55 us | 44-46 us | 565 us      | 12.6x |
+//!
+//! (The last rows: criterion's estimate, old (main 889051f) and new
+//! binaries alternating, SciPy's best repeat just before and after; the
+//! box switched between a fast and a slow phase under the other builds,
+//! SciPy slowing more than the kernels. Best of 3000 single calls, old/new
+//! alternating: 46.7 -> 38.9 us with peak_widths, 31.9 -> 27.6 us for
+//! find_peaks, i.e. 11.6x and 11.0x against SciPy's fast-phase 452 / 304 us.)
+//! What changed: `check_finite` sums in 32 accumulators compiled through
+//! `simd::widest` (was one chain of 8 on SSE2: ~2 us per call -> ~0.6);
+//! the block-top loop of `peaks_by_distance` runs once through `widest`
+//! with `strict_top` and the lane loop inlined (was one dispatched call per
+//! block of `distance` samples); `peak_widths` on sorted peaks with
+//! `rel_height <= 1` takes the bases' values from the stack runs and
+//! locates a base only where the width search could reach it (the
+//! equality search over each run is skipped).
 //!
 //! (The later rows: criterion's fastest sample, SciPy's best repeat just
 //! before. An A/B of best-of-2000 single calls, old and new binaries
@@ -57,7 +78,7 @@
 //! alternating, criterion's estimate: 71-78 -> 50-52 us with peak_widths,
 //! 46-47 -> 37 us for find_peaks; SciPy 451-461 / 306-318 us, load ~1.1.
 //!
-//! Left for 10x (~45 us with peak_widths): the chunked runs still read
+//! Left (before the rows above; still true of the runs): the chunked runs still read
 //! nearly every sample once per side and call (4 x 30 000 samples, ~12 us,
 //! bound by the 4-cycle minimum chain per chunk of 8), and locating the
 //! base in a run is a second chunked search (~5 us). Tried without gain:
@@ -67,6 +88,10 @@
 //! (max, min) summaries so that runs step over blocks whose maximum is
 //! `<= v`; share one prominence pass between find_peaks and peak_widths
 //! through `peak_widths_with_prominences` where the caller has both.
+//! Tried without gain since: carrying the lanes' argmin through the runs
+//! (the index lanes are not kept in vector registers: 2x slower); the
+//! whole stack search inside one `widest` call (the closure is then not
+//! inlined into the AVX function: +20 %).
 // criterion_group! generates an undocumented pub fn.
 #![allow(missing_docs)]
 

@@ -16,6 +16,22 @@
 //! | ... 2 segments per complex FFT (later) | 62 µs    | 731 µs   | 11.8x |
 //! | csd, nperseg 4096                      | 159 µs   | 1120 µs  | 7.0x  |
 //! | ... x + i y per complex FFT (later)    | 131 µs   | 1106 µs  | 8.4x  |
+//! | ... wide input check (s3, fast phase)  | 122 µs   | 1160 µs  | 9.5x  |
+//! | ... the same, slow phase               | 180-185 µs | 1866-1960 µs | 10.4x |
+//!
+//! The s3 rows: criterion's estimate, old (main 889051f: 132 / 185-195 µs)
+//! and new binaries alternating, load 4.0-4.5, SciPy's best repeat just
+//! before and after (the box switched between a fast and a slow phase);
+//! best of 1000 single calls, old/new alternating: 113.9 -> 111.8 µs
+//! against SciPy's 1170 µs (10.5x). The input checks (`check_finite` on x
+//! and y) now sum in 32 accumulators (4 independent AVX-512 chains instead
+//! of one latency-bound chain): ~9 -> ~3 µs in a perf profile. Not kept:
+//! summing the four 128-leaves of each 512 block of the pairwise mean side
+//! by side (bitwise equal), because the larger segment loop was then no
+//! longer inlined into the AVX function of `simd::widest` (2x slower). Left
+//! (perf, per call): the 13 complex FFTs ~70 % (~80 µs), window/detrend
+//! pass ~11 µs, the per-segment pairwise means ~9 µs (one addition chain
+//! per leaf of 128), the accumulation of `conj(X) Y` ~5 µs.
 //!
 //! Where the time goes (perf): the correlations are ~75 % RustFFT/realfft
 //! (three real transforms of length 60 000, since then 62 208 = 2^8 3^5,

@@ -85,15 +85,19 @@ pub fn check_finite(what: &'static str, x: &[f64]) -> Result<()> {
 
 /// Index of the first NaN or infinity in `x`.
 ///
-/// Fast path: [`all_finite`] over blocks, so kernels can afford to check
+/// Fast path: [`all_finite`] over blocks, compiled for the widest vectors
+/// the CPU has ([`crate::simd::widest`]), so kernels can afford to check
 /// every call.
 #[inline(always)]
 pub(crate) fn first_non_finite(x: &[f64]) -> Option<usize> {
-    if x.chunks(1024).all(all_finite) {
+    if crate::simd::widest(|| x.chunks(1024).all(all_finite)) {
         return None;
     }
     x.iter().position(|v| !v.is_finite())
 }
+
+/// Accumulators of [`all_finite`].
+const FINITE_ACC: usize = 32;
 
 /// Whether every sample of `x` is finite, branch-free:
 ///
@@ -101,13 +105,15 @@ pub(crate) fn first_non_finite(x: &[f64]) -> Option<usize> {
 /// sum_i 0 * x[i] = 0     iff every x[i] is finite (0 * inf, 0 * NaN = NaN)
 /// ```
 ///
-/// summed in eight independent accumulators so that the loop vectorises
-/// (about twice as fast as testing the exponent bits on the SSE2
-/// baseline, which lacks 64-bit integer compares).
+/// summed in [`FINITE_ACC`] independent accumulators so that the loop
+/// vectorises (about twice as fast as testing the exponent bits on the
+/// SSE2 baseline, which lacks 64-bit integer compares) into several
+/// independent chains of vector additions (4 with AVX-512: one chain
+/// would be bound by the addition's latency).
 #[inline(always)]
 pub(crate) fn all_finite(x: &[f64]) -> bool {
-    let mut acc = [0.0f64; 8];
-    let mut blocks = x.chunks_exact(8);
+    let mut acc = [0.0f64; FINITE_ACC];
+    let mut blocks = x.chunks_exact(FINITE_ACC);
     for b in &mut blocks {
         for (a, v) in acc.iter_mut().zip(b) {
             *a += 0.0 * v;
@@ -116,7 +122,9 @@ pub(crate) fn all_finite(x: &[f64]) -> bool {
     for (a, v) in acc.iter_mut().zip(blocks.remainder()) {
         *a += 0.0 * v;
     }
-    acc.iter().sum::<f64>() == 0.0
+    // Each accumulator is +-0 or NaN: test them all at once rather than
+    // summing them in one dependent chain.
+    acc.iter().fold(true, |ok, &a| ok & (a == 0.0))
 }
 
 /// Checks a set of signals and the index pairs into it that a multi-signal
@@ -196,6 +204,15 @@ mod tests {
                 assert!(!all_finite(&x), "{bad} at {i}");
                 assert_eq!(first_non_finite(&x), Some(i));
             }
+        }
+        // Across the 1024-sample blocks and the accumulators' remainders.
+        let long: Vec<f64> = (0..3001).map(|i| i as f64 - 1500.5).collect();
+        assert_eq!(first_non_finite(&long), None);
+        for i in [0, 31, 32, 1023, 1024, 1025, 2047, 2999, 3000] {
+            let mut x = long.clone();
+            x[i] = f64::NAN;
+            assert_eq!(first_non_finite(&x), Some(i), "NaN at {i}");
+            assert!(!all_finite(&x));
         }
     }
 }

@@ -514,10 +514,10 @@ fn outranks(a: (f64, usize), b: (f64, usize)) -> bool {
 /// Lanes of [`strict_top`] over `w` (samples `1..w.len() - 1` tested, a
 /// multiple of [`PEAK_LANES`] of them): per lane the largest strict local
 /// maximum (`-inf` if none) and 1.0 if a plateau starts there (else 0.0).
-/// Exact maxima, so every instance (baseline, AVX2, AVX-512 in
-/// `crate::simd`) returns the same bits.
+/// Exact maxima, so every instance (baseline, or compiled with AVX2 /
+/// AVX-512F through `crate::simd::widest`) returns the same bits.
 #[inline(always)]
-pub(crate) fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
+fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
     const L: usize = PEAK_LANES;
     let mut acc = [f64::NEG_INFINITY; L];
     let mut flat = [0.0f64; L];
@@ -536,7 +536,7 @@ pub(crate) fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
 }
 
 /// Lanes of [`peak_lanes`].
-pub(crate) const PEAK_LANES: usize = 8;
+const PEAK_LANES: usize = 8;
 
 /// The top-ranked strict local maximum (`x[i-1] < x[i] > x[i+1]`; highest,
 /// the later on ties) among the samples `lo..=hi`, and whether a plateau
@@ -550,6 +550,9 @@ pub(crate) const PEAK_LANES: usize = 8;
 /// maximum); the block's best value
 /// is the largest of the 8. The second walks the groups back from the end to
 /// the last maximum of that value, the top (the later one on ties).
+/// Inlined into the block loop of [`peaks_by_distance`], which runs
+/// through `crate::simd::widest` (one call per signal, not per block).
+#[inline(always)]
 fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
     const L: usize = PEAK_LANES;
     if lo > hi {
@@ -566,11 +569,7 @@ fn strict_top(x: &[f64], lo: usize, hi: usize) -> (Option<(f64, usize)>, bool) {
             f64::NEG_INFINITY
         }
     };
-    let (acc, flat) = match crate::simd::detect() {
-        Some(Wide::Avx512(p)) => p.peak_lanes(&w[..full + 2]),
-        Some(Wide::Avx2(p)) => p.peak_lanes(&w[..full + 2]),
-        None => peak_lanes(&w[..full + 2]),
-    };
+    let (acc, flat) = peak_lanes(&w[..full + 2]);
     let mut best = acc.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
     let mut any_flat = flat.iter().any(|&f| f != 0.0);
     let mut at = None;
@@ -671,14 +670,16 @@ fn peaks_by_distance(x: &[f64], distance: usize) -> Vec<usize> {
     let blocks = last / distance + 1;
     let mut tops = Vec::with_capacity(blocks);
     let mut flats = Vec::new();
-    for id in 0..blocks {
-        let (lo, hi) = block(id);
-        let (top, flat) = strict_top(x, lo, hi);
-        if flat {
-            plateaus_in(x, lo, hi, &mut flats);
+    crate::simd::widest(|| {
+        for id in 0..blocks {
+            let (lo, hi) = block(id);
+            let (top, flat) = strict_top(x, lo, hi);
+            if flat {
+                plateaus_in(x, lo, hi, &mut flats);
+            }
+            tops.push(top);
         }
-        tops.push(top);
-    }
+    });
     for &(mid, _, _) in &flats {
         let t = &mut tops[mid / distance];
         if t.is_none_or(|t| outranks((x[mid], mid), t)) {
@@ -981,9 +982,9 @@ fn prominences_unchecked(x: &[f64], peaks: &[usize], half: Option<usize>) -> Pro
         }
     } else if peaks.windows(2).all(|w| w[0] < w[1]) {
         let (left, right) = match crate::simd::detect() {
-            Some(Wide::Avx512(w)) => bases_sorted(x, peaks, h, w),
-            Some(Wide::Avx2(w)) => bases_sorted(x, peaks, h, w),
-            None => bases_sorted(x, peaks, h, Baseline),
+            Some(Wide::Avx512(w)) => bases_sorted::<true>(x, peaks, h, w),
+            Some(Wide::Avx2(w)) => bases_sorted::<true>(x, peaks, h, w),
+            None => bases_sorted::<true>(x, peaks, h, Baseline),
         };
         for ((&p, (lmin, lb)), (rmin, rb)) in peaks.iter().zip(left).zip(right) {
             out.prominences.push(x[p] - lmin.max(rmin));
@@ -1182,10 +1183,20 @@ impl Runs for Baseline {
 
 /// Left and right bases ([`bases_left_sorted`], [`bases_right_sorted`]) of
 /// strictly increasing `peaks`, the runs by `runs`.
-fn bases_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> (Bases, Bases) {
+///
+/// Without `LOCATE` only the bases' values are exact: the index of a base
+/// that is the minimum of a run is not searched for (reported as
+/// `usize::MAX`), and the value is the run's minimum (`-0.0` and `0.0`
+/// not told apart).
+fn bases_sorted<const LOCATE: bool>(
+    x: &[f64],
+    peaks: &[usize],
+    h: usize,
+    runs: impl Runs,
+) -> (Bases, Bases) {
     (
-        bases_left_sorted(x, peaks, h, runs),
-        bases_right_sorted(x, peaks, h, runs),
+        bases_left_sorted::<LOCATE>(x, peaks, h, runs),
+        bases_right_sorted::<LOCATE>(x, peaks, h, runs),
     )
 }
 
@@ -1210,7 +1221,12 @@ struct Searched {
 /// samples no earlier search covered are read, in chunked runs, so the
 /// cost is O(n + k) instead of the tree's O(k log n). Same visiting order
 /// and strict `<` as SciPy, so the bases are identical.
-fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> Bases {
+fn bases_left_sorted<const LOCATE: bool>(
+    x: &[f64],
+    peaks: &[usize],
+    h: usize,
+    runs: impl Runs,
+) -> Bases {
     let mut stack: Vec<Searched> = Vec::new();
     let mut out = Vec::with_capacity(peaks.len());
     for &p in peaks {
@@ -1251,7 +1267,11 @@ fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> B
             }
         }
         if let Some((a, b)) = run {
-            at = last_equal(x, a, b, vmin);
+            at = if LOCATE {
+                last_equal(x, a, b, vmin)
+            } else {
+                usize::MAX
+            };
         }
         stack.push(Searched {
             lo: pos,
@@ -1261,14 +1281,19 @@ fn bases_left_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> B
             at,
         });
         // x[at] rather than vmin: the same sample SciPy reads (signed zeros)
-        out.push((x[at], at));
+        out.push(if LOCATE { (x[at], at) } else { (vmin, at) });
     }
     out
 }
 
 /// [`bases_left_sorted`] mirrored: right bases ([`scan_right`]), the
 /// peaks taken from the last.
-fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> Bases {
+fn bases_right_sorted<const LOCATE: bool>(
+    x: &[f64],
+    peaks: &[usize],
+    h: usize,
+    runs: impl Runs,
+) -> Bases {
     let n = x.len();
     let mut stack: Vec<Searched> = Vec::new();
     let mut out = vec![(0.0, 0); peaks.len()];
@@ -1306,7 +1331,11 @@ fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> 
             }
         }
         if let Some((a, b)) = run {
-            at = first_equal(x, a, b, vmin);
+            at = if LOCATE {
+                first_equal(x, a, b, vmin)
+            } else {
+                usize::MAX
+            };
         }
         stack.push(Searched {
             lo: p,
@@ -1315,7 +1344,7 @@ fn bases_right_sorted(x: &[f64], peaks: &[usize], h: usize, runs: impl Runs) -> 
             min: vmin,
             at,
         });
-        out[j] = (x[at], at);
+        out[j] = if LOCATE { (x[at], at) } else { (vmin, at) };
     }
     out
 }
@@ -1565,7 +1594,13 @@ impl<'a> MinMaxTree<'a> {
 /// `rel_height < 0` or non-finite.
 pub fn peak_widths(x: &[f64], peaks: &[usize], settings: &PeakWidthsSettings) -> Result<Widths> {
     check_rel_height(settings.rel_height)?;
-    let prom = peak_prominences(x, peaks, settings.wlen)?;
+    check_signal(x)?;
+    check_peaks(x, peaks)?;
+    let half = half_window(settings.wlen)?;
+    if let Some(w) = widths_sorted(x, peaks, half, settings.rel_height) {
+        return Ok(w);
+    }
+    let prom = prominences_unchecked(x, peaks, half);
     Ok(widths_unchecked(
         x,
         peaks,
@@ -1636,6 +1671,85 @@ pub fn peak_widths_with_prominences(
         &prominences.prominences,
         &prominences.left_bases,
         &prominences.right_bases,
+    ))
+}
+
+/// [`peak_widths`] of strictly increasing peaks (validated input) for
+/// `rel_height <= 1`, with the bases located only where the width search
+/// could reach them; `None` where [`prominences_unchecked`] would not take
+/// its sorted path (or `rel_height > 1`).
+///
+/// The search for the crossing left of a peak stops at the first sample
+/// `<= width_height`; it cannot pass the left base when
+/// `x[left_base] <= width_height` (the base lies between the peak and the
+/// window's edge), so there the base only bounds a search that stops
+/// anyway, and the signal's first sample is as good a bound. Only the
+/// bases' values are needed for the prominences; a base's index is
+/// searched for (SciPy's scan) only when `width_height` is below it (e.g.
+/// by rounding at `rel_height = 1`) or its value is zero (whose sign the
+/// prominence keeps). Same results as with every base located.
+fn widths_sorted(
+    x: &[f64],
+    peaks: &[usize],
+    half: Option<usize>,
+    rel_height: f64,
+) -> Option<Widths> {
+    let (n, k) = (x.len(), peaks.len());
+    let h = half.unwrap_or(n).min(n);
+    if k == 0
+        || rel_height > 1.0
+        || k.saturating_mul(2 * h + 1) < n
+        || !peaks.windows(2).all(|w| w[0] < w[1])
+    {
+        return None;
+    }
+    let (left, right) = match crate::simd::detect() {
+        Some(Wide::Avx512(w)) => bases_sorted::<false>(x, peaks, h, w),
+        Some(Wide::Avx2(w)) => bases_sorted::<false>(x, peaks, h, w),
+        None => bases_sorted::<false>(x, peaks, h, Baseline),
+    };
+    let mut prom = Vec::with_capacity(k);
+    let mut left_bases = Vec::with_capacity(k);
+    let mut right_bases = Vec::with_capacity(k);
+    for ((&p, &(lmin, lb)), &(rmin, rb)) in peaks.iter().zip(&left).zip(&right) {
+        // A zero's sign: the value of the sample SciPy reads.
+        let lb = if lmin == 0.0 && lb == usize::MAX {
+            scan_left(x, p, p.saturating_sub(h)).1
+        } else {
+            lb
+        };
+        let rb = if rmin == 0.0 && rb == usize::MAX {
+            scan_right(x, p, (p + h).min(n - 1)).1
+        } else {
+            rb
+        };
+        let lv = if lb == usize::MAX { lmin } else { x[lb] };
+        let rv = if rb == usize::MAX { rmin } else { x[rb] };
+        let pr = x[p] - lv.max(rv);
+        let height = x[p] - pr * rel_height;
+        left_bases.push(if lb != usize::MAX {
+            lb
+        } else if lv <= height {
+            0
+        } else {
+            scan_left(x, p, p.saturating_sub(h)).1
+        });
+        right_bases.push(if rb != usize::MAX {
+            rb
+        } else if rv <= height {
+            n - 1
+        } else {
+            scan_right(x, p, (p + h).min(n - 1)).1
+        });
+        prom.push(pr);
+    }
+    Some(widths_unchecked(
+        x,
+        peaks,
+        rel_height,
+        &prom,
+        &left_bases,
+        &right_bases,
     ))
 }
 
@@ -1789,16 +1903,16 @@ mod tests {
                 for peaks in [all, some, maxima] {
                     for half in [len, 1, 2, 3, 7, 16, 100, 1 + next(len as u64) as usize] {
                         let h = half.min(len);
-                        let (left, right) = bases_sorted(&x, &peaks, h, Baseline);
+                        let (left, right) = bases_sorted::<true>(&x, &peaks, h, Baseline);
                         let wide = match crate::simd::detect() {
                             Some(Wide::Avx512(w)) => {
                                 assert_eq!(
-                                    bases_sorted(&x, &peaks, h, w.avx2()),
+                                    bases_sorted::<true>(&x, &peaks, h, w.avx2()),
                                     (left.clone(), right.clone())
                                 );
-                                Some(bases_sorted(&x, &peaks, h, w))
+                                Some(bases_sorted::<true>(&x, &peaks, h, w))
                             }
-                            Some(Wide::Avx2(w)) => Some(bases_sorted(&x, &peaks, h, w)),
+                            Some(Wide::Avx2(w)) => Some(bases_sorted::<true>(&x, &peaks, h, w)),
                             None => None,
                         };
                         assert!(wide.is_none_or(|w| w == (left.clone(), right.clone())));
@@ -1820,6 +1934,87 @@ mod tests {
                         let what = format!("len {len} kind {kind} half {half} peaks {peaks:?}");
                         assert_eq!(fast, slow, "tree: {what}");
                         assert_eq!(fast, naive(&x, &peaks, h), "scan: {what}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn widths_with_unlocated_bases_equal_the_located_path() {
+        // Ties, plateaus, signed zeros, random walks; windows from 1 sample
+        // to none; rel_height 0 to 1 (1: rounding can put the width height
+        // below a base).
+        let mut s = 2718u64;
+        let mut next = |m: u64| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % m
+        };
+        for len in (3..40).chain([200, 1000, 3000]) {
+            for kind in 0..4 {
+                let mut x: Vec<f64> = (0..len).map(|_| next(3 + 3 * kind) as f64).collect();
+                match kind {
+                    1 => {
+                        for i in 1..len {
+                            if next(3) > 0 {
+                                x[i] = x[i - 1];
+                            }
+                        }
+                    }
+                    2 => {
+                        // signed zeros around the other levels
+                        for v in &mut x {
+                            *v = match *v as u64 {
+                                0 => -0.0,
+                                1 => 0.0,
+                                2 => -1.0,
+                                _ => *v,
+                            };
+                        }
+                    }
+                    3 => {
+                        for i in 1..len {
+                            x[i] = x[i - 1] + x[i] * 0.37 - 2.0;
+                        }
+                    }
+                    _ => {}
+                }
+                let all: Vec<usize> = (0..len).collect();
+                let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
+                let (maxima, _) = local_maxima(&x);
+                for peaks in [all, some, maxima] {
+                    for half in [
+                        None,
+                        Some(1),
+                        Some(3),
+                        Some(16),
+                        Some(1 + next(len as u64) as usize),
+                    ] {
+                        for rel in [0.0, 0.25, 0.5, 0.999, 1.0] {
+                            let Some(fast) = widths_sorted(&x, &peaks, half, rel) else {
+                                continue;
+                            };
+                            let prom = prominences_unchecked(&x, &peaks, half);
+                            let slow = widths_unchecked(
+                                &x,
+                                &peaks,
+                                rel,
+                                &prom.prominences,
+                                &prom.left_bases,
+                                &prom.right_bases,
+                            );
+                            let bits = |w: &Widths| {
+                                [&w.widths, &w.width_heights, &w.left_ips, &w.right_ips]
+                                    .map(|v| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>())
+                            };
+                            assert_eq!(
+                                bits(&fast),
+                                bits(&slow),
+                                "len {len} kind {kind} half {half:?} rel {rel} peaks {peaks:?}"
+                            );
+                        }
                     }
                 }
             }
@@ -1887,11 +2082,11 @@ mod tests {
             let base = peak_lanes(&x);
             let mut wides = vec![];
             if let crate::simd::Wide::Avx512(p) = wide {
-                wides.push(p.peak_lanes(&x));
-                wides.push(p.avx2().peak_lanes(&x));
+                wides.push(p.run(|| peak_lanes(&x)));
+                wides.push(p.avx2().run(|| peak_lanes(&x)));
             }
             if let crate::simd::Wide::Avx2(p) = wide {
-                wides.push(p.peak_lanes(&x));
+                wides.push(p.run(|| peak_lanes(&x)));
             }
             let bits = |(a, f): ([f64; PEAK_LANES], [f64; PEAK_LANES])| {
                 (a.map(f64::to_bits), f.map(f64::to_bits))

@@ -16,14 +16,13 @@
 //! exactly as the baseline code does, lane for lane (the test
 //! `wide_kernels_round_as_the_baseline` checks this bitwise).
 //!
-//! The same way, `peaks::peak_lanes` (the local-maximum scan of
-//! `find_peaks` with `distance`) runs 4 or 8 samples per instruction; its
-//! lanes are exact maxima, so every instance returns the same bits
-//! (`wide_peak_lanes_equal_the_baseline`).
-//!
 //! [`widest`] does the same for any small closure over `#[inline(always)]`
 //! code: the csd segment loop (window, pairwise mean, cross products) and
-//! its input checks run through it (`wide_cross_sum_equals_the_baseline_bitwise`).
+//! the input checks run through it (`wide_cross_sum_equals_the_baseline_bitwise`),
+//! and so does the block loop of `find_peaks` with `distance`
+//! (`peaks::peak_lanes`, 4 or 8 samples per instruction; its lanes are
+//! exact maxima, so every instance returns the same bits:
+//! `wide_peak_lanes_equal_the_baseline`).
 //!
 //! Off x86_64, or on a CPU without AVX2, [`detect`] says `None` and the
 //! baseline path runs.
@@ -32,7 +31,6 @@
 #[cfg(not(target_arch = "x86_64"))]
 use crate::biquad::Baseline;
 use crate::biquad::{Coef, Isa, Lanes};
-use crate::peaks::PEAK_LANES;
 
 /// The widest kernels the running CPU supports.
 #[derive(Debug, Clone, Copy)]
@@ -148,20 +146,6 @@ macro_rules! wide_isa {
         }
 
         impl $proof {
-            /// [`crate::peaks::peak_lanes`] compiled with the features.
-            pub(crate) fn peak_lanes(self, w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as in `run_lanes` above: the features were
-                // detected.
-                unsafe {
-                    $module::peak_lanes(w)
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                crate::peaks::peak_lanes(w)
-            }
-        }
-
-        impl $proof {
             /// Runs `f` compiled with the features: `f` (a small closure)
             /// is inlined into a function that enables them, and with it the
             /// `#[inline(always)]` code it calls.
@@ -206,7 +190,6 @@ macro_rules! wide_isa {
         #[cfg(target_arch = "x86_64")]
         mod $module {
             use crate::biquad::{Coef, Lanes};
-            use crate::peaks::PEAK_LANES;
 
             /// `f()` with the features.
             ///
@@ -238,16 +221,6 @@ macro_rules! wide_isa {
                 v: f64,
             ) -> (Option<usize>, f64) {
                 crate::peaks::run_right(x, lo, hi, v)
-            }
-
-            /// [`crate::peaks::peak_lanes`] with the features.
-            ///
-            /// # Safety
-            /// The CPU must support the features.
-            #[target_feature(enable = $features)]
-            #[inline(never)]
-            pub(super) unsafe fn peak_lanes(w: &[f64]) -> ([f64; PEAK_LANES], [f64; PEAK_LANES]) {
-                crate::peaks::peak_lanes(w)
             }
 
             /// [`crate::biquad::run_lanes`] with the features.
