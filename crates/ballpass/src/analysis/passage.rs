@@ -47,7 +47,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use ballpass_dsp::{find_peaks, peak_widths, Bound, FindPeaksSettings, PeakWidthsSettings};
+use ballpass_dsp::{
+    find_peaks, peak_widths_with_prominences, Bound, FindPeaksSettings, Prominences,
+};
 
 use crate::analysis::train_fit;
 use crate::bearing::{check_velocity, Geometry};
@@ -509,17 +511,19 @@ fn candidates(
         },
     )
     .map_err(|e| dsp("optical_V: find_peaks", e))?;
-    let w = peak_widths(
-        y,
-        &peaks.indices,
-        &PeakWidthsSettings {
-            rel_height: 0.5,
-            wlen,
-        },
-    )
-    .map_err(|e| dsp("optical_V: peak_widths", e))?;
+    // The widths at half prominence from the prominences find_peaks just
+    // computed with the same `wlen` (what `peak_widths(y, peaks, 0.5, wlen)`
+    // would compute again).
+    let p = peaks.properties;
+    let prominences = Prominences {
+        prominences: p.prominences.unwrap_or_default(),
+        left_bases: p.left_bases.unwrap_or_default(),
+        right_bases: p.right_bases.unwrap_or_default(),
+    };
+    let w = peak_widths_with_prominences(y, &peaks.indices, 0.5, &prominences)
+        .map_err(|e| dsp("optical_V: peak_widths", e))?;
     Ok(Candidates {
-        prominence: peaks.properties.prominences.unwrap_or_default(),
+        prominence: prominences.prominences,
         idx: peaks.indices,
         width: w.widths,
         left_ip: w.left_ips,
