@@ -18,6 +18,10 @@
 //! | ... x + i y per complex FFT (later)    | 131 µs   | 1106 µs  | 8.4x  |
 //! | ... wide input check (s3, fast phase)  | 122 µs   | 1160 µs  | 9.5x  |
 //! | ... the same, slow phase               | 180-185 µs | 1866-1960 µs | 10.4x |
+//! | xcorr `correlate_into`, fused passes   | 315 µs   | 1426 µs  | 4.5x  |
+//! | autocorrelation, fused passes          | 210 µs   | 1447 µs  | 6.9x  |
+//! | welch (unchanged code, same minutes)   | 68 µs    | 804 µs   | 11.8x |
+//! | csd (unchanged code, same minutes)     | 125 µs   | 1211 µs  | 9.7x  |
 //!
 //! The s3 rows: criterion's estimate, old (main 889051f: 132 / 185-195 µs)
 //! and new binaries alternating, load 4.0-4.5, SciPy's best repeat just
@@ -32,6 +36,19 @@
 //! (perf, per call): the 13 complex FFTs ~70 % (~80 µs), window/detrend
 //! pass ~11 µs, the per-segment pairwise means ~9 µs (one addition chain
 //! per leaf of 128), the accumulation of `conj(X) Y` ~5 µs.
+//!
+//! The "fused passes" rows (load 1.2-1.7, criterion's lower bound; the
+//! code before, run back to back: 323 µs and 225 µs; SciPy's best repeat
+//! of two runs in the same minutes): the correlator calls RustFFT's
+//! half-length complex FFTs itself and does realfft's forward
+//! post-processing of both spectra, the product and the inverse
+//! pre-processing in one pass over the bin pairs `(k, m-k)` (8 pairs per
+//! vector block), and unpacks the lags with vector code. A best-of-1500
+//! timing of single calls (load ~4) gave 293-309 µs vs 303-327 µs and
+//! 192-202 µs vs 209-224 µs. Still short of 10x: the three complex FFTs
+//! of 31 104 points take ~64-75 µs each, and the fused pass ~3.5 ns per
+//! bin pair (~55 µs), since the reversed, interleaved pairs vectorise
+//! poorly (SLP shuffles; AVX-512 turned the stores into scatters).
 //!
 //! Where the time goes (perf): the correlations are ~75 % RustFFT/realfft
 //! (three real transforms of length 60 000, since then 62 208 = 2^8 3^5,
