@@ -7,8 +7,11 @@ Per file: np.loadtxt; velocity error (np.gradient); 5th-order Butterworth
 20 Hz sosfiltfilt + linear detrend of the three signals; the six full-lag
 correlations (signal.correlate, fft) normalised; full-range welch/csd/coherence
 (nperseg 4096); decimate(q=20) and hi-res welch/csd/coherence; ball passages
-(find_peaks on the optical signal with prominence and distance, peak_widths at
-half prominence); sticking spikes (find_peaks on friction minus its
+as ballpass detects them (`detect` of tools/bench_scipy_passage.py: robust
+noise, running 10th-percentile baseline, Gaussian smoothing, find_peaks +
+peak_widths on the pulses up and down; until session 3 this was a lighter
+single find_peaks over a global percentile baseline, less work than ballpass
+does); sticking spikes (find_peaks on friction minus its
 block-median baseline). Then the per-velocity and per-bearing tables are
 trivial in comparison and left out (that favours SciPy).
 
@@ -37,6 +40,7 @@ import numpy as np
 from scipy import signal
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import bench_scipy_passage as bp  # noqa: E402
 import reference_analyze as ra  # noqa: E402
 
 
@@ -62,11 +66,9 @@ def one(path, velocity):
     f_c = velocity / (2 * a.d_avg)
     ra.analyze(fs, fr, pos, opt, a)
     tau = 1.0 / f_c
-    base = np.percentile(opt, 10)
-    x = opt - base
-    noise = 1.4826 * np.median(np.abs(np.diff(x))) / np.sqrt(2)
-    peaks, props = signal.find_peaks(x, prominence=6 * noise, distance=max(1, int(0.7 * tau * fs)))
-    signal.peak_widths(x, peaks, rel_height=0.5)
+    # Ball passages as ballpass detects them (running-percentile baseline,
+    # robust noise, Gaussian smoothing, pulses up and down).
+    bp.detect(opt, fs, velocity)
     block = max(8, int(round(tau * fs / 2)))
     med = np.array([np.median(fr[i:i + block]) for i in range(0, len(fr), block)])
     centres = np.arange(len(med)) * block + (block - 1) / 2

@@ -63,7 +63,9 @@ def detect(x, fs, v):
     out = []
     for s in (ys, -ys):
         p, props = find_peaks(s, prominence=thr, distance=max(0.7 * ts, 1.0), wlen=2.5 * ts)
-        w = peak_widths(s, p, rel_height=0.5, wlen=2.5 * ts)
+        # The prominences find_peaks just computed, as ballpass passes them.
+        w = peak_widths(s, p, rel_height=0.5, prominence_data=(
+            props["prominences"], props["left_bases"], props["right_bases"]))
         out.append((p, props["prominences"], w))
     p75 = max(np.percentile(o[1], 75) if len(o[1]) else 0.0 for o in out)
     p, prom, w = out[0]

@@ -571,14 +571,12 @@ pub(crate) fn run(
         p.signals.retain(|(s, _)| signals.contains(s));
         let (c, (f, h)) = rayon::join(
             || {
-                let mut correlator = Correlator::with_lengths(
+                with_correlator(
                     CorrelateSettings {
                         normalization: settings.corr_norm.to_dsp(),
                     },
-                    n,
-                    n,
-                );
-                correlation::compute(&p, &mut correlator, settings)
+                    |c| correlation::compute(&p, c, settings),
+                )
             },
             || {
                 rayon::join(
@@ -744,4 +742,25 @@ pub(crate) fn run(
         spectra: full,
         spectra_hires: hr,
     })
+}
+
+thread_local! {
+    /// The correlator a worker thread used last, kept for its next record:
+    /// its FFT plan and ~1.5 MB of buffers, which a new one would allocate
+    /// and zero again (a campaign analyses hundreds of records per thread).
+    static CORRELATOR: std::cell::Cell<Option<Correlator>> = const { std::cell::Cell::new(None) };
+}
+
+/// Runs `f` with this thread's kept correlator when its settings are
+/// `settings`, else with a new one, and keeps it afterwards. The correlator
+/// is taken out while `f` runs, so a nested call (none today: the
+/// correlations run no parallel work of their own) would just make its own.
+fn with_correlator<R>(settings: CorrelateSettings, f: impl FnOnce(&mut Correlator) -> R) -> R {
+    let mut c = CORRELATOR
+        .take()
+        .filter(|c| c.settings() == &settings)
+        .unwrap_or_else(|| Correlator::new(settings));
+    let out = f(&mut c);
+    CORRELATOR.set(Some(c));
+    out
 }
