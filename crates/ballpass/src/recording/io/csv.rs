@@ -599,21 +599,23 @@ fn parse_number(cell: &[u8], delimiter: u8) -> std::result::Result<f64, String> 
 /// Digits after the decimal point of a printed number, minus its exponent
 /// (`0.0125` → 4, `1.25e-2` → 4, `12` → 0, `1e3` → -3).
 fn decimals(cell: &[u8]) -> i32 {
-    let (mantissa, exp) = match cell.iter().position(|&b| b == b'e' || b == b'E') {
-        Some(p) => (
-            &cell[..p],
-            std::str::from_utf8(&cell[p + 1..])
-                .ok()
-                .and_then(|s| s.parse::<i32>().ok())
-                .unwrap_or(0),
-        ),
-        None => (cell, 0),
-    };
-    let frac = match mantissa.iter().position(|&b| b == b'.') {
-        Some(p) => (mantissa.len() - p - 1) as i32,
-        None => 0,
-    };
-    frac.saturating_sub(exp)
+    // One pass (it runs on every time cell): the point, then an exponent.
+    let mut point = None;
+    for (i, &b) in cell.iter().enumerate() {
+        match b {
+            b'.' => point = Some(i),
+            b'e' | b'E' => {
+                let exp = std::str::from_utf8(&cell[i + 1..])
+                    .ok()
+                    .and_then(|s| s.parse::<i32>().ok())
+                    .unwrap_or(0);
+                let frac = point.map_or(0, |p| (i - p - 1) as i32);
+                return frac.saturating_sub(exp);
+            }
+            _ => {}
+        }
+    }
+    point.map_or(0, |p| (cell.len() - p - 1) as i32)
 }
 
 #[cfg(test)]
@@ -763,6 +765,9 @@ mod tests {
         assert_eq!(decimals(b"12"), 0);
         assert_eq!(decimals(b"1e3"), -3);
         assert_eq!(decimals(b"-3.5E+1"), 0);
+        assert_eq!(decimals(b"5."), 0);
+        assert_eq!(decimals(b".25"), 2);
+        assert_eq!(decimals(b"2.5e"), 1);
     }
 
     #[test]
