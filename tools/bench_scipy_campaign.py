@@ -11,9 +11,13 @@ as ballpass detects them (`detect` of tools/bench_scipy_passage.py: robust
 noise, running 10th-percentile baseline, Gaussian smoothing, find_peaks +
 peak_widths on the pulses up and down; until session 3 this was a lighter
 single find_peaks over a global percentile baseline, less work than ballpass
-does); sticking spikes (find_peaks on friction minus its
-block-median baseline). Then the per-velocity and per-bearing tables are
-trivial in comparison and left out (that favours SciPy).
+does); the per-record numbers of the analysis (`scalars`: measured period
+from the autocorrelation peaks, phases from the correlations and the
+cross-spectra, harmonics against their chi-square floors and coherence at
+k f_c, velocity-error spread: ~0.7-1.1 ms of ~55 ms per record, added in
+session 3); sticking spikes (find_peaks on friction minus its block-median
+baseline). Then the per-velocity and per-bearing tables are trivial in
+comparison and left out (that favours SciPy).
 
 Usage: python3 tools/bench_scipy_campaign.py CAMPAIGN_DIR/manifest.csv [--ballpass BIN] [-n N]
 Prints the total wall time, one core. With --ballpass (e.g.
@@ -37,7 +41,7 @@ import tempfile
 import time
 
 import numpy as np
-from scipy import signal
+from scipy import signal, stats
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import bench_scipy_passage as bp  # noqa: E402
@@ -59,12 +63,101 @@ class Args:
     d_avg = 4.0 + 2.0 / 36.0
 
 
+def parabola(a, b, c):
+    den = a - 2.0 * b + c
+    return 0.0 if den == 0 else max(-0.5, min(0.5, 0.5 * (a - c) / den))
+
+
+def period(r, zero, fs, tau):
+    """Autocorrelation peaks near k T (window +-T/4, k T within half the
+    record), parabolic refinement, T re-fitted through the origin."""
+    t, ks, lags, k = tau, [], [], 1
+    while k * t <= 0.5 * zero / fs:
+        c, w = zero + int(round(k * t * fs)), int(round(0.25 * t * fs))
+        lo, hi = max(c - w, zero + 1), min(c + w, len(r) - 2)
+        if hi <= lo:
+            break
+        i = lo + int(np.argmax(r[lo:hi + 1]))
+        if lo < i < hi and r[i] > 0:
+            ks.append(k)
+            lags.append((i - zero + parabola(r[i - 1], r[i], r[i + 1])) / fs)
+            kk = np.array(ks, float)
+            t = float(np.dot(kk, lags) / np.dot(kk, kk))
+        k += 1
+    return t if ks else None
+
+
+def harmonic(f, psd, fk, f_c, med_ratio, thr_ratio):
+    """PSD at fk (largest of the +-1 bins) against the median floor over
+    +-1.5 f_c without the bins near any harmonic, chi-square scaled."""
+    df = f[1] - f[0]
+    i = int(round(fk / df))
+    if i < 1 or i + 1 >= len(psd):
+        return None
+    p = psd[i - 1:i + 2].max()
+    j = np.arange(max(int(np.ceil((fk - 1.5 * f_c) / df)), 1),
+                  min(int(np.floor((fk + 1.5 * f_c) / df)), len(psd) - 1) + 1)
+    fj = j * df
+    keep = np.abs(fj - np.round(fj / f_c) * f_c) > 1.5 * df
+    if keep.sum() < 3:
+        return None
+    floor = np.median(psd[j[keep]]) / med_ratio
+    return 10 * np.log10(p / floor), p / floor > thr_ratio
+
+
+def scalars(fs, sig, corr, hires, f_c, nperseg_hr, nd, velocity_error_raw):
+    """The per-record numbers ballpass' analysis reports: measured period,
+    phases (correlation and cross-spectrum), harmonics and coherence at
+    k f_c with their chi-square thresholds, velocity-error spread."""
+    n = len(sig["friction"])
+    zero = n - 1
+    tau = 1.0 / f_c
+    periods = {s: period(corr[s], zero, fs, tau) for s in ("friction", "velocity_error", "optical")}
+    t = next((p for p in periods.values() if p), tau)
+    h = int(round(0.5 * t * fs))
+    for pair in ("friction__velocity_error", "friction__optical", "velocity_error__optical"):
+        r = corr[pair][zero - h:zero + h + 1]
+        i = int(np.argmax(r))
+        d = parabola(r[i - 1], r[i], r[i + 1]) if 0 < i < len(r) - 1 else 0.0
+        _ = 360.0 * ((i - h + d) / fs) / t
+        k = int(round(f_c / (hires["freq_hz"][1] - hires["freq_hz"][0])))
+        _ = np.angle(hires[pair + "_re"][k] + 1j * hires[pair + "_im"][k], deg=True)
+    w = signal.get_window("hann", nperseg_hr)
+    step = nperseg_hr - nperseg_hr // 2
+    segs = (nd - nperseg_hr) // step + 1
+    e = np.dot(w, w)
+    sm = sum((1 - m / segs) * (np.dot(w[m * step:], w[:len(w) - m * step]) / e) ** 2
+             for m in range(1, segs) if m * step < len(w))
+    nu = 2 * segs / (1 + 2 * sm)
+    med_ratio = stats.chi2.ppf(0.5, nu) / nu
+    thr_ratio = stats.chi2.ppf(0.99 ** (1 / 3), nu) / nu
+    f = hires["freq_hz"]
+    f_meas = 1.0 / t
+    for s in ("friction", "velocity_error", "optical"):
+        for k in range(1, 6):
+            harmonic(f, hires[s], k * f_c, f_c, med_ratio, thr_ratio)
+            harmonic(f, hires[s], k * f_meas, f_meas, med_ratio, thr_ratio)
+    n_d = nu / 2
+    thr = 1 - (1 - 0.99 ** (1 / 3)) ** (1 / (n_d - 1)) if n_d > 1 else np.inf
+    for pair in ("friction__velocity_error", "friction__optical", "velocity_error__optical"):
+        coh = hires[pair + "_coh"]
+        for k in range(1, 6):
+            i = int(round(k * f_c / (f[1] - f[0])))
+            if 0 < i < len(coh) - 1:
+                _ = coh[i - 1:i + 2].max() > thr
+    _ = (np.std(velocity_error_raw, ddof=1), np.std(sig["velocity_error"], ddof=1))
+
+
 def one(path, velocity):
     fs, fr, pos, opt = ra.load_csv(path)
     a = Args()
     a.velocity = velocity
     f_c = velocity / (2 * a.d_avg)
-    ra.analyze(fs, fr, pos, opt, a)
+    sig, corr, _, hires = ra.analyze(fs, fr, pos, opt, a)
+    nd = -(-len(sig["friction"]) // a.q)
+    nperseg_hr = min(ra.next_pow2(4.0 * (fs / a.q) / f_c), nd)
+    ve_raw = np.gradient(pos, 1.0 / fs) - velocity
+    scalars(fs, sig, corr, hires, f_c, nperseg_hr, nd, ve_raw)
     tau = 1.0 / f_c
     # Ball passages as ballpass detects them (running-percentile baseline,
     # robust noise, Gaussian smoothing, pulses up and down).
