@@ -1866,6 +1866,46 @@ mod tests {
         }
     }
 
+    /// A test signal of `len` samples with ties: kind 0 a small alphabet,
+    /// 1 runs of equal values (plateaus), 2 the same alphabet with signed
+    /// zeros and -1 when `signed_zeros`, 3 a random walk
+    /// `x[i] = x[i-1] + a u[i] + b` of `walk = (a, b)`.
+    fn tricky_signal(
+        len: usize,
+        kind: u64,
+        walk: (f64, f64),
+        signed_zeros: bool,
+        next: &mut impl FnMut(u64) -> u64,
+    ) -> Vec<f64> {
+        let mut x: Vec<f64> = (0..len).map(|_| next(3 + 3 * kind) as f64).collect();
+        match kind {
+            1 => {
+                for i in 1..len {
+                    if next(3) > 0 {
+                        x[i] = x[i - 1];
+                    }
+                }
+            }
+            2 if signed_zeros => {
+                for v in &mut x {
+                    *v = match *v as u64 {
+                        0 => -0.0,
+                        1 => 0.0,
+                        2 => -1.0,
+                        _ => *v,
+                    };
+                }
+            }
+            3 => {
+                for i in 1..len {
+                    x[i] = x[i - 1] + walk.0 * x[i] + walk.1;
+                }
+            }
+            _ => {}
+        }
+        x
+    }
+
     #[test]
     fn sorted_stack_search_matches_tree_and_scan() {
         // Random sorted peak sets (all samples, random subsets, local maxima
@@ -1880,23 +1920,7 @@ mod tests {
         };
         for len in (1..60).chain([200, 1000, 3000]) {
             for kind in 0..4 {
-                let mut x: Vec<f64> = (0..len).map(|_| next(3 + 3 * kind) as f64).collect();
-                match kind {
-                    1 => {
-                        // plateaus: repeat values in runs
-                        for i in 1..len {
-                            if next(3) > 0 {
-                                x[i] = x[i - 1];
-                            }
-                        }
-                    }
-                    3 => {
-                        for i in 1..len {
-                            x[i] = x[i - 1] + x[i] - 5.0;
-                        }
-                    }
-                    _ => {}
-                }
+                let x = tricky_signal(len, kind, (1.0, -5.0), false, &mut next);
                 let all: Vec<usize> = (0..len).collect();
                 let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
                 let (maxima, _) = local_maxima(&x);
@@ -1954,33 +1978,7 @@ mod tests {
         };
         for len in (3..40).chain([200, 1000, 3000]) {
             for kind in 0..4 {
-                let mut x: Vec<f64> = (0..len).map(|_| next(3 + 3 * kind) as f64).collect();
-                match kind {
-                    1 => {
-                        for i in 1..len {
-                            if next(3) > 0 {
-                                x[i] = x[i - 1];
-                            }
-                        }
-                    }
-                    2 => {
-                        // signed zeros around the other levels
-                        for v in &mut x {
-                            *v = match *v as u64 {
-                                0 => -0.0,
-                                1 => 0.0,
-                                2 => -1.0,
-                                _ => *v,
-                            };
-                        }
-                    }
-                    3 => {
-                        for i in 1..len {
-                            x[i] = x[i - 1] + x[i] * 0.37 - 2.0;
-                        }
-                    }
-                    _ => {}
-                }
+                let x = tricky_signal(len, kind, (0.37, -2.0), true, &mut next);
                 let all: Vec<usize> = (0..len).collect();
                 let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
                 let (maxima, _) = local_maxima(&x);
