@@ -16,6 +16,10 @@
 //! | apply_many, 3 x 30 000 (each)   | -      | 73 us  | 57 us *  | 452 us     | 7.9x  |
 //! | decimate q=20, 30 000 (planned) | 301 us | 154 us | 75 us    | 894 us     | 12x   |
 //! | butter(5, 20 Hz) design (crit.) | 1.1 us | 1.1 us | 1.1 us   | 271 us     | 250x  |
+//! | final s3 main, quiet (load ~1.5), criterion mean, SciPy the same minutes: |
+//! | sosfiltfilt, 30 000 samples     |        |        | 42.5 us  | 477 us     | 11.2x |
+//! | decimate q=20, 30 000 (planned) |        |        | 82.3 us  | 936 us     | 11.4x |
+//! | butter(5, 20 Hz) design         |        |        | 0.84 us  | 289 us     | 340x  |
 //!
 //! \* criterion mean, as `apply x3`: three fresh 240 kB outputs per call,
 //! which glibc may hand back to the OS between calls (it did in this

@@ -25,6 +25,9 @@
 //! | ... same binaries, the box's slow phase a minute later, load ~4.4:  |
 //! | find_peaks + peak_widths   | 74-76 us | 63.6-64.5 us | 851 us  | 13.3x |
 //! | find_peaks                 | 54-55 us | 44-46 us | 565 us      | 12.6x |
+//! | ... final s3 main, quiet machine (load ~1.5), criterion mean:         |
+//! | find_peaks + peak_widths   |        | 41.9 us  | 451 us       | 10.8x |
+//! | find_peaks                 |        | 29.9 us  | 304 us       | 10.1x |
 //!
 //! (The last rows: criterion's estimate, old (main 889051f) and new
 //! binaries alternating, SciPy's best repeat just before and after; the

@@ -22,6 +22,12 @@
 //! | autocorrelation, fused passes          | 210 µs   | 1447 µs  | 6.9x  |
 //! | welch (unchanged code, same minutes)   | 68 µs    | 804 µs   | 11.8x |
 //! | csd (unchanged code, same minutes)     | 125 µs   | 1211 µs  | 9.7x  |
+//! | final s3 main, quiet (load ~1.5):      |          |          |       |
+//! | xcorr `correlate_into`                 | 294 µs   | 1446 µs  | 4.9x  |
+//! | xcorr `correlate` (allocates)          | 307 µs   | 1446 µs  | 4.7x  |
+//! | autocorrelation                        | 198 µs   | 1437 µs  | 7.3x  |
+//! | welch, nperseg 4096                    | 76.5 µs  | 782 µs   | 10.2x |
+//! | csd, nperseg 4096                      | 122 µs   | 1185 µs  | 9.7x  |
 //!
 //! The s3 rows: criterion's estimate, old (main 889051f: 132 / 185-195 µs)
 //! and new binaries alternating, load 4.0-4.5, SciPy's best repeat just
