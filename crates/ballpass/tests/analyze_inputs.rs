@@ -226,7 +226,13 @@ fn five_identical_repeats_average_to_the_single_record() {
             .zip(y)
             .all(|(u, v)| (u - v).abs() <= 1e-12 * (1.0 + u.abs())));
     }
-    assert_eq!(one.measured_period.period_s, five.measured_period.period_s);
+    // The period comes from the averaged correlations, so it carries their
+    // rounding (a few ulp), not more.
+    let (p1, p5) = (
+        one.measured_period.period_s.unwrap(),
+        five.measured_period.period_s.unwrap(),
+    );
+    assert!((p1 - p5).abs() <= 1e-12 * p1, "{p1} vs {p5}");
     let s = five.repeats.unwrap();
     let lag = s
         .spread

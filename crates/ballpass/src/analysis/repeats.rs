@@ -761,6 +761,13 @@ fn with_correlator<R>(settings: CorrelateSettings, f: impl FnOnce(&mut Correlato
         .filter(|c| c.settings() == &settings)
         .unwrap_or_else(|| Correlator::new(settings));
     let out = f(&mut c);
-    CORRELATOR.set(Some(c));
+    // Kept only up to records of ~1M samples (~50 MB of buffers), so a long
+    // record's buffers do not stay with a thread for the rest of the run.
+    if c.planned_len().is_some_and(|len| len <= KEEP_MAX_FFT_LEN) {
+        CORRELATOR.set(Some(c));
+    }
     out
 }
+
+/// Longest FFT whose correlator a thread keeps (see [`with_correlator`]).
+const KEEP_MAX_FFT_LEN: usize = 1 << 21;
