@@ -1675,9 +1675,9 @@ pub fn peak_widths_with_prominences(
 }
 
 /// [`peak_widths`] of strictly increasing peaks (validated input) for
-/// `rel_height <= 1`, with the bases located only where the width search
+/// `rel_height < 1`, with the bases located only where the width search
 /// could reach them; `None` where [`prominences_unchecked`] would not take
-/// its sorted path (or `rel_height > 1`).
+/// its sorted path (or `rel_height >= 1`).
 ///
 /// The search for the crossing left of a peak stops at the first sample
 /// `<= width_height`; it cannot pass the left base when
@@ -1685,8 +1685,8 @@ pub fn peak_widths_with_prominences(
 /// window's edge), so there the base only bounds a search that stops
 /// anyway, and the signal's first sample is as good a bound. Only the
 /// bases' values are needed for the prominences; a base's index is
-/// searched for (SciPy's scan) only when `width_height` is below it (e.g.
-/// by rounding at `rel_height = 1`) or its value is zero (whose sign the
+/// searched for (SciPy's scan) only when `width_height` is below it (by
+/// rounding) or when it and the peak are both zero (whose signs the
 /// prominence keeps). Same results as with every base located.
 fn widths_sorted(
     x: &[f64],
@@ -1696,8 +1696,11 @@ fn widths_sorted(
 ) -> Option<Widths> {
     let (n, k) = (x.len(), peaks.len());
     let h = half.unwrap_or(n).min(n);
+    // At `rel_height >= 1` rounding often puts the width height below a
+    // base, whose index would then be scanned for peak by peak (quadratic
+    // without a window): the located path is linear there.
     if k == 0
-        || rel_height > 1.0
+        || rel_height >= 1.0
         || k.saturating_mul(2 * h + 1) < n
         || !peaks.windows(2).all(|w| w[0] < w[1])
     {
@@ -1712,13 +1715,15 @@ fn widths_sorted(
     let mut left_bases = Vec::with_capacity(k);
     let mut right_bases = Vec::with_capacity(k);
     for ((&p, &(lmin, lb)), &(rmin, rb)) in peaks.iter().zip(&left).zip(&right) {
-        // A zero's sign: the value of the sample SciPy reads.
-        let lb = if lmin == 0.0 && lb == usize::MAX {
+        // A zero's sign (the value of the sample SciPy reads) changes the
+        // prominence `x[p] - max(l, r)` only when the peak is zero too.
+        let zero_peak = x[p] == 0.0;
+        let lb = if zero_peak && lmin == 0.0 && lb == usize::MAX {
             scan_left(x, p, p.saturating_sub(h)).1
         } else {
             lb
         };
-        let rb = if rmin == 0.0 && rb == usize::MAX {
+        let rb = if zero_peak && rmin == 0.0 && rb == usize::MAX {
             scan_right(x, p, (p + h).min(n - 1)).1
         } else {
             rb
@@ -1990,7 +1995,7 @@ mod tests {
                         Some(16),
                         Some(1 + next(len as u64) as usize),
                     ] {
-                        for rel in [0.0, 0.25, 0.5, 0.999, 1.0] {
+                        for rel in [0.0, 0.25, 0.5, 0.999, 1.0 - f64::EPSILON / 2.0, 1.0] {
                             let Some(fast) = widths_sorted(&x, &peaks, half, rel) else {
                                 continue;
                             };
