@@ -53,19 +53,19 @@ pub fn mean_std(x: &[f64]) -> Option<MeanStd> {
     MeanStd::of(&v)
 }
 
-/// Median of the finite values (mean of the middle two for an even count).
+/// Median of the finite values (mean of the middle two for an even count,
+/// `0.5 (lo + hi)`); `None` when there are none.
 pub fn median(x: &[f64]) -> Option<f64> {
-    let mut v: Vec<f64> = x.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+    median_with(x, &mut Vec::new())
+}
+
+/// [`median()`] with a scratch buffer reused between calls, found by
+/// selection on [`order_key`]s: under `total_cmp` the order statistics are
+/// unique, so the value is that of a full sort bit for bit (tested).
+pub(crate) fn median_with(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
+    scratch.clear();
+    scratch.extend(x.iter().filter(|x| x.is_finite()).map(|&v| order_key(v)));
+    median_of_keys(scratch)
 }
 
 /// A key whose integer order is [`f64::total_cmp`]'s order: the transform
@@ -101,17 +101,18 @@ pub(crate) fn percentile_of_keys(keys: &mut [i64], q: f64) -> f64 {
     let frac = pos - lo as f64;
     let (_, &mut a, rest) = keys.select_nth_unstable(lo);
     let a = from_order_key(a);
+    if frac == 0.0 {
+        return a;
+    }
     match rest.iter().min() {
-        Some(&b) if frac != 0.0 => a + frac * (from_order_key(b) - a),
-        _ => a,
+        Some(&b) => a + frac * (from_order_key(b) - a),
+        None => a,
     }
 }
 
 /// The median as [`median()`] defines it (`0.5 (lo + hi)` of the middle two
 /// for an even count) of the values whose [`order_key`]s are `keys`, which
-/// it reorders; `None` when empty. Under `total_cmp` the order statistics
-/// are unique, so this is [`median()`]'s value bit for bit when the keys are
-/// those of the finite values.
+/// it reorders; `None` when empty.
 pub(crate) fn median_of_keys(keys: &mut [i64]) -> Option<f64> {
     let n = keys.len();
     if n == 0 {
@@ -135,9 +136,14 @@ pub(crate) fn median_of_keys(keys: &mut [i64]) -> Option<f64> {
 /// Median absolute deviation scaled to a normal standard deviation:
 /// `1.4826 · median(|x − median(x)|)`.
 pub fn robust_sigma(x: &[f64]) -> Option<f64> {
-    let m = median(x)?;
+    robust_sigma_with(x, &mut Vec::new())
+}
+
+/// [`robust_sigma`] with a scratch buffer reused between calls.
+pub(crate) fn robust_sigma_with(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
+    let m = median_with(x, scratch)?;
     let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
-    median(&dev).map(|d| 1.482_602_218_505_602 * d)
+    median_with(&dev, scratch).map(|d| 1.482_602_218_505_602 * d)
 }
 
 /// A least-squares straight line `y = slope · x + intercept` with 95 %
@@ -572,13 +578,18 @@ mod tests {
                 })
                 .collect();
             let mut keys: Vec<i64> = x.iter().map(|&v| order_key(v)).collect();
-            assert_eq!(
-                median_of_keys(&mut keys).map(f64::to_bits),
-                median(&x).map(f64::to_bits),
-                "n={n}"
-            );
             let mut sorted = x.clone();
             sorted.sort_by(f64::total_cmp);
+            let want = if n % 2 == 1 {
+                sorted[n / 2]
+            } else {
+                0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+            };
+            assert_eq!(
+                median_of_keys(&mut keys).map(f64::to_bits),
+                Some(want.to_bits()),
+                "n={n}"
+            );
             for q in [0.0, 10.0, 25.0, 50.0, 75.0, 100.0] {
                 let pos = q / 100.0 * (n - 1) as f64;
                 let lo = pos.floor() as usize;

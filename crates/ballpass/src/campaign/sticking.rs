@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use ballpass_dsp::{find_peaks, Bound, FindPeaksSettings};
 
 use crate::error::{Error, Result};
-use crate::stats::{median_of_keys, order_key};
+use crate::stats::{median_with, robust_sigma_with};
 
 /// Settings of the sticking-event detector.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -91,7 +91,7 @@ pub fn sticking_events(
     let n = friction_n.len();
     let block = ((tau_c_s * fs_hz / 2.0).round() as usize).max(8);
     let residual = detrend_by_block_medians(friction_n, block);
-    let level = robust_sigma(&residual, &mut Vec::new()).unwrap_or(0.0);
+    let level = robust_sigma_with(&residual, &mut Vec::new()).unwrap_or(0.0);
     let threshold = settings.spike_factor * level;
     let distance = (settings.min_separation_periods * tau_c_s * fs_hz).max(1.0);
     let found = find_peaks(
@@ -129,24 +129,6 @@ pub fn sticking_events(
     })
 }
 
-/// Median of the finite values of `x` (`None` if there are none), the value
-/// of [`crate::stats::median`] found by selection on order keys instead of
-/// a full sort (bit for bit the same, see [`crate::stats::median_of_keys`]).
-/// `scratch` is reused between calls.
-fn median(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
-    scratch.clear();
-    scratch.extend(x.iter().filter(|x| x.is_finite()).map(|&v| order_key(v)));
-    median_of_keys(scratch)
-}
-
-/// `1.4826 · median(|x − median(x)|)`, the value of
-/// [`crate::stats::robust_sigma`] by selection (see [`median`]).
-fn robust_sigma(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
-    let m = median(x, scratch)?;
-    let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
-    median(&dev, scratch).map(|d| 1.482_602_218_505_602 * d)
-}
-
 /// `x` minus a baseline made of the medians of consecutive blocks of `block`
 /// samples, linearly interpolated between block centres (robust to spikes,
 /// follows the load cell's slow drift).
@@ -158,7 +140,7 @@ fn detrend_by_block_medians(x: &[f64], block: usize) -> Vec<f64> {
         .enumerate()
         .map(|(b, c)| {
             let centre = (b * block) as f64 + (c.len() as f64 - 1.0) / 2.0;
-            (centre, median(c, &mut scratch).unwrap_or(0.0))
+            (centre, median_with(c, &mut scratch).unwrap_or(0.0))
         })
         .collect();
     let mut out = Vec::with_capacity(n);
@@ -200,11 +182,23 @@ mod tests {
             .collect()
     }
 
-    /// The selection median and robust σ equal the sorting ones of
-    /// `crate::stats` bit for bit (odd and even counts, ties, NaN and
-    /// infinities dropped, signed zeros, empty input).
+    /// The selection median and robust σ (`crate::stats`, by order keys)
+    /// equal the sorting ones bit for bit (odd and even counts, ties, NaN
+    /// and infinities dropped, signed zeros, empty input).
     #[test]
     fn selection_median_equals_the_sorting_median() {
+        fn sorting_median(x: &[f64]) -> Option<f64> {
+            let mut v: Vec<f64> = x.iter().copied().filter(|x| x.is_finite()).collect();
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            (n > 0).then(|| {
+                if n % 2 == 1 {
+                    v[n / 2]
+                } else {
+                    0.5 * (v[n / 2 - 1] + v[n / 2])
+                }
+            })
+        }
         let mut scratch = Vec::new();
         let mut cases: Vec<Vec<f64>> = vec![
             vec![],
@@ -219,15 +213,20 @@ mod tests {
             cases.push(noise(n, 3).iter().map(|v| (v * 4.0).round()).collect());
         }
         for x in &cases {
+            let want = sorting_median(x);
             assert_eq!(
-                median(x, &mut scratch).map(f64::to_bits),
-                crate::stats::median(x).map(f64::to_bits),
+                median_with(x, &mut scratch).map(f64::to_bits),
+                want.map(f64::to_bits),
                 "{} values",
                 x.len()
             );
+            let want_sigma = want.and_then(|m| {
+                let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
+                sorting_median(&dev).map(|d| 1.482_602_218_505_602 * d)
+            });
             assert_eq!(
-                robust_sigma(x, &mut scratch).map(f64::to_bits),
-                crate::stats::robust_sigma(x).map(f64::to_bits),
+                robust_sigma_with(x, &mut scratch).map(f64::to_bits),
+                want_sigma.map(f64::to_bits),
                 "{} values",
                 x.len()
             );
