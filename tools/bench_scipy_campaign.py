@@ -121,13 +121,14 @@ def scalars(fs, sig, corr, hires, f_c, nperseg_hr, nd, velocity_error_raw):
     tau = 1.0 / f_c
     periods = {s: period(corr[s], zero, fs, tau) for s in ("friction", "velocity_error", "optical")}
     t = next((p for p in periods.values() if p), tau)
+    f_used = 1.0 / t
     h = int(round(0.5 * t * fs))
     for pair in ("friction__velocity_error", "friction__optical", "velocity_error__optical"):
         r = corr[pair][zero - h:zero + h + 1]
         i = int(np.argmax(r))
         d = parabola(r[i - 1], r[i], r[i + 1]) if 0 < i < len(r) - 1 else 0.0
         _ = 360.0 * ((i - h + d) / fs) / t
-        k = int(round(f_c / (hires["freq_hz"][1] - hires["freq_hz"][0])))
+        k = int(round(f_used / (hires["freq_hz"][1] - hires["freq_hz"][0])))
         _ = np.angle(hires[pair + "_re"][k] + 1j * hires[pair + "_im"][k], deg=True)
     w = signal.get_window("hann", nperseg_hr)
     step = nperseg_hr - nperseg_hr // 2
@@ -139,17 +140,26 @@ def scalars(fs, sig, corr, hires, f_c, nperseg_hr, nd, velocity_error_raw):
     med_ratio = stats.chi2.ppf(0.5, nu) / nu
     thr_ratio = stats.chi2.ppf(0.99 ** (1 / 3), nu) / nu
     f = hires["freq_hz"]
-    f_meas = 1.0 / t
+    df = f[1] - f[0]
+    # As ballpass: a first pass at the predicted f_c, the spectral peak
+    # within +-25 % of it, then the table at the predicted and measured f_c.
     for s in ("friction", "velocity_error", "optical"):
         for k in range(1, 6):
             harmonic(f, hires[s], k * f_c, f_c, med_ratio, thr_ratio)
-            harmonic(f, hires[s], k * f_meas, f_meas, med_ratio, thr_ratio)
+        lo, hi = max(int(np.ceil(0.75 * f_c / df)), 1), min(int(np.floor(1.25 * f_c / df)), len(f) - 2)
+        if lo <= hi:
+            i = lo + int(np.argmax(hires[s][lo:hi + 1]))
+            _ = (i + parabola(hires[s][i - 1], hires[s][i], hires[s][i + 1])) * df
+    for s in ("friction", "velocity_error", "optical"):
+        for k in range(1, 6):
+            harmonic(f, hires[s], k * f_c, f_c, med_ratio, thr_ratio)
+            harmonic(f, hires[s], k * f_used, f_used, med_ratio, thr_ratio)
     n_d = nu / 2
     thr = 1 - (1 - 0.99 ** (1 / 3)) ** (1 / (n_d - 1)) if n_d > 1 else np.inf
     for pair in ("friction__velocity_error", "friction__optical", "velocity_error__optical"):
         coh = hires[pair + "_coh"]
         for k in range(1, 6):
-            i = int(round(k * f_c / (f[1] - f[0])))
+            i = int(round(k * f_used / df))
             if 0 < i < len(coh) - 1:
                 _ = coh[i - 1:i + 2].max() > thr
     _ = (np.std(velocity_error_raw, ddof=1), np.std(sig["velocity_error"], ddof=1))

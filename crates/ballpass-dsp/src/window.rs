@@ -96,6 +96,8 @@ fn general_cosine_periodic(n: usize, a0: f64, a1: f64) -> Vec<f64> {
     use std::cell::RefCell;
     /// Windows kept per thread.
     const KEEP: usize = 4;
+    /// Longest window kept (512 kB): a longer one is rare and costly to hold.
+    const KEEP_MAX_LEN: usize = 1 << 16;
     type Key = (u64, u64, usize);
     thread_local! {
         static RECENT: RefCell<Vec<(Key, Vec<f64>)>> = const { RefCell::new(Vec::new()) };
@@ -110,6 +112,9 @@ fn general_cosine_periodic(n: usize, a0: f64, a1: f64) -> Vec<f64> {
         return w;
     }
     let w = compute_general_cosine_periodic(n, a0, a1);
+    if n > KEEP_MAX_LEN {
+        return w;
+    }
     RECENT.with_borrow_mut(|r| {
         if r.len() == KEEP {
             r.remove(0);

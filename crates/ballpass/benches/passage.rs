@@ -10,7 +10,7 @@
 //! | work                               | ballpass | SciPy 1.17.1 / NumPy 2.4.6 |
 //! |------------------------------------|----------|----------------------------|
 //! | detect (33 passages)               | 2.6 ms   | 3.5 ms                     |
-//! | detect + both whole-record fits    | 92 ms    | 1426 ms                    |
+//! | detect + both whole-record fits    | 92 ms    | 1426 ms (loaded machine; superseded below) |
 //!
 //! Session 3 (quiet machine, load ~1.5; criterion mean, SciPy best of 5 of
 //! the same script, whose `peak_widths` now takes find_peaks' prominences

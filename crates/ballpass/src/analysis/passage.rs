@@ -1082,9 +1082,13 @@ fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
     let hi = n.saturating_sub(half).max(lo);
     let mut out: Vec<f64> = Vec::with_capacity(n);
     out.extend((0..lo).map(edge));
-    match (hi > lo).then(|| ballpass_dsp::correlate_valid(&x[lo - half..hi + half], &k)) {
-        Some(Ok(inner)) => out.extend(inner),
-        _ => out.extend((lo..hi).map(edge)),
+    if hi > lo {
+        // The slice holds `hi - lo + 2 half >= k.len()` samples, neither
+        // empty: `correlate_valid` has nothing to reject.
+        out.extend(
+            ballpass_dsp::correlate_valid(&x[lo - half..hi + half], &k)
+                .expect("the kernel fits inside the slice"),
+        );
     }
     out.extend((hi..n).map(edge));
     out

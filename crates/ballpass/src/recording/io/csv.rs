@@ -374,8 +374,10 @@ fn parse_row(text: &[u8], role: &[Role], delimiter: u8, rows: &mut Rows) -> Opti
 }
 
 /// Whether bytes that [`rows_of`] skips (a comment line, an unused field)
-/// are text without a quote: the general reader reads text and gives
-/// quotes their CSV meaning. Everything else `rows_of` accepts (numbers,
+/// are text without a quote. A quote has a CSV meaning the fast path does
+/// not implement; bytes that are not UTF-8 are left to the general reader
+/// too (it decodes only the cells it uses, so the result is the same; the
+/// fast path only declines). Everything else `rows_of` accepts (numbers,
 /// white space, delimiters, line ends) is ASCII by construction, so these
 /// checks stand for a check of the whole body.
 fn plain_text(skipped: &[u8]) -> bool {
