@@ -31,12 +31,16 @@ sweep 0.31 s + diagnose 0.16 s = 0.48 s vs SciPy 7.73 s, 16.1x (earlier run:
 merged), three runs, load ~1.5: 0.46 / 0.50 / 0.48 s vs 8.74 / 8.80 / 8.30 s,
 19.0x / 17.5x / 17.5x (the SciPy loop's own time varies by 15 % between runs).
 
-Session 3 (quiet machine, load ~1.2, this script with the faithful passage
-detection and the per-record numbers): sweep 0.292 s + diagnose 0.154 s =
-0.447 s vs SciPy 8.39 s, 18.8x; again 0.439 s vs 8.26 s, 18.8x. The same
-binary against the session-2 script (lighter SciPy work): 0.454 s vs 7.74 s
-(17.0x). Session-2 main against this script: 0.483 s (sweep 0.317 +
-diagnose 0.166) in the same minutes.
+Session 3 (quiet machine, load ~1.2-1.7, this script with the faithful
+passage detection and the per-record numbers): mid-session main 0.447 s
+(sweep 0.292 + diagnose 0.154) vs SciPy 8.39 s, 18.8x; again 0.439 s vs
+8.26 s, 18.8x. The session's final main (correlation energies once per
+signal, spectra kept), five runs: 0.446 / 0.462 / 0.435 / 0.435 / 0.430 s
+vs 8.76 / 9.35 / 8.87 / 8.77 / 8.62 s = 19.6x / 20.2x / 20.4x / 20.2x /
+20.0x (median 20.2x). The same kind of binary against the session-2 script
+(lighter SciPy work: one find_peaks for the passages, no per-record
+numbers) measured 17.0x mid-session. Session-2 main against this script:
+0.483 s (sweep 0.317 + diagnose 0.166) in the same minutes.
 """
 import argparse
 import csv
