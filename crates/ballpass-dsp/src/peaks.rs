@@ -1871,6 +1871,26 @@ mod tests {
         }
     }
 
+    /// Pseudo-random integers below the argument (the LCG of
+    /// [`lcg_levels`]), seeded with `seed`.
+    fn lcg(seed: u64) -> impl FnMut(u64) -> u64 {
+        let mut s = seed;
+        move |m| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % m
+        }
+    }
+
+    /// Sorted peak sets of `x` for the stack-search tests: every sample, a
+    /// random quarter of them, the local maxima.
+    fn peak_sets(x: &[f64], next: &mut impl FnMut(u64) -> u64) -> [Vec<usize>; 3] {
+        let len = x.len();
+        let some = (0..len).filter(|_| next(4) == 0).collect();
+        [(0..len).collect(), some, local_maxima(x).0]
+    }
+
     /// A test signal of `len` samples with ties: kind 0 a small alphabet,
     /// 1 runs of equal values (plateaus), 2 the same alphabet with signed
     /// zeros and -1 when `signed_zeros`, 3 a random walk
@@ -1916,20 +1936,11 @@ mod tests {
         // Random sorted peak sets (all samples, random subsets, local maxima
         // only) on signals with ties and plateaus (small alphabets, runs of
         // equal values) and random walks, for windows from 1 sample to none.
-        let mut s = 4242u64;
-        let mut next = |m: u64| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) % m
-        };
+        let mut next = lcg(4242u64);
         for len in (1..60).chain([200, 1000, 3000]) {
             for kind in 0..4 {
                 let x = tricky_signal(len, kind, (1.0, -5.0), false, &mut next);
-                let all: Vec<usize> = (0..len).collect();
-                let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
-                let (maxima, _) = local_maxima(&x);
-                for peaks in [all, some, maxima] {
+                for peaks in peak_sets(&x, &mut next) {
                     for half in [len, 1, 2, 3, 7, 16, 100, 1 + next(len as u64) as usize] {
                         let h = half.min(len);
                         let (left, right) = bases_sorted::<true>(&x, &peaks, h, Baseline);
@@ -1974,20 +1985,11 @@ mod tests {
         // Ties, plateaus, signed zeros, random walks; windows from 1 sample
         // to none; rel_height 0 to 1 (1: rounding can put the width height
         // below a base).
-        let mut s = 2718u64;
-        let mut next = |m: u64| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) % m
-        };
+        let mut next = lcg(2718u64);
         for len in (3..40).chain([200, 1000, 3000]) {
             for kind in 0..4 {
                 let x = tricky_signal(len, kind, (0.37, -2.0), true, &mut next);
-                let all: Vec<usize> = (0..len).collect();
-                let some: Vec<usize> = (0..len).filter(|_| next(4) == 0).collect();
-                let (maxima, _) = local_maxima(&x);
-                for peaks in [all, some, maxima] {
+                for peaks in peak_sets(&x, &mut next) {
                     for half in [
                         None,
                         Some(1),

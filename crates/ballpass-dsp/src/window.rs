@@ -90,8 +90,8 @@ impl Window {
 /// `_general_cosine_impl(n, [a0, a1], sym=False)`.
 ///
 /// The last few windows made on a thread are kept and copied out again: a
-/// campaign builds the same 4096-point window for every record, and the
-/// `n` cosines cost ten times the copy.
+/// campaign builds the same 4096-point window for every record, and `n`
+/// cosines cost far more than copying `n` values.
 fn general_cosine_periodic(n: usize, a0: f64, a1: f64) -> Vec<f64> {
     use std::cell::RefCell;
     /// Windows kept per thread.

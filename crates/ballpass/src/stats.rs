@@ -70,8 +70,9 @@ pub(crate) fn median_with(x: &[f64], scratch: &mut Vec<i64>) -> Option<f64> {
 
 /// A key whose integer order is [`f64::total_cmp`]'s order: the transform
 /// `total_cmp` applies to both sides of every comparison, done once per
-/// value, so that a selection compares plain integers (about 20 % faster on
-/// the campaign's running percentiles). [`from_order_key`] undoes it.
+/// value, so that a selection compares plain integers (in a microbenchmark
+/// of the running percentile's selections, 800-sample windows of 30 000
+/// samples, 226 -> 182 µs). [`from_order_key`] undoes it.
 #[inline]
 pub(crate) fn order_key(x: f64) -> i64 {
     let b = x.to_bits() as i64;

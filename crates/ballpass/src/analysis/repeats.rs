@@ -575,6 +575,7 @@ pub(crate) fn run(
                     CorrelateSettings {
                         normalization: settings.corr_norm.to_dsp(),
                     },
+                    n,
                     |c| correlation::compute(&p, c, settings),
                 )
             },
@@ -752,22 +753,29 @@ thread_local! {
 }
 
 /// Runs `f` with this thread's kept correlator when its settings are
-/// `settings`, else with a new one, and keeps it afterwards. The correlator
-/// is taken out while `f` runs, so a nested call (none today: the
-/// correlations run no parallel work of their own) would just make its own.
-fn with_correlator<R>(settings: CorrelateSettings, f: impl FnOnce(&mut Correlator) -> R) -> R {
+/// `settings`, else with a new one, and keeps it afterwards when the
+/// records are at most [`KEEP_MAX_SAMPLES`] long (`n` samples now). The
+/// correlator is taken out while `f` runs, so a nested call (none today:
+/// the correlations run no parallel work of their own) would just make its
+/// own.
+fn with_correlator<R>(
+    settings: CorrelateSettings,
+    n: usize,
+    f: impl FnOnce(&mut Correlator) -> R,
+) -> R {
     let mut c = CORRELATOR
         .take()
         .filter(|c| c.settings() == &settings)
         .unwrap_or_else(|| Correlator::new(settings));
     let out = f(&mut c);
-    // Kept only up to records of ~1M samples (~50 MB of buffers), so a long
-    // record's buffers do not stay with a thread for the rest of the run.
-    if c.planned_len().is_some_and(|len| len <= KEEP_MAX_FFT_LEN) {
+    if n <= KEEP_MAX_SAMPLES {
         CORRELATOR.set(Some(c));
     }
     out
 }
 
-/// Longest FFT whose correlator a thread keeps (see [`with_correlator`]).
-const KEEP_MAX_FFT_LEN: usize = 1 << 21;
+/// Longest record whose correlator a thread keeps: its FFT has at most
+/// 2^19 points, whose seven buffers of 2^18 complex values (three signals'
+/// spectra, two work spectra, the inverse's input, scratch) hold ~28 MB; a
+/// longer record's would stay with the thread for the rest of the run.
+const KEEP_MAX_SAMPLES: usize = 1 << 18;
