@@ -238,7 +238,7 @@ fn encoder_moves_in_whole_tenths_of_a_micrometre() {
 fn load_cell_decays_with_its_time_constant() {
     for tau in [10.0, 50.0] {
         let mut s = quiet(9.0);
-        s.load_cell.time_constant_s = tau;
+        s.load_cell.time_constant_s = Some(tau);
         let sim = run(&s);
         let f = ch(&sim, Channel::Friction);
         let t0 = sim.truth.record_start_time_s;
@@ -392,7 +392,7 @@ fn truth_lags_match_the_recorded_channels() {
         // The load cell's discharge of the Coulomb level, F_c exp(-t/tau), is
         // known exactly; remove it so that its 1/f leakage does not bias the bin.
         let t0 = t.record_start_time_s;
-        let tau = s.load_cell.time_constant_s;
+        let tau = s.load_cell.time_constant_s.unwrap();
         let f: Vec<f64> = ch(&sim, Channel::Friction)
             .iter()
             .enumerate()

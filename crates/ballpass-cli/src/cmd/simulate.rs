@@ -115,7 +115,7 @@ impl SimFlags {
             s.friction.coulomb_n = v;
         }
         if let Some(v) = self.load_cell_tau {
-            s.load_cell.time_constant_s = v;
+            s.load_cell.time_constant_s = Some(v);
         }
         if self.ac_coupling {
             s.optical.ac_coupling = true;

@@ -55,6 +55,13 @@
 //! | velocity-error std | peak near 9 mm/s at ~100 µm/s (calibration target) | thesis Fig. 29 (110 µm/s) |
 //! | load-cell time constant | 10 s (spec >= 50 s; Fig. 54 decays faster) | thesis §3.3, §7 |
 //!
+//! Beyond the thesis' bench, every part can be set to stand for benches that
+//! are not ours (the randomized validation draws them): pulse shapes other
+//! than the Gaussian ([`shapes`]), a DC-coupled force sensor or any discharge
+//! time constant, spike amplitudes in a given range (mild to severe
+//! sticking), a slow wander of the optical DC level, any stage, rate,
+//! duration and geometry.
+//!
 //! Assumptions (the thesis gives no number): the PD stage (natural frequency
 //! at the 9 mm/s ball-pass frequency, damping 0.35, effective mass 240 kg —
 //! see [`StageSettings`] for why), Coulomb level 3 N ("a few newtons"),
@@ -70,12 +77,6 @@
 //! 1 mm/s, 100 µm/s at 9–10 mm/s and 83 µm/s at 20 mm/s (5 seeds; see
 //! `examples/sim_sweep.rs`).
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
-
-use serde::{Deserialize, Serialize};
-
-use crate::bearing::{self, check_velocity, Geometry};
 use crate::error::{Error, Result};
 use crate::recording::{Channels, Metadata, Recording};
 
@@ -83,620 +84,23 @@ pub mod balls;
 pub mod campaign;
 pub mod rng;
 pub mod sensors;
+pub mod settings;
+pub mod shapes;
 pub mod stage;
+pub mod truth;
 
+pub use settings::{
+    Condition, EncoderSettings, FrictionSettings, LoadCellSettings, MotionSettings,
+    OpticalSettings, SimSettings, Start, MAX_SAMPLES,
+};
+pub use shapes::PulseShape;
 pub use stage::{PdStage, StageSettings};
+pub use truth::{truth_path, Simulation, Spike, Truth, TRUTH_SCHEMA};
 
 use balls::Circuit;
 use rng::Rng;
-use sensors::{gaussian, quantize, sigma_from_fwhm, Butterworth2, HighPass1, PULSE_CUTOFF_SIGMAS};
-
-/// Schema tag of the truth file.
-pub const TRUTH_SCHEMA: &str = "ballpass.truth/1";
-
-/// Bearing condition.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Condition {
-    /// Small periodic friction content, hard to see in a spectrum.
-    #[default]
-    Good,
-    /// Sporadic large friction spikes at ball passages (thesis ch. 8).
-    Sticking,
-}
-
-impl Condition {
-    /// Lower-case name (`good`, `sticking`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Condition::Good => "good",
-            Condition::Sticking => "sticking",
-        }
-    }
-}
-
-/// How the recording starts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Start {
-    /// Stage already tracking `V` in steady state; a settling time is
-    /// simulated before the first sample so that pulses and roughness have
-    /// driven the stage as they would in a long run.
-    #[default]
-    Settled,
-    /// Stage starts at rest, the reference accelerates to `V`, and the
-    /// recording triggers when the stage has travelled the trigger distance
-    /// (thesis ch. 7).
-    FromRest,
-}
-
-/// Motion profile and trigger.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MotionSettings {
-    /// Reference acceleration from rest, mm/s² (assumption: 100).
-    pub acceleration_mm_s2: f64,
-    /// Stage travel that triggers the recording in `from_rest`, mm; `None`:
-    /// `V² / (2 a) + V t_settle`.
-    pub trigger_distance_mm: Option<f64>,
-    /// Time allowed for transients, s; `None`: `10 / (zeta omega_n)` (e^-10).
-    pub settle_time_s: Option<f64>,
-}
-
-impl Default for MotionSettings {
-    fn default() -> Self {
-        Self {
-            acceleration_mm_s2: 100.0,
-            trigger_distance_mm: None,
-            settle_time_s: None,
-        }
-    }
-}
-
-/// Friction model.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FrictionSettings {
-    /// Coulomb level `F_c`, N.
-    pub coulomb_n: f64,
-    /// Peak of the Gaussian pulse of each ball entering the loaded zone, N.
-    pub pulse_amplitude_n: f64,
-    /// Friction pulse FWHM as a fraction of `tau_c`.
-    pub pulse_width_ratio: f64,
-    /// Standard deviation of the roughness force, N.
-    pub roughness_n: f64,
-    /// Correlation length of the roughness along the rail (stage travel), mm.
-    pub roughness_length_mm: f64,
-    /// Probability that a ball entry carries a sticking spike (`sticking` only).
-    pub stick_probability: f64,
-    /// Largest total friction during a spike, as a multiple of `F_c`.
-    pub stick_max_ratio: f64,
-    /// Sticking spike FWHM as a fraction of `tau_c`.
-    pub stick_width_ratio: f64,
-    /// Regularisation of the Coulomb sign near zero velocity, mm/s (raised
-    /// automatically where needed for stability at the internal step).
-    pub zero_velocity_band_mm_s: f64,
-}
-
-impl Default for FrictionSettings {
-    fn default() -> Self {
-        Self {
-            coulomb_n: 3.0,
-            pulse_amplitude_n: 0.2,
-            pulse_width_ratio: 0.155,
-            roughness_n: 0.2,
-            roughness_length_mm: 1.3,
-            stick_probability: 0.6,
-            stick_max_ratio: 10.0,
-            stick_width_ratio: 0.05,
-            zero_velocity_band_mm_s: 1e-3,
-        }
-    }
-}
-
-/// Quartz load cell.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct LoadCellSettings {
-    /// Discharge time constant of the first-order high-pass, s. The 208C01 is
-    /// specified at >= 50 s, but thesis Fig. 54 decays within ~10 s; 10 s.
-    pub time_constant_s: f64,
-    /// White noise on the recorded samples, N (std).
-    pub noise_n: f64,
-    /// Analog anti-alias low-pass cut-off, Hz.
-    pub antialias_hz: f64,
-}
-
-impl Default for LoadCellSettings {
-    fn default() -> Self {
-        Self {
-            time_constant_s: 10.0,
-            noise_n: 0.02,
-            antialias_hz: 400.0,
-        }
-    }
-}
-
-/// Linear encoder.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct EncoderSettings {
-    /// Resolution, µm (Renishaw RGH22 on the ABL20100: 0.1 µm).
-    pub resolution_um: f64,
-}
-
-impl Default for EncoderSettings {
-    fn default() -> Self {
-        Self { resolution_um: 0.1 }
-    }
-}
-
-/// Optical ball-pass sensor (photodetector).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct OpticalSettings {
-    /// DC level, V.
-    pub dc_v: f64,
-    /// Peak of a ball's pulse, V.
-    pub pulse_amplitude_v: f64,
-    /// Relative ball-to-ball variation of the pulse height (std).
-    pub amplitude_jitter: f64,
-    /// Pulse FWHM (width at half prominence) as a fraction of `tau_c` (thesis: 0.155).
-    pub width_ratio: f64,
-    /// Distance from the loaded-zone entry to the sensor along the ball path, mm.
-    /// Optical pulses lag friction pulses by `offset / (v / 2)`; 1.755 mm gives
-    /// the thesis' 0.39 s at 9 mm/s (0.433 tau_c at every speed).
-    pub sensor_offset_mm: f64,
-    /// White noise on the recorded samples, V (std).
-    pub noise_v: f64,
-    /// Analog anti-alias low-pass cut-off, Hz.
-    pub antialias_hz: f64,
-    /// AC coupling (first-order high-pass) before the anti-alias filter (thesis Fig. 38).
-    pub ac_coupling: bool,
-    /// AC-coupling time constant, s.
-    pub ac_time_constant_s: f64,
-    /// Coherent-source interference drift (thesis Fig. 32): a slow sinusoid
-    /// `A sin(theta)` added to the signal and pulses multiplied by `-sin(theta)`,
-    /// so pulses point up in its troughs, invert at its crests and vanish at
-    /// its mid-level.
-    pub interference_drift: bool,
-    /// Period of the interference drift, s (thesis: 5 s).
-    pub interference_period_s: f64,
-    /// Amplitude of the interference drift, V.
-    pub interference_amplitude_v: f64,
-}
-
-impl Default for OpticalSettings {
-    fn default() -> Self {
-        Self {
-            dc_v: 1.0,
-            pulse_amplitude_v: 0.5,
-            amplitude_jitter: 0.05,
-            width_ratio: 0.155,
-            sensor_offset_mm: 1.755,
-            noise_v: 0.01,
-            antialias_hz: 400.0,
-            ac_coupling: false,
-            ac_time_constant_s: 1.0,
-            interference_drift: false,
-            interference_period_s: 5.0,
-            interference_amplitude_v: 0.5,
-        }
-    }
-}
-
-/// Everything that defines a simulated recording. Same settings (seed
-/// included), same samples, bit for bit, on one platform.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SimSettings {
-    /// Tracking velocity `V`, mm/s.
-    pub velocity_mm_s: f64,
-    /// Recorded duration, s.
-    pub duration_s: f64,
-    /// Sampling rate of the recording, Hz.
-    pub fs_hz: f64,
-    /// Internal steps per sample (internal rate = `oversample * fs`).
-    pub oversample: u32,
-    /// Seed of all random draws.
-    pub seed: u64,
-    /// Bearing name written to the metadata (catalog key or a campaign label).
-    pub bearing: String,
-    /// Ball-circuit geometry.
-    pub geometry: Geometry,
-    /// Test id written to the metadata; `None`: `sim-v{V}-s{seed}`.
-    pub test_id: Option<String>,
-    /// Bearing condition.
-    pub condition: Condition,
-    /// Settled or from rest.
-    pub start: Start,
-    /// Stage model.
-    pub stage: StageSettings,
-    /// Motion profile and trigger.
-    pub motion: MotionSettings,
-    /// Friction model.
-    pub friction: FrictionSettings,
-    /// Load cell.
-    pub load_cell: LoadCellSettings,
-    /// Encoder.
-    pub encoder: EncoderSettings,
-    /// Photodetector.
-    pub optical: OpticalSettings,
-}
-
-impl Default for SimSettings {
-    fn default() -> Self {
-        Self {
-            velocity_mm_s: 9.0,
-            duration_s: 30.0,
-            fs_hz: 1000.0,
-            oversample: 20,
-            seed: 0,
-            bearing: "sr25w".into(),
-            geometry: SR25W,
-            test_id: None,
-            condition: Condition::Good,
-            start: Start::Settled,
-            stage: StageSettings::default(),
-            motion: MotionSettings::default(),
-            friction: FrictionSettings::default(),
-            load_cell: LoadCellSettings::default(),
-            encoder: EncoderSettings::default(),
-            optical: OpticalSettings::default(),
-        }
-    }
-}
-
-const SR25W: Geometry = Geometry {
-    ball_diameter_mm: 4.0,
-    free_space_mm: 2.0,
-    balls_in_race: 36,
-};
-
-/// Most samples one recording may have (guards against a typo like `--fs 1e9`).
-pub const MAX_SAMPLES: usize = 50_000_000;
-
-fn positive(name: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::setting(
-            name,
-            format!("must be a positive number, got {v}"),
-        ))
-    }
-}
-
-fn non_negative(name: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(Error::setting(
-            name,
-            format!("must be zero or a positive number, got {v}"),
-        ))
-    }
-}
-
-impl SimSettings {
-    /// Settings for a catalog bearing at one velocity, other fields default.
-    ///
-    /// # Errors
-    /// [`Error::InvalidSetting`] for an unknown bearing key.
-    pub fn for_bearing(key: &str, velocity_mm_s: f64) -> Result<Self> {
-        let entry = bearing::lookup(key).ok_or_else(|| {
-            let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
-            Error::setting(
-                "bearing",
-                format!("unknown bearing '{key}' (catalog: {})", keys.join(", ")),
-            )
-        })?;
-        Ok(Self {
-            velocity_mm_s,
-            bearing: entry.key.into(),
-            geometry: entry.geometry,
-            ..Self::default()
-        })
-    }
-
-    /// Number of recorded samples, `round(duration * fs)`.
-    pub fn n_samples(&self) -> usize {
-        (self.duration_s * self.fs_hz).round() as usize
-    }
-
-    /// Checks every field's range.
-    ///
-    /// # Errors
-    /// [`Error::InvalidSetting`] naming the field and the value.
-    pub fn validate(&self) -> Result<()> {
-        check_velocity(self.velocity_mm_s)?;
-        positive("duration", self.duration_s)?;
-        positive("fs", self.fs_hz)?;
-        if !(1..=1000).contains(&self.oversample) {
-            return Err(Error::setting(
-                "oversample",
-                format!("must be 1 to 1000, got {}", self.oversample),
-            ));
-        }
-        let n = self.duration_s * self.fs_hz;
-        if n.round() < Recording::MIN_SAMPLES as f64 || n > MAX_SAMPLES as f64 {
-            return Err(Error::setting(
-                "duration",
-                format!(
-                    "{} s at {} Hz gives {n:.0} samples; expected {} to {MAX_SAMPLES}",
-                    self.duration_s,
-                    self.fs_hz,
-                    Recording::MIN_SAMPLES
-                ),
-            ));
-        }
-        self.geometry.validate()?;
-        self.stage.validate()?;
-        let band = self.friction.zero_velocity_band_mm_s;
-        if self.velocity_mm_s < 10.0 * band {
-            return Err(Error::setting(
-                "velocity",
-                format!(
-                    "{} mm/s is within 10x the friction's zero-velocity band ({band} mm/s); expected at least {}",
-                    self.velocity_mm_s,
-                    10.0 * band
-                ),
-            ));
-        }
-        let passages =
-            self.velocity_mm_s * (self.duration_s + 100.0) / (2.0 * self.geometry.d_avg_mm());
-        if passages > 1e7 {
-            return Err(Error::setting(
-                "velocity",
-                format!(
-                    "{} mm/s over {} s makes {passages:.0} ball passages; at most 1e7",
-                    self.velocity_mm_s, self.duration_s
-                ),
-            ));
-        }
-        positive("acceleration", self.motion.acceleration_mm_s2)?;
-        if let Some(d) = self.motion.trigger_distance_mm {
-            non_negative("trigger distance", d)?;
-        }
-        if let Some(t) = self.motion.settle_time_s {
-            non_negative("settle time", t)?;
-        }
-        let f = &self.friction;
-        non_negative("friction coulomb_n", f.coulomb_n)?;
-        non_negative("friction pulse_amplitude_n", f.pulse_amplitude_n)?;
-        positive("friction pulse_width_ratio", f.pulse_width_ratio)?;
-        non_negative("friction roughness_n", f.roughness_n)?;
-        positive("friction roughness_length_mm", f.roughness_length_mm)?;
-        if !(0.0..=1.0).contains(&f.stick_probability) {
-            return Err(Error::setting(
-                "friction stick_probability",
-                format!("must be between 0 and 1, got {}", f.stick_probability),
-            ));
-        }
-        if !(f.stick_max_ratio.is_finite() && f.stick_max_ratio >= 1.0) {
-            return Err(Error::setting(
-                "friction stick_max_ratio",
-                format!("must be at least 1, got {}", f.stick_max_ratio),
-            ));
-        }
-        positive("friction stick_width_ratio", f.stick_width_ratio)?;
-        positive(
-            "friction zero_velocity_band_mm_s",
-            f.zero_velocity_band_mm_s,
-        )?;
-        positive("load-cell time constant", self.load_cell.time_constant_s)?;
-        non_negative("load-cell noise", self.load_cell.noise_n)?;
-        positive("load-cell anti-alias cut-off", self.load_cell.antialias_hz)?;
-        positive("encoder resolution", self.encoder.resolution_um)?;
-        let o = &self.optical;
-        for (name, v) in [
-            ("optical dc_v", o.dc_v),
-            ("optical pulse_amplitude_v", o.pulse_amplitude_v),
-            ("optical sensor_offset_mm", o.sensor_offset_mm),
-            (
-                "optical interference_amplitude_v",
-                o.interference_amplitude_v,
-            ),
-        ] {
-            if !v.is_finite() {
-                return Err(Error::setting(name, format!("must be finite, got {v}")));
-            }
-        }
-        non_negative("optical amplitude_jitter", o.amplitude_jitter)?;
-        positive("optical width_ratio", o.width_ratio)?;
-        non_negative("optical noise_v", o.noise_v)?;
-        positive("optical anti-alias cut-off", o.antialias_hz)?;
-        positive("optical AC-coupling time constant", o.ac_time_constant_s)?;
-        positive("optical interference period", o.interference_period_s)?;
-        Ok(())
-    }
-
-    fn settle_time_s(&self) -> f64 {
-        self.motion
-            .settle_time_s
-            .unwrap_or_else(|| 10.0 / (self.stage.damping_ratio() * self.stage.omega_n_rad_s()))
-    }
-
-    fn trigger_distance_mm(&self) -> f64 {
-        self.motion.trigger_distance_mm.unwrap_or_else(|| {
-            let v = self.velocity_mm_s;
-            v * v / (2.0 * self.motion.acceleration_mm_s2) + v * self.settle_time_s()
-        })
-    }
-}
-
-/// A simulated recording and what is true about it.
-#[derive(Debug, Clone)]
-pub struct Simulation {
-    /// The recording (friction_N, position_mm, optical_V).
-    pub recording: Recording,
-    /// The truth.
-    pub truth: Truth,
-}
-
-/// One sticking spike.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Spike {
-    /// Time of the spike's centre (the ball's loaded-zone entry), s from the first sample.
-    pub time_s: f64,
-    /// Peak added to the friction, N.
-    pub amplitude_n: f64,
-}
-
-/// What is true about a simulated recording (schema `ballpass.truth/1`).
-///
-/// Times are seconds from the first sample. Lags are of the fundamental at
-/// the realised `f_c`, between the *recorded* channels (sensor filters
-/// included), wrapped into `(-tau_c/2, tau_c/2]`; a positive lag means the
-/// signal lags the friction force, and the phase is `-360 lag / tau_c`
-/// degrees (ERRATA §8 convention).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Truth {
-    /// `ballpass.truth/1`.
-    pub schema: String,
-    /// ballpass version that produced it.
-    pub version: String,
-    /// Bearing condition.
-    pub condition: Condition,
-    /// Commanded velocity, mm/s.
-    pub velocity_mm_s: f64,
-    /// Sampling rate, Hz.
-    pub fs_hz: f64,
-    /// Number of samples per channel.
-    pub n_samples: usize,
-    /// Simulated time before the first sample (settling or acceleration), s.
-    pub record_start_time_s: f64,
-    /// Mean ball spacing `d_avg`, mm.
-    pub d_avg_mm: f64,
-    /// Predicted ball-pass frequency `V / (2 d_avg)`, Hz.
-    pub f_c_nominal_hz: f64,
-    /// Predicted ball-pass period, s.
-    pub tau_c_nominal_s: f64,
-    /// Mean stage velocity over the recording, mm/s.
-    pub mean_velocity_mm_s: f64,
-    /// Realised long-run ball-pass frequency `mean velocity / (2 d_avg)`, Hz.
-    pub f_c_hz: f64,
-    /// Realised ball-pass period `1 / f_c_hz`, s.
-    pub tau_c_s: f64,
-    /// Mean optical passage rate in the recording, `(n - 1) / (t_last - t_first)`, Hz
-    /// (`None` with fewer than two passages). Varies about `f_c` with the spacings.
-    pub passage_rate_hz: Option<f64>,
-    /// Centre-to-centre spacings of the circuit, ball `k` to `k + 1`, mm.
-    pub ball_spacings_mm: Vec<f64>,
-    /// Times the ball centres pass the optical sensor, s.
-    pub optical_passage_times_s: Vec<f64>,
-    /// Which ball made each optical passage.
-    pub optical_passage_balls: Vec<usize>,
-    /// Times the ball centres enter the loaded zone (friction pulse centres), s.
-    pub friction_pulse_times_s: Vec<f64>,
-    /// Which ball made each friction pulse.
-    pub friction_pulse_balls: Vec<usize>,
-    /// Sticking spikes in the recording (empty for a good bearing).
-    pub sticking_spikes: Vec<Spike>,
-    /// Optical pulse width at half prominence (FWHM), s.
-    pub optical_pulse_fwhm_s: f64,
-    /// Optical pulse Gaussian sigma, s.
-    pub optical_pulse_sigma_s: f64,
-    /// Optical pulse FWHM / tau_c.
-    pub optical_pulse_fwhm_tau_c: f64,
-    /// Friction pulse FWHM, s.
-    pub friction_pulse_fwhm_s: f64,
-    /// Delay of the optical pulses after the friction pulses, `offset / (v/2)`, s (not wrapped).
-    pub optical_delay_s: f64,
-    /// Lag of the optical channel behind the friction channel, s.
-    pub optical_lag_s: f64,
-    /// Same, in units of tau_c.
-    pub optical_lag_tau_c: f64,
-    /// Phase of the optical channel relative to friction, degrees.
-    pub optical_phase_deg: f64,
-    /// Lag of the velocity error (from the position channel) behind the friction channel, s.
-    pub velocity_error_lag_s: f64,
-    /// Same, in units of tau_c.
-    pub velocity_error_lag_tau_c: f64,
-    /// Phase of the velocity error relative to friction, degrees.
-    pub velocity_error_phase_deg: f64,
-    /// `|G_vf(j 2 pi f_c)|`, velocity error per unit friction at f_c, (mm/s)/N.
-    pub g_vf_gain_mm_s_per_n: f64,
-    /// Stage natural frequency `sqrt(K K_P / m) / 2 pi`, Hz.
-    pub natural_frequency_hz: f64,
-    /// Stage damping ratio.
-    pub damping_ratio: f64,
-    /// Steady lag of the stage behind the reference, `F_c / (K K_P)`, mm.
-    pub steady_offset_mm: f64,
-    /// Std of the velocity error as the analysis computes it (`numpy.gradient`
-    /// of the encoder position, minus V), mm/s.
-    pub velocity_error_std_mm_s: f64,
-    /// Std of the true (unquantised) velocity error at the sample instants, mm/s.
-    pub velocity_error_true_std_mm_s: f64,
-    /// Phase of the interference drift at the first sample, rad (when enabled).
-    pub interference_phase_rad: Option<f64>,
-    /// All parameters.
-    pub settings: SimSettings,
-}
-
-impl Truth {
-    /// Writes the truth as pretty-printed JSON, atomically (temporary file
-    /// beside `path`, then rename).
-    ///
-    /// # Errors
-    /// [`Error::Io`] naming the file.
-    pub fn write_json(&self, path: &Path) -> Result<()> {
-        crate::fsutil::write_atomic_with(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
-            w.write_all(b"\n")
-        })
-    }
-}
-
-/// The truth file that belongs beside a recording: `rec.csv` → `rec.truth.json`.
-pub fn truth_path(recording_path: &Path) -> PathBuf {
-    recording_path.with_extension("truth.json")
-}
-
-/// A train of Gaussian pulses at fixed ball-travel positions, evaluated only
-/// near the current position.
-struct PulseTrain {
-    centres_mm: Vec<f64>,
-    amps: Vec<f64>,
-    sigma_mm: f64,
-    lo: usize,
-    hi: usize,
-}
-
-impl PulseTrain {
-    fn new(centres_mm: Vec<f64>, amps: Vec<f64>, sigma_mm: f64) -> Self {
-        Self {
-            centres_mm,
-            amps,
-            sigma_mm,
-            lo: 0,
-            hi: 0,
-        }
-    }
-
-    fn value(&mut self, s: f64) -> f64 {
-        let reach = PULSE_CUTOFF_SIGMAS * self.sigma_mm;
-        let c = &self.centres_mm;
-        while self.lo < c.len() && c[self.lo] < s - reach {
-            self.lo += 1;
-        }
-        while self.lo > 0 && c[self.lo - 1] >= s - reach {
-            self.lo -= 1;
-        }
-        if self.hi < self.lo {
-            self.hi = self.lo;
-        }
-        while self.hi < c.len() && c[self.hi] <= s + reach {
-            self.hi += 1;
-        }
-        while self.hi > self.lo && c[self.hi - 1] > s + reach {
-            self.hi -= 1;
-        }
-        (self.lo..self.hi)
-            .map(|j| self.amps[j] * gaussian(s - c[j], self.sigma_mm))
-            .sum()
-    }
-}
+use sensors::{quantize, Butterworth2, HighPass1};
+use shapes::{fundamental, PulseTrain};
 
 /// Rail roughness: an Ornstein–Uhlenbeck process in rail position with
 /// standard deviation `sigma` and correlation length `ell`, generated exactly
@@ -833,6 +237,7 @@ const STREAM_LOAD_CELL_NOISE: u64 = 4;
 const STREAM_OPTICAL_NOISE: u64 = 5;
 const STREAM_OPTICAL_AMPLITUDE: u64 = 6;
 const STREAM_INTERFERENCE: u64 = 7;
+const STREAM_BASELINE_DRIFT: u64 = 8;
 
 /// Simulates one bench recording.
 ///
@@ -883,13 +288,11 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let entries: Vec<f64> = passages.iter().map(|p| p.travel_mm).collect();
 
     // Spatial pulse widths: FWHM ratio * tau_c * v/2 = ratio * d_avg.
-    let sigma_f = sigma_from_fwhm(fr.pulse_width_ratio * d_avg);
-    let sigma_stick = sigma_from_fwhm(fr.stick_width_ratio * d_avg);
-    let sigma_o = sigma_from_fwhm(opt.width_ratio * d_avg);
     let mut friction_pulses = PulseTrain::new(
         entries.clone(),
         vec![fr.pulse_amplitude_n; entries.len()],
-        sigma_f,
+        fr.pulse_shape,
+        fr.pulse_width_ratio * d_avg,
     );
     let mut rng_stick = Rng::stream(s.seed, STREAM_STICK);
     let stick_amps: Vec<f64> = entries
@@ -900,7 +303,10 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
             let hit = rng_stick.uniform() < fr.stick_probability;
             let u = rng_stick.uniform();
             if s.condition == Condition::Sticking && hit {
-                (fr.stick_max_ratio - 1.0) * fr.coulomb_n * u
+                match fr.stick_range_n {
+                    Some([lo, hi]) => lo + (hi - lo) * u,
+                    None => (fr.stick_max_ratio - 1.0) * fr.coulomb_n * u,
+                }
             } else {
                 0.0
             }
@@ -913,7 +319,12 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         .filter(|(_, &a)| a > 0.0)
         .map(|(&e, &a)| (e, a))
         .unzip();
-    let mut stick_pulses = PulseTrain::new(stick_centres, stick_nonzero, sigma_stick);
+    let mut stick_pulses = PulseTrain::new(
+        stick_centres,
+        stick_nonzero,
+        PulseShape::Gaussian,
+        fr.stick_width_ratio * d_avg,
+    );
     let mut rng_amp = Rng::stream(s.seed, STREAM_OPTICAL_AMPLITUDE);
     let ball_amps: Vec<f64> = (0..g.balls_in_race)
         .map(|_| (opt.pulse_amplitude_v * (1.0 + opt.amplitude_jitter * rng_amp.normal())).max(0.0))
@@ -922,7 +333,8 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let mut optical_pulses = PulseTrain::new(
         optical_centres.clone(),
         passages.iter().map(|p| ball_amps[p.ball]).collect(),
-        sigma_o,
+        opt.pulse_shape,
+        opt.width_ratio * d_avg,
     );
 
     // Stage and reference.
@@ -956,13 +368,27 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     };
 
     // Sensors.
-    let mut lc_hp = HighPass1::new(s.load_cell.time_constant_s, dt, 0.0);
+    let mut lc_hp = s
+        .load_cell
+        .time_constant_s
+        .map(|tau| HighPass1::new(tau, dt, 0.0));
     let mut lc_lp: Option<Butterworth2> = None;
     let mut opt_ac = HighPass1::new(opt.ac_time_constant_s, dt, opt.dc_v);
     let mut opt_lp: Option<Butterworth2> = None;
     let mut rng_interf = Rng::stream(s.seed, STREAM_INTERFERENCE);
     let interf_phase0 = std::f64::consts::TAU * rng_interf.uniform();
     let interf_w = std::f64::consts::TAU / opt.interference_period_s;
+    let mut rng_drift = Rng::stream(s.seed, STREAM_BASELINE_DRIFT);
+    let drift_phase = [
+        std::f64::consts::TAU * rng_drift.uniform(),
+        std::f64::consts::TAU * rng_drift.uniform(),
+    ];
+    let drift_w = std::f64::consts::TAU / opt.baseline_drift_period_s;
+    let drift = |t: f64| {
+        opt.baseline_drift_v
+            * (0.6 * (drift_w * t + drift_phase[0]).sin()
+                + 0.4 * (drift_w / 0.37 * t + drift_phase[1]).sin())
+    };
 
     let mut roughness = Roughness::new(
         fr.roughness_n,
@@ -1027,15 +453,21 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
 
         // Optical signal at this step.
         let pulses = optical_pulses.value(sb);
-        let optical_in = if opt.interference_drift {
+        let mut optical_in = if opt.interference_drift {
             let th = interf_w * t + interf_phase0;
             opt.dc_v + opt.interference_amplitude_v * th.sin() - th.sin() * pulses
         } else {
             opt.dc_v + pulses
         };
+        if opt.baseline_drift_v > 0.0 {
+            optical_in += drift(t);
+        }
 
         // Sensors: high-pass has feedthrough, low-pass output is its state.
-        let lc_hp_out = lc_hp.step(friction);
+        let lc_hp_out = match lc_hp.as_mut() {
+            Some(hp) => hp.step(friction),
+            None => friction,
+        };
         let lcl =
             lc_lp.get_or_insert_with(|| Butterworth2::new(s.load_cell.antialias_hz, dt, lc_hp_out));
         let opt_hp_out = if opt.ac_coupling {
@@ -1117,10 +549,16 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         _ => None,
     };
     let w = std::f64::consts::TAU * f_c;
-    let lc_resp = cmul(
-        HighPass1::response(s.load_cell.time_constant_s, w),
-        Butterworth2::response(s.load_cell.antialias_hz, w),
-    );
+    let lc_aa = Butterworth2::response(s.load_cell.antialias_hz, w);
+    let lc_resp = match s.load_cell.time_constant_s {
+        Some(tau) => cmul(HighPass1::response(tau, w), lc_aa),
+        None => lc_aa,
+    };
+    // The phase each pulse shape adds to its train's fundamental (zero for
+    // the symmetric pulses).
+    let g_f = fundamental(fr.pulse_shape, fr.pulse_width_ratio * d_avg, d_avg);
+    let g_o = fundamental(opt.pulse_shape, opt.width_ratio * d_avg, d_avg);
+    let shape_phase = arg(g_o) - arg(g_f);
     let mut opt_resp = Butterworth2::response(opt.antialias_hz, w);
     if opt.ac_coupling {
         opt_resp = cmul(opt_resp, HighPass1::response(opt.ac_time_constant_s, w));
@@ -1128,10 +566,14 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let gvf = s.stage.g_vf(w);
     let h_ve = (-gvf.0, -gvf.1);
     let optical_delay_s = opt.sensor_offset_mm / (mean_v / 2.0);
-    let opt_phase = -w * optical_delay_s + arg(opt_resp) - arg(lc_resp);
+    let opt_phase_force = -w * optical_delay_s + shape_phase + arg(opt_resp) - arg(lc_aa);
+    let opt_phase = opt_phase_force + arg(lc_aa) - arg(lc_resp);
     let optical_lag_s = wrap_lag(-opt_phase / w, tau_c);
-    let ve_phase = arg(h_ve) - arg(lc_resp);
+    let optical_lag_force_s = wrap_lag(-opt_phase_force / w, tau_c);
+    let ve_phase_force = arg(h_ve) - arg(lc_aa);
+    let ve_phase = ve_phase_force + arg(lc_aa) - arg(lc_resp);
     let velocity_error_lag_s = wrap_lag(-ve_phase / w, tau_c);
+    let velocity_error_lag_force_s = wrap_lag(-ve_phase_force / w, tau_c);
     let ve_meas: Vec<f64> = gradient(&position_out)
         .iter()
         .map(|d| d * s.fs_hz - v_mm_s)
@@ -1159,13 +601,20 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         friction_pulse_times_s,
         sticking_spikes,
         optical_pulse_fwhm_s: opt.width_ratio * tau_c,
-        optical_pulse_sigma_s: sigma_from_fwhm(opt.width_ratio * tau_c),
+        optical_pulse_sigma_s: sensors::sigma_from_fwhm(opt.width_ratio * tau_c),
         optical_pulse_fwhm_tau_c: opt.width_ratio,
         friction_pulse_fwhm_s: fr.pulse_width_ratio * tau_c,
         optical_delay_s,
         optical_lag_s,
         optical_lag_tau_c: optical_lag_s / tau_c,
         optical_phase_deg: -360.0 * optical_lag_s / tau_c,
+        optical_lag_force_s,
+        optical_lag_force_tau_c: optical_lag_force_s / tau_c,
+        velocity_error_lag_force_s,
+        velocity_error_lag_force_tau_c: velocity_error_lag_force_s / tau_c,
+        load_cell_phase_deg: arg(lc_resp).to_degrees(),
+        friction_fundamental_n: 2.0 * fr.pulse_amplitude_n * (g_f.0 * g_f.0 + g_f.1 * g_f.1).sqrt()
+            / d_avg,
         velocity_error_lag_s,
         velocity_error_lag_tau_c: velocity_error_lag_s / tau_c,
         velocity_error_phase_deg: -360.0 * velocity_error_lag_s / tau_c,
