@@ -17,6 +17,7 @@ pub mod recording;
 pub mod report;
 pub mod sim;
 pub mod stats;
+pub mod validate;
 
 pub use error::{Error, Result};
 

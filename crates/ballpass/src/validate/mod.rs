@@ -1,0 +1,8 @@
+//! Validation of every verdict on randomized benches: the simulator and the
+//! analyses run together on benches drawn from a [`bench::Domain`], and each
+//! verdict is scored against the simulator's truth (false-alarm and
+//! detection rates with their binomial intervals).
+
+pub mod bench;
+
+pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
