@@ -1,0 +1,126 @@
+//! The conditions a record shows (module docs of [`super`], "Conditions
+//! reported"), each with what it means and the thesis' fix.
+
+use super::{Condition, ConditionKind, Passage};
+
+/// What the conditions are judged on.
+pub(super) struct Inputs<'a> {
+    /// The passages, in time order.
+    pub passages: &'a [Passage],
+    /// Time to the next passage of each passage but the last, s.
+    pub tau_c_all: &'a [f64],
+    /// Their median, s.
+    pub med_tau: f64,
+    /// Baseline under the pulses (of the restored signal), per block.
+    pub baseline: &'a [f64],
+    /// Blocks per ball-pass period.
+    pub blocks_per_period: f64,
+    /// Median pulse amplitude, V.
+    pub med_amp: f64,
+    /// Noise of one block of the signal, V.
+    pub block_noise: f64,
+    /// AC coupling undone: time constant, s, and the dip each pulse left
+    /// (its area over the time constant), in pulse heights.
+    pub ac: Option<(f64, f64)>,
+    /// Measured and predicted ball-pass frequencies, Hz.
+    pub f_c: f64,
+    pub f_c_predicted: Option<f64>,
+}
+
+/// Smallest dip per pulse, in pulse heights, for the AC coupling to be
+/// reported (its effect on the widths is undone either way).
+pub(super) const AC_DIP_REPORTED: f64 = 0.01;
+
+/// Baseline wander reported above this fraction of the median pulse.
+const DRIFT_FRACTION: f64 = 0.2;
+
+pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
+    let mut out = Vec::new();
+    let n_inv = c.passages.iter().filter(|p| p.polarity < 0).count();
+
+    // Baseline drift: the baseline's range, half a period in from either end.
+    let skip = (0.5 * c.blocks_per_period).round() as usize;
+    let inner = if c.baseline.len() > 2 * skip + 2 {
+        &c.baseline[skip..c.baseline.len() - skip]
+    } else {
+        c.baseline
+    };
+    if !inner.is_empty() {
+        let hi = inner.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        let lo = inner.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        let range = hi - lo;
+        if range > DRIFT_FRACTION * c.med_amp && range > 5.0 * c.block_noise {
+            out.push(Condition {
+                kind: ConditionKind::BaselineDrift,
+                measure: range / c.med_amp,
+                message: format!(
+                    "the level under the pulses wanders by {range:.3e} V ({:.0}% of the median pulse) over the record",
+                    100.0 * range / c.med_amp
+                ),
+                advice: "pulses were measured against the fitted baseline, so counts and widths hold; a wandering level with a laser source is the strain-dependent interference of thesis §5.2 (Figs. 32, 36): use an incoherent source (LED, thesis §5.3) and keep the fibre still".into(),
+            });
+        }
+    }
+
+    if let Some((tau, dip)) = c.ac {
+        if dip >= AC_DIP_REPORTED {
+            out.push(Condition {
+                kind: ConditionKind::AcCoupling,
+                measure: dip,
+                message: format!(
+                    "the photodetector was AC coupled (time constant {tau:.3} s): each pulse pulled the level after it down by {:.1}% of its height (thesis Fig. 38); the coupling was undone before the pulses were measured",
+                    100.0 * dip
+                ),
+                advice: "record the photodetector DC coupled (thesis Fig. 39): ballpass undid a first-order coupling, but a coupling of another order would leave the widths tau_p and the fits of this record biased".into(),
+            });
+        }
+    }
+
+    if n_inv > 0 {
+        out.push(Condition {
+            kind: ConditionKind::InvertedPulses,
+            measure: n_inv as f64 / c.passages.len() as f64,
+            message: format!(
+                "{n_inv} of {} passages are inverted pulses: interference between the incident and reflected light of a coherent source (thesis Fig. 32)",
+                c.passages.len()
+            ),
+            advice: "use an incoherent light source (LED, thesis §5.3) or multimode fibre; AC coupling does not cure it. Amplitudes of this record are not comparable between passages; inverted passages are counted and timed, polarity −1".into(),
+        });
+    }
+
+    let long: Vec<f64> = c
+        .tau_c_all
+        .iter()
+        .copied()
+        .filter(|t| *t >= 1.6 * c.med_tau)
+        .collect();
+    if !long.is_empty() {
+        let missing: f64 = long.iter().map(|t| (t / c.med_tau).round() - 1.0).sum();
+        out.push(Condition {
+            kind: ConditionKind::MissedPassages,
+            measure: missing,
+            message: format!(
+                "{} gap(s) of 1.6 periods or more: about {missing:.0} passage(s) too weak to detect",
+                long.len()
+            ),
+            advice: "weak passages fall below the threshold: lower min_snr only if the noise allows; fading pulses with a laser source are the interference of thesis Fig. 32 (use an LED)".into(),
+        });
+    }
+
+    if let Some(p) = c.f_c_predicted {
+        let e = (c.f_c - p) / p;
+        if e.abs() > 0.2 {
+            out.push(Condition {
+                kind: ConditionKind::PeriodMismatch,
+                measure: e,
+                message: format!(
+                    "measured f_c = {:.4} Hz is {:+.0}% from the predicted {p:.4} Hz",
+                    c.f_c,
+                    100.0 * e
+                ),
+                advice: "check the tracking velocity and the bearing geometry given; passages closer than 0.7 predicted periods are merged".into(),
+            });
+        }
+    }
+    out
+}
