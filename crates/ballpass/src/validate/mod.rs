@@ -4,5 +4,7 @@
 //! detection rates with their binomial intervals).
 
 pub mod bench;
+pub mod passages;
+pub mod score;
 
 pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
