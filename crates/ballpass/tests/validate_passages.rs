@@ -1,0 +1,45 @@
+//! A fast subset of the randomized passage validation
+//! (`ballpass::validate::passages`; the full run is the `validate_passages`
+//! bench binary): 40 benches drawn from the default domain, seeds
+//! 2_000_001..=2_000_040, a range used neither to design the rules (seeds
+//! 1..) nor for the scored run (1_000_001..). Each bench's record is scored
+//! against the simulator's truth.
+//!
+//! The bars are the acceptance figures or looser, with room for
+//! the binomial spread of 40 records (a bar at the measured rate would
+//! fail on a fair draw): detection at least 98 % of the required passages
+//! (the full run measures ~99.8 %), false passages at most 1 % of the
+//! detections (0 in the full run), the median timing error at most
+//! 0.01 τc (0.004), the median width error at SNR ≥ 10 at most 3 % (the
+//! acceptance bar; ~1 % measured). Records under coherent-light
+//! interference are scored by the condition verdicts, not here.
+
+use ballpass::validate::passages::{score, summarize, PassageScore};
+use ballpass::validate::Domain;
+use rayon::prelude::*;
+
+#[test]
+fn passages_hold_on_randomized_benches() {
+    let domain = Domain::default();
+    let scores: Vec<PassageScore> = (2_000_001u64..=2_000_040)
+        .into_par_iter()
+        .map(|seed| {
+            score(&domain.draw(seed), seed).expect("the default domain draws valid benches")
+        })
+        .collect();
+    let s = summarize(&scores);
+    let h = &s.headline;
+    let table = s.to_markdown();
+    // Most records must be scorable, or the subset proves nothing.
+    assert!(h.records >= 25, "{} records scored\n{table}", h.records);
+    assert_eq!(h.failed.k, 0, "analyses failed\n{table}");
+    assert!(h.detection.rate >= 0.98, "detection\n{table}");
+    assert!(h.false_passages.rate <= 0.01, "false passages\n{table}");
+    assert!(h.timing_tau_c.p50 <= 0.01, "timing\n{table}");
+    assert!(h.width_error_snr10.p50 <= 0.03, "width\n{table}");
+    // The matching never pairs a detection with two truths, nor the reverse.
+    for r in &scores {
+        assert!(r.matched <= r.detected && r.missed <= r.required, "{r:?}");
+        assert_eq!(r.matched + r.spurious, r.detected, "{r:?}");
+    }
+}
