@@ -99,7 +99,13 @@ pub(super) fn measure(
         let dx = (fwhm / GRID_PER_FWHM).max(0.25);
         Template::from_fn(l, r, dx, |_| 0.0)
     };
-    let mut grid = grid_for(SUPPORT_HALF_WIDTHS * hl / qf, SUPPORT_HALF_WIDTHS * hr / qf);
+    let seed_grid = grid_for(SUPPORT_HALF_WIDTHS * hl / qf, SUPPORT_HALF_WIDTHS * hr / qf);
+    let mut grid = seed_grid.clone();
+    // Whether `grid` is the seeds' support (see `no_shape` below).
+    let mut on_seed_grid = true;
+    // Rounds allowed; one more once, for a round re-solved on the seeds'
+    // support.
+    let mut rounds = MAX_ROUNDS;
     let mut pulses: Vec<Pulse> = seeds
         .idx
         .iter()
@@ -116,7 +122,26 @@ pub(super) fn measure(
     let mut kappa = 0.0;
     // Amplitudes of the pulses just outside the record (see `ghosts`).
     let mut ghost_a = [f64::NAN; 2];
-    for round in 0..MAX_ROUNDS {
+    // A template with no half-maximum crossing on its support: the support
+    // came from the last round's template, and that template from pulses
+    // the search has since replaced (seeds on an interference fringe's
+    // crests, say, with the pulses inverted beside them): the round is
+    // solved again on the seeds' support, which the seeds' own widths set.
+    // On the seeds' support already, the pulses have no common shape.
+    macro_rules! no_shape {
+        () => {{
+            if !on_seed_grid {
+                grid = seed_grid.clone();
+                on_seed_grid = true;
+                rounds = rounds.max(MAX_ROUNDS + 1);
+                continue;
+            }
+            return Err("the pulses found have no common shape".into());
+        }};
+    }
+    let mut round = 0;
+    while round < rounds {
+        round += 1;
         let ghosts = ghosts(&pulses, nd, &grid, ghost_a);
         let with_ghosts = |pulses: &[Pulse]| -> Vec<Pulse> {
             let mut all: Vec<Pulse> = pulses.to_vec();
@@ -220,9 +245,9 @@ pub(super) fn measure(
         }
         let sol = sol.ok_or("no least-squares pass")?;
         let mut template = full.ok_or("no least-squares pass")?;
-        let shape = template
-            .shape()
-            .ok_or("the pulses found have no common shape")?;
+        let Some(shape) = template.shape() else {
+            no_shape!();
+        };
         template.scale(1.0 / shape.peak);
         for p in pulses.iter_mut() {
             p.a *= shape.peak;
@@ -244,22 +269,6 @@ pub(super) fn measure(
         };
         // The core support, where each pulse is fitted.
         let core = (grid.left(), grid.right());
-        if std::env::var("PASSAGE_DEBUG").is_ok() {
-            let sp = splines.eval(&sol.beta, nd);
-            let r = |v: &[f64]| {
-                v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
-                    - v.iter().fold(f64::INFINITY, |a, &b| a.min(b))
-            };
-            eprintln!(
-                "round {round}: kappa {kappa:.4} spline range {:.4} fast range {:.4} spline {:?}",
-                r(&sp),
-                r(&fast),
-                sp.iter()
-                    .step_by(nd / 20 + 1)
-                    .map(|v| (v * 1000.0).round() / 1000.0)
-                    .collect::<Vec<_>>()
-            );
-        }
         let baseline: Vec<f64> = splines
             .eval(&sol.beta, nd)
             .iter()
@@ -316,10 +325,10 @@ pub(super) fn measure(
                 p.s /= mean_s;
             }
         }
-        let shape = template
-            .shape()
-            .ok_or("the pulses found have no common shape")?;
-        let last = round + 1 == MAX_ROUNDS;
+        let Some(shape) = template.shape() else {
+            no_shape!();
+        };
+        let last = round == rounds;
         if !last {
             let ghosts_now: Vec<Pulse> = ghosts
                 .iter()
@@ -359,11 +368,12 @@ pub(super) fn measure(
             } else {
                 merge(&pulses, &s.found, 0.35 * pd)
             };
-            // The first round's support came from the seeds; the next one's
-            // from the template.
-            if changed || round == 0 {
+            // A round on the seeds' support is followed by one on the
+            // template's.
+            if changed || on_seed_grid {
                 pulses = merged;
                 grid = grid_for(core_left, core_right);
+                on_seed_grid = false;
                 continue;
             }
         }
