@@ -51,7 +51,9 @@ pub(super) struct Measurement {
     pub template: Template,
     /// Its peak and half-maximum crossings.
     pub shape: Shape,
-    /// Baseline per block (of the restored signal).
+    /// Baseline per block of the restored signal `z + κ ∫z dt`, the
+    /// integral from the record's start (not of `z − mean`: see
+    /// `mean_ramp`), so that it wanders only where the light did.
     pub baseline: Vec<f64>,
     /// Baseline splines and their coefficients.
     pub splines: Splines,
@@ -387,7 +389,7 @@ pub(super) fn measure(
             fits,
             template,
             shape,
-            baseline,
+            baseline: with_mean_ramp(&baseline, &z, kappa, qf / fs),
             splines,
             beta: sol.beta,
             kappa,
@@ -396,6 +398,25 @@ pub(super) fn measure(
         });
     }
     Err("the pulse search did not settle".into())
+}
+
+/// `baseline` plus `κ (∫z dt − ∫(z − mean z) dt)`, the integrals from
+/// block 0 to block `i`: `κ × mean × i dt`.
+///
+/// The least squares restore `z + κ ∫(z − mean) dt`
+/// ([`running_integral`]), whose baseline is the restored signal's less
+/// `κ mean t`: a ramp that holds nothing of the light (an AC-coupled
+/// record's mean is what its ends happen to leave, `T Δ(x − y) /
+/// duration`; 0.008 V over 30 s at 1 mm/s, `T` = 1 s: a 0.23 V ramp,
+/// a third of the pulse). The splines take it, so the pulses are the same
+/// either way; the baseline reported gets it back.
+fn with_mean_ramp(baseline: &[f64], z: &[f64], kappa: f64, dt: f64) -> Vec<f64> {
+    let rate = kappa * z.iter().sum::<f64>() / z.len().max(1) as f64;
+    baseline
+        .iter()
+        .enumerate()
+        .map(|(i, b)| b + rate * i as f64 * dt)
+        .collect()
 }
 
 /// Centred running mean over `period` blocks (rounded; shorter at the

@@ -169,7 +169,7 @@ pub(super) fn box_decimate(x: &[f64], q: usize) -> Vec<f64> {
 /// Running integral by the trapezoidal rule, `I[0] = 0`,
 /// `I[i] = I[i−1] + dt (x[i−1] + x[i]) / 2`, of `x − mean(x)` (the mean
 /// only adds a ramp, which the baseline takes anyway, and would make the
-/// values large).
+/// values large; the baseline reported gets it back, `measure.rs`).
 pub(super) fn running_integral(x: &[f64], dt: f64) -> Vec<f64> {
     let n = x.len();
     if n == 0 {
