@@ -43,6 +43,7 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
+pub mod load_cell;
 pub mod passage;
 pub mod preprocess;
 pub mod repeats;
@@ -254,6 +255,9 @@ pub struct AnalyzeSettings {
     /// Encoder resolution for the quantisation floor of the velocity error,
     /// µm. Default 0.1 (Renishaw RGH22).
     pub encoder_resolution_um: f64,
+    /// Load-cell DC restoration (see [`load_cell`]). Default: estimate the
+    /// discharge from each record and undo it where identified.
+    pub load_cell: load_cell::LoadCellCorrection,
 }
 
 impl Default for AnalyzeSettings {
@@ -277,6 +281,7 @@ impl Default for AnalyzeSettings {
             max_period_peaks: None,
             phase_tolerance_deg: 20.0,
             encoder_resolution_um: 0.1,
+            load_cell: load_cell::LoadCellCorrection::Auto,
         }
     }
 }
@@ -355,6 +360,7 @@ impl AnalyzeSettings {
                 ),
             ));
         }
+        self.load_cell.validate()?;
         if self.hires_q == Some(0) {
             return Err(Error::setting(
                 "hires q",
@@ -473,6 +479,9 @@ pub struct Analysis {
     /// Velocity-error statistics of the (first, or only) record; see
     /// [`Analysis::repeats`] for every record.
     pub velocity_error: Option<VelocityErrorStats>,
+    /// What was done about each record's load-cell discharge (records with
+    /// a friction channel, in input order).
+    pub load_cell: Vec<load_cell::DcRestoration>,
     /// Per-record results and spread, when more than one record was given.
     pub repeats: Option<Repeats>,
     /// Conclusion.
@@ -510,7 +519,7 @@ pub fn analyze(
     prediction: &Prediction,
     settings: &AnalyzeSettings,
 ) -> Result<Analysis> {
-    repeats::run(recs, prediction, settings, true)
+    repeats::run(recs, prediction, settings, true, None)
 }
 
 /// [`analyze`] without the passage summaries ([`Analysis::passages`] is
@@ -520,9 +529,14 @@ pub(crate) fn analyze_without_passages(
     recs: &[Recording],
     prediction: &Prediction,
     settings: &AnalyzeSettings,
+    restored: Option<Vec<Restored<'_>>>,
 ) -> Result<Analysis> {
-    repeats::run(recs, prediction, settings, false)
+    repeats::run(recs, prediction, settings, false, restored)
 }
+
+/// One record's friction after the load-cell correction, and what was done
+/// (`None` for a record without friction).
+pub(crate) type Restored<'a> = Option<(std::borrow::Cow<'a, [f64]>, load_cell::DcRestoration)>;
 
 /// The ball passages of one record in brief (part of `analysis.json`).
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -111,7 +111,8 @@ pub(crate) fn lowpass_filter(
 ///
 /// `velocity_mm_s` is the commanded velocity `V`. Missing channels are
 /// skipped (the caller reports them); `n_keep` truncates the trimmed record
-/// to a common length for repeats.
+/// to a common length for repeats; `friction`, when given, replaces the
+/// recorded friction (its load-cell discharge undone).
 ///
 /// # Errors
 /// [`Error::InvalidRecording`] if the trim leaves too few samples for the
@@ -123,6 +124,7 @@ pub(crate) fn prepare(
     filter: Option<&ZeroPhaseFilter>,
     trim: usize,
     n_keep: usize,
+    friction: Option<&[f64]>,
 ) -> Result<Prepared> {
     let fs = rec.fs_hz();
     let name = rec.source_name();
@@ -142,7 +144,7 @@ pub(crate) fn prepare(
     let mut velocity_error = None;
     for s in Signal::ALL {
         let raw: Vec<f64> = match s {
-            Signal::Friction => match rec.channel(Channel::Friction) {
+            Signal::Friction => match friction.or_else(|| rec.channel(Channel::Friction)) {
                 Some(x) => x[range.clone()].to_vec(),
                 None => continue,
             },
@@ -215,7 +217,7 @@ mod tests {
         .unwrap();
         let s = AnalyzeSettings::default();
         let f = lowpass_filter(&s, fs).unwrap();
-        let p = prepare(&rec, v, &s, f.as_ref(), 0, 2000).unwrap();
+        let p = prepare(&rec, v, &s, f.as_ref(), 0, 2000, None).unwrap();
         let st = p.velocity_error.unwrap();
         // A ramp differentiates exactly up to rounding of i/fs * 9 (~1e-15 mm
         // relative), amplified by 1/(2 T_s) = 500: far below 1e-6 µm/s.

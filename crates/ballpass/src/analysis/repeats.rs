@@ -461,6 +461,7 @@ pub(crate) fn run(
     pred: &Prediction,
     settings: &AnalyzeSettings,
     with_passages: bool,
+    restored: Option<Vec<super::Restored<'_>>>,
 ) -> Result<Analysis> {
     settings.validate()?;
     check_velocity(pred.velocity_mm_s)?;
@@ -559,6 +560,31 @@ pub(crate) fn run(
             needed_for: "analyze (no friction, position or optical channel)",
         });
     }
+    // The load-cell correction of each record (given by a caller that needs
+    // the restored friction itself, else made here).
+    let restored: Vec<super::Restored<'_>> = match restored {
+        Some(r) => r,
+        None => recs
+            .par_iter()
+            .map(|r| {
+                r.channel(Channel::Friction)
+                    .map(|f| {
+                        super::load_cell::restore_friction(f, fs, pred.tau_c_s, settings.load_cell)
+                    })
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?,
+    };
+    let load_cell: Vec<super::load_cell::DcRestoration> =
+        restored.iter().flatten().map(|(_, d)| d.clone()).collect();
+    if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
+        warnings.push(w);
+    }
+    for (r, d) in recs.iter().zip(&restored) {
+        if let Some((_, d)) = d {
+            notes.push(format!("{}: {}", r.source_name(), d.note));
+        }
+    }
     let filter = preprocess::lowpass_filter(settings, fs)?;
     let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut warnings)?;
     // Each record's correlations, full and high-resolution spectra are
@@ -566,8 +592,17 @@ pub(crate) fn run(
     // detection of all of them: all run in parallel (rayon), and the
     // results are taken in record order, so they and the first error
     // reported are those of a sequential pass.
-    let one = |r: &Recording| -> Result<(Prepared, Correlations, Spectra, Spectra)> {
-        let mut p = preprocess::prepare(r, pred.velocity_mm_s, settings, filter.as_ref(), trim, n)?;
+    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<(Prepared, Correlations, Spectra, Spectra)> {
+        let friction = fr.as_ref().map(|(f, _)| f.as_ref());
+        let mut p = preprocess::prepare(
+            r,
+            pred.velocity_mm_s,
+            settings,
+            filter.as_ref(),
+            trim,
+            n,
+            friction,
+        )?;
         p.signals.retain(|(s, _)| signals.contains(s));
         let (c, (f, h)) = rayon::join(
             || {
@@ -591,6 +626,7 @@ pub(crate) fn run(
     let (per_record, passages) = rayon::join(
         || {
             recs.par_iter()
+                .zip(restored.par_iter())
                 .map(one)
                 .collect::<Vec<_>>()
                 .into_iter()
@@ -735,6 +771,7 @@ pub(crate) fn run(
         harmonics: findings.harmonics,
         coherence: findings.coherence,
         velocity_error: prepared[0].velocity_error.clone(),
+        load_cell,
         repeats,
         verdict,
         passages,

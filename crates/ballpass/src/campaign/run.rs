@@ -2,6 +2,7 @@
 //! the full analysis, the optical passages, the sticking events, and the
 //! friction spectrum kept for diagnosis.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -10,6 +11,7 @@ use super::diagnose::low_band_power;
 use super::manifest::ManifestEntry;
 use super::record::RecordResult;
 use super::sticking::{sticking_events, StickingSettings};
+use crate::analysis::load_cell::restore_friction;
 use crate::analysis::{
     analyze_without_passages, detect_passages, AnalyzeSettings, PassageSettings, Signal,
 };
@@ -85,10 +87,29 @@ pub fn process_recording(
 ) -> Result<RecordResult> {
     let v = entry.velocity_mm_s;
     let prediction = geometry.predict(v, settings.analyze.harmonics)?;
+    // The load-cell correction once, for the analysis and the sticking
+    // events alike.
+    let restored = rec
+        .channel(Channel::Friction)
+        .map(|f| {
+            restore_friction(
+                f,
+                rec.fs_hz(),
+                prediction.tau_c_s,
+                settings.analyze.load_cell,
+            )
+        })
+        .transpose()?;
     // The passages are detected below with the campaign's settings; the
     // analysis' own summary of them would be the same work twice.
-    let analysis =
-        analyze_without_passages(std::slice::from_ref(rec), &prediction, &settings.analyze)?;
+    let analysis = analyze_without_passages(
+        std::slice::from_ref(rec),
+        &prediction,
+        &settings.analyze,
+        Some(vec![restored
+            .as_ref()
+            .map(|(f, d)| (Cow::Borrowed(f.as_ref()), d.clone()))]),
+    )?;
     let mut warnings = analysis.warnings.clone();
 
     let passages = if rec.channel(Channel::Optical).is_some() {
@@ -136,8 +157,8 @@ pub fn process_recording(
         .filter(|t| t.is_finite() && *t > 0.0)
         .or(analysis.measured_period.period_s)
         .unwrap_or(prediction.tau_c_s);
-    let sticking = match rec.channel(Channel::Friction) {
-        Some(f) => Some(sticking_events(
+    let sticking = match &restored {
+        Some((f, _)) => Some(sticking_events(
             f,
             rec.fs_hz(),
             tau_for_sticking,
