@@ -97,10 +97,16 @@ fn sticking_harmonics_are_flagged() {
         let a = run(&[sim(v, Condition::Sticking, 21)]);
         let flagged = &a.verdict.friction_harmonics_flagged;
         assert!(
-            flagged.contains(&1) && flagged.len() >= 3,
+            flagged.len() >= 3,
             "v = {v}: flagged {flagged:?}"
         );
-        assert!(a.verdict.text.contains("sticking"), "{}", a.verdict.text);
+        // Harmonics are a ripple every bearing has; the verdict does not call
+        // them sticking (that is diagnose's, from sporadic spikes).
+        assert!(
+            a.verdict.text.contains("every bearing has") && a.verdict.text.contains("diagnose"),
+            "{}",
+            a.verdict.text
+        );
         assert!(a.verdict.signals_showing_f_c.contains(&Signal::Friction));
     }
 }

@@ -82,13 +82,8 @@ struct Findings {
     showing: Vec<Signal>,
 }
 
-fn is_sig(r: &HarmonicRow, measured: bool) -> Option<bool> {
-    let v = if measured {
-        r.measured.as_ref().or(r.predicted.as_ref())
-    } else {
-        r.predicted.as_ref()
-    };
-    v.and_then(|v| v.significant)
+fn is_sig(r: &HarmonicRow) -> Option<bool> {
+    r.significant
 }
 
 fn ratio(r: &HarmonicRow) -> f64 {
@@ -109,10 +104,7 @@ fn evaluate(
     // Which signals show f_c at the prediction (chooses the period's source).
     let pre = spectra::harmonics(hires, pred.f_c_hz, None, settings);
     let k1: Vec<&HarmonicRow> = pre.iter().filter(|r| r.k == 1).collect();
-    let shows = |s: Signal| {
-        k1.iter()
-            .any(|r| r.signal == s && is_sig(r, false) == Some(true))
-    };
+    let shows = |s: Signal| pre.iter().any(|r| r.signal == s && is_sig(r) == Some(true));
     let per_signal: Vec<SignalPeriod> = signals
         .iter()
         .filter_map(|&s| correlation::signal_period(corr, s, pred.tau_c_s, settings))
@@ -129,7 +121,7 @@ fn evaluate(
         )
     } else if let Some(r) = k1
         .iter()
-        .filter(|r| is_sig(r, false) == Some(true) && has_period(r.signal))
+        .filter(|r| shows(r.signal) && has_period(r.signal))
         .max_by(|a, b| ratio(a).total_cmp(&ratio(b)))
     {
         (
@@ -220,14 +212,16 @@ fn evaluate(
         }
         phases.push(ph);
     }
-    let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas, settings);
+    let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas.zip(from), settings);
+    // A signal shows f_c when any of its harmonics stands above its floor
+    // after the family correction.
     let showing: Vec<Signal> = signals
         .iter()
         .copied()
         .filter(|&s| {
             harmonics
                 .iter()
-                .any(|r| r.signal == s && r.k == 1 && is_sig(r, true) == Some(true))
+                .any(|r| r.signal == s && is_sig(r) == Some(true))
         })
         .collect();
     let coherence = spectra::coherence_rows(hires, f_used, settings);
@@ -334,10 +328,7 @@ fn scalars(source: String, f: &Findings, p: &Prepared) -> RecordScalars {
             .harmonics
             .iter()
             .filter(|r| r.k == 1)
-            .map(|r| {
-                let v = r.measured.as_ref().or(r.predicted.as_ref());
-                (r.signal, v.and_then(|v| v.ratio_db))
-            })
+            .map(|r| (r.signal, r.value().and_then(|v| v.ratio_db)))
             .collect(),
         velocity_error_std_um_s: p.velocity_error.as_ref().map(|v| v.std_um_s),
     }
@@ -400,7 +391,7 @@ fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
     let flagged: Vec<usize> = f
         .harmonics
         .iter()
-        .filter(|r| r.signal == Signal::Friction && is_sig(r, true) == Some(true))
+        .filter(|r| r.signal == Signal::Friction && is_sig(r) == Some(true))
         .map(|r| r.k)
         .collect();
     let dev = f
@@ -433,14 +424,10 @@ fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
     if !flagged.is_empty() {
         let ks: Vec<String> = flagged.iter().map(|k| k.to_string()).collect();
         text.push_str(&format!(
-            "; friction stands above its floor at k = {}{}",
-            ks.join(", "),
-            if flagged.len() >= 3 {
-                " (periodic friction disturbance with harmonics: check the bearing for sticking, \
-                 thesis ch. 8)"
-            } else {
-                ""
-            }
+            "; friction stands above its floor at k = {} (a periodic friction ripple at the \
+             ball-pass frequency, which every bearing has; sticking is told by sporadic spikes, \
+             `ballpass diagnose`)",
+            ks.join(", ")
         ));
     } else if f.harmonics.iter().any(|r| r.signal == Signal::Friction) {
         text.push_str("; friction shows no ball-pass harmonic above its floor");
@@ -688,9 +675,10 @@ pub(crate) fn run(
         hr.info.method, plan.q, plan.fs_hz, plan.nperseg, plan.noverlap, hr.info.resolution_hz
     ));
     notes.push(
-        "harmonic floor: median over ±1.5 f_c excluding ±1 bin of every harmonic, converted to a \
-         mean by chi2 median/nu; PSD = max of ±1 bin; threshold chi2_ppf(conf^(1/3), nu)/nu with \
-         nu the Welch equivalent dof (Percival & Walden 292b) times the records"
+        "harmonic test: floor = polynomial fit of ln PSD against ln f around k·f_c (harmonic bins \
+         excluded), mean-corrected for chi2; p-value of the largest tested bin with the floor's own \
+         uncertainty; nu the Welch equivalent dof (Percival & Walden 292b) times the records; a \
+         signal shows f_c when a harmonic is significant after Holm's correction over k = 1..K"
             .into(),
     );
     notes.push(

@@ -142,8 +142,6 @@ pub fn process_recording(
         .filter(|h| h.signal == Signal::Friction)
         .collect();
     harmonics.sort_by_key(|h| h.k);
-    let value =
-        |h: &&crate::analysis::HarmonicRow| h.measured.clone().or_else(|| h.predicted.clone());
 
     let (freq, psd) = match analysis.spectra.auto_of(Signal::Friction) {
         Some(p) => (analysis.spectra.freq_hz.clone(), p.to_vec()),
@@ -195,11 +193,11 @@ pub fn process_recording(
         phase_velocity_error_optical_deg: phase("velocity_error__optical"),
         friction_harmonic_ratio_db: harmonics
             .iter()
-            .map(|h| value(h).and_then(|v| v.ratio_db))
+            .map(|h| h.value().and_then(|v| v.ratio_db))
             .collect(),
         friction_harmonic_significant: harmonics
             .iter()
-            .map(|h| value(h).and_then(|v| v.significant))
+            .map(|h| h.significant)
             .collect(),
         friction_low_band_power_n2: low_band,
         sticking,
