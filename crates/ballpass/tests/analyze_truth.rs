@@ -51,15 +51,21 @@ fn errors(a: &Analysis, s: &Simulation) -> (f64, f64) {
     } else {
         t.optical_lag_s
     };
-    let lag_err = wrap((-ph.lag_s - truth) / t.tau_c_s);
+    let lag = ph
+        .lag_s
+        .unwrap_or_else(|| panic!("no phase at f_c: {ph:?}"));
+    let lag_err = wrap((-lag - truth) / t.tau_c_s);
     ((f - realised) / realised, lag_err)
 }
 
 #[test]
 fn f_c_and_optical_lag_match_the_truth_from_1_to_20_mm_s() {
-    // 1 mm/s spans only 3.7 periods in 30 s: like the thesis, five repeats
-    // are averaged there; single records elsewhere.
-    for (v, repeats) in [(1.0, 5), (5.0, 1), (9.0, 1), (15.0, 1), (20.0, 1)] {
+    // 1 mm/s spans only 3.7 periods in 30 s, and the default bench's rail
+    // roughness has its corner at f_c there: ten repeats (37 periods) give
+    // the fundamental a significant coherence (five do not: the phase is then
+    // reported as not measurable, never as a biased number); single records
+    // elsewhere.
+    for (v, repeats) in [(1.0, 10), (5.0, 1), (9.0, 1), (15.0, 1), (20.0, 1)] {
         let sims: Vec<Simulation> = (0..repeats)
             .map(|i| sim(v, Condition::Good, 11 + i))
             .collect();
@@ -96,10 +102,7 @@ fn sticking_harmonics_are_flagged() {
     for v in [9.0, 15.0, 20.0] {
         let a = run(&[sim(v, Condition::Sticking, 21)]);
         let flagged = &a.verdict.friction_harmonics_flagged;
-        assert!(
-            flagged.len() >= 3,
-            "v = {v}: flagged {flagged:?}"
-        );
+        assert!(flagged.len() >= 3, "v = {v}: flagged {flagged:?}");
         // Harmonics are a ripple every bearing has; the verdict does not call
         // them sticking (that is diagnose's, from sporadic spikes).
         assert!(

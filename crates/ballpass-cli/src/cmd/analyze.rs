@@ -295,11 +295,7 @@ fn summary<W: Write>(w: &mut W, a: &Analysis, bearing: &str) -> std::io::Result<
         }
     )?;
     for ph in &a.phases {
-        write!(w, "  {}", ph.words)?;
-        if let Some(d) = ph.cross_spectrum_phase_deg {
-            write!(w, "; cross spectrum {d:+.0}°")?;
-        }
-        writeln!(w)?;
+        writeln!(w, "  {}", ph.words)?;
     }
     if let Some(v) = &a.velocity_error {
         writeln!(

@@ -45,14 +45,16 @@ pub mod correlation;
 pub mod export;
 pub mod load_cell;
 pub mod passage;
+pub mod phase;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
 mod train_fit;
 
-pub use correlation::{Correlations, MeasuredPeriod, Phase, SignalPeriod};
+pub use correlation::{Correlations, MeasuredPeriod, SignalPeriod};
 pub use export::{write_outputs, OutputPaths};
 pub use passage::{detect_passages, PassageAnalysis, PassageSettings};
+pub use phase::Phase;
 pub use preprocess::{Prepared, VelocityErrorStats};
 pub use repeats::{RecordScalars, Repeats, Spread};
 pub use spectra::{CoherenceRow, HarmonicRow, HarmonicValue, Spectra, SpectrumInfo};

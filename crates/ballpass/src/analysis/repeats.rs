@@ -17,7 +17,8 @@ use ballpass_dsp::{CorrelateSettings, Correlator};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
+use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, SignalPeriod};
+use super::phase::{self, LineSpectra, Phase};
 use super::preprocess::{self, Prepared};
 use super::spectra::{self, HarmonicRow, Spectra};
 use super::{
@@ -80,6 +81,9 @@ struct Findings {
     harmonics: Vec<HarmonicRow>,
     coherence: Vec<spectra::CoherenceRow>,
     showing: Vec<Signal>,
+    /// The ball-pass frequency the phases are taken at (measured, else
+    /// predicted), Hz.
+    f_used: f64,
 }
 
 fn is_sig(r: &HarmonicRow) -> Option<bool> {
@@ -183,33 +187,9 @@ fn evaluate(
     let f_used = 1.0 / t_used;
     let mut phases = Vec::new();
     for (x, y) in pairs_for(&signals).into_iter().filter(|(x, y)| x != y) {
-        let Some(mut ph) = correlation::phase(corr, x, y, t_used) else {
+        let Some(ph) = phase::correlation_peak(corr, x, y, t_used) else {
             continue;
         };
-        if let (Some(c), Some(i)) = (hires.cross_of(x, y), hires.nearest_bin(f_used)) {
-            let p = c.pxy[i];
-            let deg = p.im.atan2(p.re).to_degrees();
-            let diff = correlation::wrap_deg(deg - ph.phase_deg);
-            ph.cross_spectrum_phase_deg = Some(deg);
-            ph.cross_spectrum_f_hz = Some(hires.freq_hz[i]);
-            ph.cross_spectrum_coherence = Some(c.coherence[i]);
-            ph.disagreement_deg = Some(diff);
-            // The cross-spectrum phase means something only where the
-            // coherence at that bin is significant; elsewhere it is noise
-            // and a disagreement is not worth a warning.
-            let coherent = coherence_threshold(hires, settings).is_some_and(|t| c.coherence[i] > t);
-            if coherent && diff.abs() > settings.phase_tolerance_deg {
-                warnings.push(format!(
-                    "{}: correlation phase {:+.0}° and cross-spectrum phase {deg:+.0}° at {:.4} Hz \
-                     disagree by {:.0}° (coherence there {:.2})",
-                    ph.pair,
-                    ph.phase_deg,
-                    hires.freq_hz[i],
-                    diff.abs(),
-                    c.coherence[i]
-                ));
-            }
-        }
         phases.push(ph);
     }
     let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas.zip(from), settings);
@@ -238,13 +218,17 @@ fn evaluate(
         harmonics,
         coherence,
         showing,
+        f_used,
     }
 }
 
-/// Coherence threshold of one bin at the stated confidence (see [`spectra`]).
-fn coherence_threshold(s: &Spectra, settings: &AnalyzeSettings) -> Option<f64> {
-    let n_d = s.info.dof / 2.0;
-    (n_d > 1.0).then(|| 1.0 - (1.0 - settings.confidence).powf(1.0 / (n_d - 1.0)))
+/// Fills in every phase at `f_c` from the records' line spectra; pairs
+/// without the velocity error are pulse trains related by a delay.
+fn fill_phases(phases: &mut [Phase], lines: &LineSpectra, f_hz: f64, confidence: f64) {
+    for ph in phases {
+        let delay = ph.x != Signal::VelocityError && ph.y != Signal::VelocityError;
+        phase::fill_phase(ph, lines, f_hz, confidence, delay);
+    }
 }
 
 fn average_into(acc: &mut [f64], v: &[f64]) {
@@ -322,7 +306,7 @@ fn scalars(source: String, f: &Findings, p: &Prepared) -> RecordScalars {
         phases: f
             .phases
             .iter()
-            .map(|ph| (ph.pair.clone(), ph.lag_s, ph.phase_deg))
+            .filter_map(|ph| Some((ph.pair.clone(), ph.lag_s?, ph.phase_deg?)))
             .collect(),
         f_c_ratio_db: f
             .harmonics
@@ -377,10 +361,7 @@ fn spreads(records: &[RecordScalars]) -> Vec<Spread> {
         // Phases are circular; spread them about the first record's value.
         let degs = collect(&|r| r.phases.iter().find(|p| p.0 == pair).map(|p| p.2));
         if let Some(&d0) = degs.first() {
-            let unwrapped: Vec<f64> = degs
-                .iter()
-                .map(|d| d0 + correlation::wrap_deg(d - d0))
-                .collect();
+            let unwrapped: Vec<f64> = degs.iter().map(|d| d0 + phase::wrap_deg(d - d0)).collect();
             out.extend(spread(format!("phase_deg {pair}"), &unwrapped));
         }
     }
@@ -652,12 +633,24 @@ pub(crate) fn run(
             hr.info.n_segments
         ));
     }
-    let findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
+    let mut findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
+    let lines: Vec<LineSpectra> = prepared
+        .par_iter()
+        .map(|p| LineSpectra::of(p, findings.f_used, settings.harmonics))
+        .collect();
+    fill_phases(
+        &mut findings.phases,
+        &LineSpectra::merge(&lines),
+        findings.f_used,
+        settings.confidence,
+    );
     let repeats = if recs.len() > 1 {
         let mut records = Vec::new();
         for ((r, p), (c, h)) in recs.iter().zip(&prepared).zip(corrs.iter().zip(&hires)) {
             let mut w = Vec::new();
-            let f = evaluate(c, h, pred, settings, &mut w);
+            let mut f = evaluate(c, h, pred, settings, &mut w);
+            let own = LineSpectra::of(p, f.f_used, settings.harmonics);
+            fill_phases(&mut f.phases, &own, f.f_used, settings.confidence);
             records.push(scalars(r.source_name(), &f, p));
         }
         let spread = spreads(&records);
@@ -689,7 +682,9 @@ pub(crate) fn run(
     );
     notes.push(
         "correlation convention Eq. 7.1: R_xy[m] = sum x[n+m] y[n]; a peak at negative lag means y \
-         lags x; phase = 360 lag / T wrapped to (-180, 180]"
+         lags x. Phases at f_c: cross spectrum conj(X) Y at the measured f_c (segments of three \
+         periods, DFT at f_c itself), 95 % interval from the coherence; lag = phase / (360 f_c). \
+         The correlation-peak lag weighs every shared frequency and is reported beside it"
             .into(),
     );
     if recs.len() > 1 {

@@ -134,7 +134,7 @@ pub fn process_recording(
             .phases
             .iter()
             .find(|p| p.pair == pair)
-            .map(|p| p.phase_deg)
+            .and_then(|p| p.phase_deg)
     };
     let mut harmonics: Vec<_> = analysis
         .harmonics
@@ -195,10 +195,7 @@ pub fn process_recording(
             .iter()
             .map(|h| h.value().and_then(|v| v.ratio_db))
             .collect(),
-        friction_harmonic_significant: harmonics
-            .iter()
-            .map(|h| h.significant)
-            .collect(),
+        friction_harmonic_significant: harmonics.iter().map(|h| h.significant).collect(),
         friction_low_band_power_n2: low_band,
         sticking,
         warnings,
