@@ -174,6 +174,9 @@ pub(crate) fn lag_words(
     )
 }
 
+/// One signal's DFTs: per segment, `(re, im)` at each harmonic.
+type SegmentDfts = Vec<Vec<(f64, f64)>>;
+
 /// Segment DFTs of the prepared signals at the harmonics `k f` of one
 /// frequency, for the phases (module docs). Accumulates over repeats.
 #[derive(Debug, Clone, Default)]
@@ -181,7 +184,7 @@ pub(crate) struct LineSpectra {
     /// Harmonics evaluated, `k = 1..=harmonics`.
     harmonics: usize,
     /// Per signal, per segment (all records), its DFT at each `k f`.
-    dft: Vec<(Signal, Vec<Vec<(f64, f64)>>)>,
+    dft: Vec<(Signal, SegmentDfts)>,
     /// Equivalent degrees of freedom of the average (all records).
     nu: f64,
 }

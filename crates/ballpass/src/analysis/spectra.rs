@@ -547,7 +547,7 @@ pub(crate) struct TestContext {
 impl TestContext {
     pub(crate) fn new(s: &Spectra, settings: &AnalyzeSettings) -> Option<TestContext> {
         let nu = s.info.dof;
-        if !(nu > 0.0) {
+        if nu.is_nan() || nu <= 0.0 {
             return None;
         }
         let w = settings.window.to_dsp().values(s.info.nperseg).ok()?;
@@ -662,10 +662,19 @@ const GH_W: [f64; 24] = [
     9.39019368904204e-17,
 ];
 
-/// Least-squares polynomial (degree 1 or 2) of `y` on `x`: the coefficients
-/// and `(XᵀX)⁻¹`, by the normal equations on centred `x` (a few dozen
-/// points; well conditioned once centred and scaled).
-fn poly_fit(x: &[f64], y: &[f64], degree: usize) -> Option<(f64, f64, Vec<f64>, [[f64; 3]; 3])> {
+/// A least-squares polynomial in `u = (x − centre) / scale`.
+struct PolyFit {
+    centre: f64,
+    scale: f64,
+    coef: Vec<f64>,
+    /// `(UᵀU)⁻¹` of the design.
+    inv: [[f64; 3]; 3],
+}
+
+/// Least-squares polynomial (degree 1 or 2) of `y` on `x`, by the normal
+/// equations on centred and scaled `x` (a few dozen points; well
+/// conditioned once centred and scaled).
+fn poly_fit(x: &[f64], y: &[f64], degree: usize) -> Option<PolyFit> {
     let m = x.len() as f64;
     let xc = x.iter().sum::<f64>() / m;
     let sc = x
@@ -690,7 +699,12 @@ fn poly_fit(x: &[f64], y: &[f64], degree: usize) -> Option<(f64, f64, Vec<f64>, 
     let coef: Vec<f64> = (0..p)
         .map(|a| (0..p).map(|b| inv[a][b] * aty[b]).sum())
         .collect();
-    Some((xc, sc, coef, inv))
+    Some(PolyFit {
+        centre: xc,
+        scale: sc,
+        coef,
+        inv,
+    })
 }
 
 /// Inverse of the leading `p x p` block (Gauss–Jordan with pivoting).
@@ -793,7 +807,13 @@ pub(crate) fn harmonic_value(
     let x: Vec<f64> = bins.iter().map(|&j| s.freq_hz[j].ln()).collect();
     let y: Vec<f64> = bins.iter().map(|&j| psd[j].ln()).collect();
     let degree = if bins.len() >= 12 { 2 } else { 1 };
-    let Some((xc, sc, coef, inv)) = poly_fit(&x, &y, degree) else {
+    let Some(PolyFit {
+        centre: xc,
+        scale: sc,
+        coef,
+        inv,
+    }) = poly_fit(&x, &y, degree)
+    else {
         return Some(fallback());
     };
     let eval = |xv: f64| {
