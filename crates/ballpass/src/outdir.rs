@@ -90,6 +90,9 @@ pub struct OutputDir {
     command: String,
     lock_path: PathBuf,
     lock: Option<File>,
+    /// The folder did not exist before: a run that does not commit removes
+    /// it again if it is empty.
+    created: bool,
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -108,6 +111,7 @@ impl OutputDir {
     /// (a file in the way, no permission, read-only); [`Error::OutputInUse`]
     /// when another process holds its lock.
     pub fn create(dir: &Path, command: &str) -> Result<Self> {
+        let created = std::fs::symlink_metadata(dir).is_err();
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let lock_path = dir.join(LOCK_FILE);
         let lock = take_lock(dir, &lock_path)?;
@@ -117,6 +121,7 @@ impl OutputDir {
             command: command.to_string(),
             lock_path,
             lock: Some(lock),
+            created,
         };
         fsutil::register(&out.lock_path).map_err(io(dir))?;
         out.clean_stale()?;
@@ -254,6 +259,9 @@ impl Drop for OutputDir {
             let _ = std::fs::remove_dir_all(&self.staging);
             fsutil::unregister(&self.staging);
             self.release();
+            if self.created {
+                let _ = std::fs::remove_dir(&self.dir);
+            }
         }
     }
 }
@@ -397,7 +405,8 @@ mod tests {
             "{msg}"
         );
         drop(first);
-        assert!(names(&d).is_empty(), "{:?}", names(&d));
+        // It created the folder and committed nothing: the folder is gone.
+        assert!(!d.exists());
         let again = OutputDir::create(&d, "analyze").unwrap();
         again.commit().unwrap();
         std::fs::remove_dir_all(&d).unwrap();

@@ -44,6 +44,7 @@ use crate::recording::Recording;
 pub mod correlation;
 pub mod export;
 pub mod passage;
+pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
