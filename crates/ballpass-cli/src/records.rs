@@ -147,23 +147,46 @@ pub fn group_by_speed(parts: Vec<Recording>, tolerance: f64) -> Vec<(f64, Vec<Re
         .collect()
 }
 
-/// Bytes of memory the analysis of `samples` samples per record, `records`
-/// records, is expected to take at its peak (see `memory` in the README).
+/// Bytes of memory the analysis of `records` records of `samples` samples
+/// each is expected to take at its peak.
 ///
-/// Measured with `/usr/bin/time -v` (maximum resident set size) on
-/// `ballpass analyze` of simulated 3-channel records: per sample of one
-/// record, about 1.1 kB with the report and 0.6 kB without, in the first
-/// record; a further record adds its own correlations and spectra.
+/// Measured with `/usr/bin/time -f %M` (maximum resident set size) on the
+/// release `ballpass analyze` of simulated 3-channel records at 1 kHz
+/// (0.2 to 1.6 million samples): 1.00 kB per sample with the report,
+/// 0.48–0.56 kB without; each further repeat 0.1–0.23 kB per sample. The
+/// constants below round these up by about 10 %, so a refusal means the
+/// run would not have fitted.
 pub fn analysis_bytes(samples: usize, records: usize, report: bool) -> f64 {
-    let per_sample = if report { 1100.0 } else { 600.0 };
-    let per_extra = 350.0;
-    samples as f64 * (per_sample + per_extra * records.saturating_sub(1) as f64)
+    let first = if report { 1100.0 } else { 620.0 };
+    let further = 250.0;
+    samples as f64 * (first + further * records.saturating_sub(1) as f64)
 }
 
-/// Memory the system can give this process now, bytes: the smaller of
-/// `MemAvailable` and the cgroup's limit less its use; `None` where neither
-/// can be read.
-pub fn available_bytes() -> Option<f64> {
+/// Environment variable: the memory ballpass may use, GB (default: what
+/// the system has available).
+pub const MEMORY_ENV: &str = "BALLPASS_MEMORY_GB";
+
+/// Memory this process may use now, bytes: `BALLPASS_MEMORY_GB` when set,
+/// else the smaller of `MemAvailable` and the cgroup's limit less its use;
+/// `None` where none can be read.
+pub fn available_bytes() -> Result<Option<f64>> {
+    if let Some(v) = std::env::var_os(MEMORY_ENV) {
+        let gb = v
+            .to_str()
+            .and_then(|s| s.trim().parse::<f64>().ok())
+            .filter(|g| g.is_finite() && *g > 0.0)
+            .with_context(|| {
+                format!(
+                    "{MEMORY_ENV}={}: expected a positive number of GB",
+                    v.to_string_lossy()
+                )
+            })?;
+        return Ok(Some(gb * 1e9));
+    }
+    Ok(system_available_bytes())
+}
+
+fn system_available_bytes() -> Option<f64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
         t.lines()
             .find(|l| l.starts_with("MemAvailable:"))
@@ -193,12 +216,12 @@ pub fn available_bytes() -> Option<f64> {
 pub fn check_memory(recs: &[Recording], report: bool, hint: &str) -> Result<()> {
     let samples = recs.iter().map(Recording::len).max().unwrap_or(0);
     let need = analysis_bytes(samples, recs.len(), report);
-    if let Some(have) = available_bytes() {
+    if let Some(have) = available_bytes()? {
         if need > have {
             let gb = |b: f64| b / 1e9;
             bail!(
-                "the analysis of {} record(s) of {samples} samples needs about {:.1} GB of memory \
-                 but {:.1} GB are available; {hint}",
+                "the analysis of {} record(s) of {samples} samples needs about {:.2} GB of memory \
+                 but {:.2} GB are available ({MEMORY_ENV} or the system); {hint}; nothing written",
                 recs.len(),
                 gb(need),
                 gb(have)

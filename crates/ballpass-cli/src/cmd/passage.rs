@@ -242,7 +242,9 @@ fn one(
     // An explicit --velocity is a setting; a profile's or the file's
     // reaches the analysis through the recording's metadata; without
     // either, the encoder's is used when there is an encoder.
-    let stated = a.load.velocity.or(rec.meta.velocity_mm_s);
+    // A plateau's velocity is the encoder's: measured, not stated.
+    let file_velocity = rec.meta.velocity_mm_s.filter(|_| !a.segment.segment);
+    let stated = a.load.velocity.or(file_velocity);
     let (rec, velocity, measured, warnings, notes) =
         if stated.is_none() && rec.channel(Channel::Position).is_none() {
             let c = check_channels(vec![rec], pre)?;
