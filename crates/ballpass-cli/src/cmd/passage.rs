@@ -306,7 +306,7 @@ fn build_report(
 }
 
 fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {
-    writeln!(out, "{}:", r.source)?;
+    writeln!(out, "{}:", text::line(&r.source))?;
     let vel = match r.velocity_mm_s {
         Some(v) => format!("v = {v} mm/s ({})", r.velocity_source),
         None => "velocity unknown (period from the pulses)".into(),
@@ -370,7 +370,7 @@ fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {
         )?;
     }
     for c in &r.conditions {
-        writeln!(out, "  {}: {}", c.kind.name(), c.message)?;
+        writeln!(out, "  {}: {}", c.kind.name(), text::line(&c.message))?;
         writeln!(out, "    → {}", c.advice)?;
     }
     Ok(())

@@ -114,16 +114,7 @@ pub fn is_flat(x: &[f64], rel: f64) -> bool {
 /// mm/s, signed; `None` without a position channel.
 pub fn measure_velocity(rec: &Recording) -> Option<f64> {
     let x = rec.channel(Channel::Position)?;
-    let n = x.len() as f64;
-    let tm = (n - 1.0) / 2.0;
-    let mean = x.iter().sum::<f64>() / n;
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for (i, v) in x.iter().enumerate() {
-        let d = i as f64 - tm;
-        sxy += d * (v - mean);
-        sxx += d * d;
-    }
-    (sxx > 0.0).then(|| sxy / sxx * rec.fs_hz())
+    Some(crate::recording::segment::slope(x) * rec.fs_hz())
 }
 
 /// Whether the position's sample-to-sample steps are all equal within

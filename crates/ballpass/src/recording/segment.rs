@@ -270,8 +270,9 @@ pub struct Plateau {
     pub max_deviation: f64,
 }
 
-/// Least-squares slope of `x` against the sample index, per sample.
-fn slope(x: &[f64]) -> f64 {
+/// Least-squares slope of `x` against the sample index, per sample (0 for
+/// fewer than two samples).
+pub(crate) fn slope(x: &[f64]) -> f64 {
     let n = x.len() as f64;
     let tm = (n - 1.0) / 2.0;
     let mean = x.iter().sum::<f64>() / n;
