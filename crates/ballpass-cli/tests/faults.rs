@@ -318,12 +318,11 @@ fn item8_two_runs_at_once_leave_one_complete_run() {
         // table names the same segment length as analysis.json.
         let n = json["settings"]["nperseg"].as_u64().unwrap();
         let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+        let cell = |k: u64| format!("<code>nperseg</code></th><td>{k}</td>");
         let other = if n == 256 { 512 } else { 256 };
-        assert!(html.contains(&format!("{n}")));
-        assert!(
-            !html.contains(&format!("nperseg</td><td>{other}")),
-            "mixed run"
-        );
+        assert!(html.contains(&cell(n)), "report of another run");
+        assert!(!html.contains(&cell(other)), "mixed run");
+        assert!(html.contains(&format!("--nperseg {n}")), "command line");
     }
     let _ = std::fs::remove_dir_all(&d);
 }

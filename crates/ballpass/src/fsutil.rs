@@ -274,6 +274,79 @@ fn cut_name(name: &OsStr, max_bytes: usize) -> OsString {
     }
 }
 
+/// A file to be put in place together with others by [`commit_all`]: it is
+/// written under a registered temporary name beside its target first
+/// ([`Pending::path`]), so that an interrupt before the commit removes it
+/// and leaves the target as it was. Dropped without a commit, it removes
+/// its temporary file.
+#[derive(Debug)]
+pub struct Pending {
+    tmp: PathBuf,
+    target: PathBuf,
+}
+
+impl Pending {
+    /// Reserves a temporary name beside `target` (nothing is created).
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming `target` when it has no file name, or after
+    /// [`interrupt`].
+    pub fn new(target: &Path) -> Result<Self> {
+        let io_err = |source| Error::Io {
+            path: target.to_path_buf(),
+            source,
+        };
+        let tmp = temp_path(target).ok_or_else(|| {
+            io_err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a file path",
+            ))
+        })?;
+        register(&tmp).map_err(io_err)?;
+        Ok(Self {
+            tmp,
+            target: target.to_path_buf(),
+        })
+    }
+
+    /// Where to write the content (a hidden name beside the target).
+    pub fn path(&self) -> &Path {
+        &self.tmp
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.tmp);
+        unregister(&self.tmp);
+    }
+}
+
+/// Puts every pending file in place (each by [`replace`]), holding the
+/// commit lock so that an interrupt waits for all of them. On an error the
+/// files not yet in place are removed and the error names the target.
+///
+/// # Errors
+/// [`Error::Io`] naming the target that could not be put in place;
+/// [`std::io::ErrorKind::Interrupted`] after [`interrupt`] (nothing moved).
+pub fn commit_all(files: Vec<Pending>) -> Result<()> {
+    let _guard = commit_lock();
+    if is_interrupted() {
+        let path = files.first().map(|f| f.target.clone()).unwrap_or_default();
+        return Err(Error::Io {
+            path,
+            source: interrupted_error(),
+        });
+    }
+    for f in &files {
+        replace(&f.tmp, &f.target).map_err(|source| Error::Io {
+            path: f.target.clone(),
+            source,
+        })?;
+    }
+    Ok(())
+}
+
 /// A side file's name taken apart: `.<name>.<pid>-<k>.<tmp|old>`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct SideName {
@@ -565,6 +638,29 @@ mod tests {
         std::fs::write(d.join(format!(".z.csv.{dead}-0.tmp")), b"half").unwrap();
         remove_stale_temps(&d, Some(&[OsStr::new("y.csv")])).unwrap();
         assert!(d.join(format!(".z.csv.{dead}-0.tmp")).exists());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// A pair is put in place together or not at all.
+    #[test]
+    fn pending_files_appear_together_or_not_at_all() {
+        let d = dir("pending");
+        let (a, b) = (d.join("r.csv"), d.join("r.truth.json"));
+        {
+            let pa = Pending::new(&a).unwrap();
+            let _pb = Pending::new(&b).unwrap();
+            write_atomic(pa.path(), b"rec").unwrap();
+            // Dropped before the commit (a failure in between).
+        }
+        assert!(std::fs::read_dir(&d).unwrap().next().is_none());
+        let pa = Pending::new(&a).unwrap();
+        let pb = Pending::new(&b).unwrap();
+        write_atomic(pa.path(), b"rec").unwrap();
+        write_atomic(pb.path(), b"truth").unwrap();
+        commit_all(vec![pa, pb]).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), b"rec");
+        assert_eq!(std::fs::read(&b).unwrap(), b"truth");
+        assert!(leftovers(&d).is_empty(), "{:?}", leftovers(&d));
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

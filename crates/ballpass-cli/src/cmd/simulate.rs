@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use ballpass::fsutil::{commit_all, Pending};
 use ballpass::recording::{write_csv, write_mat};
 use ballpass::sim::{self, campaign, Condition, SimSettings, Simulation, Start};
 use clap::{Args, ValueEnum};
@@ -266,26 +267,28 @@ fn check_output(path: &Path) -> Result<()> {
     }
 }
 
-/// Writes the recording and its truth (each atomically); when the truth
-/// cannot be written, the recording just written is removed again, so that
-/// no recording is left without its truth. Returns the truth file's path.
+/// Writes the recording and its truth together: both go to temporary
+/// names beside their targets first and are put in place only when both
+/// are whole ([`ballpass::fsutil::commit_all`]), so a failure or an
+/// interrupt never leaves a recording without its truth. Returns the
+/// truth file's path.
 fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
     let is_mat = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
-    if is_mat {
-        write_mat(&sim.recording, path)?;
-    } else {
-        write_csv(&sim.recording, path)?;
-    }
     let truth_file = sim::truth_path(path);
-    if let Err(e) = sim.truth.write_json(&truth_file) {
-        let _ = std::fs::remove_file(path);
-        return Err(anyhow::Error::from(e).context(format!(
-            "{} not written either (it would lack its truth)",
-            path.display()
-        )));
+    let rec = Pending::new(path)?;
+    let truth = Pending::new(&truth_file)?;
+    if is_mat {
+        write_mat(&sim.recording, rec.path())
+    } else {
+        write_csv(&sim.recording, rec.path())
     }
+    .with_context(|| format!("writing {}", path.display()))?;
+    sim.truth
+        .write_json(truth.path())
+        .with_context(|| format!("writing {}", truth_file.display()))?;
+    commit_all(vec![rec, truth])?;
     Ok(truth_file)
 }
 
