@@ -322,7 +322,7 @@ impl Drop for Pending {
     }
 }
 
-/// Puts every pending file in place (each by [`replace`]), holding the
+/// Puts every pending file in place (renamed as in the module docs), holding the
 /// commit lock so that an interrupt waits for all of them. On an error the
 /// files not yet in place are removed and the error names the target.
 ///
@@ -430,7 +430,7 @@ pub struct StaleCleanup {
 /// Removes, in `dir` (not below it), the temporary files of ballpass
 /// processes that no longer run, and puts back a `.old` copy whose target is
 /// missing. Only names of the form `.<name>.<pid>-<k>.tmp|old` are touched,
-/// only of other processes, and only of dead ones ([`pid_alive`]); with
+/// only of other processes, and only of dead ones (Linux: no `/proc/<pid>`); with
 /// `names`, only side files of those targets.
 ///
 /// # Errors

@@ -7,7 +7,8 @@
 //!    advisory lock of the operating system (`flock`), so a lock whose
 //!    process died (even by SIGKILL) is free again at once, with nothing to
 //!    recover by hand. A second run into the same folder meanwhile fails at
-//!    once with a message naming the folder and the process that holds it;
+//!    once with a message naming the folder and the process that holds it
+//!    (on a file system without advisory locks the run goes on unlocked);
 //! 2. removes what a killed run left there: staging folders
 //!    (`DIR/.ballpass-staging.<pid>`: no other run can be writing them, the
 //!    lock says so) and temporary files of dead processes
@@ -291,6 +292,10 @@ fn take_lock(dir: &Path, lock_path: &Path) -> Result<File> {
                         format!("another ballpass run (pid {holder})")
                     },
                 });
+            }
+            // A file system without advisory locks (some network mounts):
+            // the run goes on unlocked rather than not at all.
+            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(io(lock_path)(e)),
         }
