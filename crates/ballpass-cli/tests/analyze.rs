@@ -85,6 +85,7 @@ fn writes_the_four_outputs_and_a_summary() {
         names,
         [
             "analysis.json",
+            "ballpass-run.json",
             "correlations.csv",
             "spectra.csv",
             "spectra_hires.csv"
@@ -109,7 +110,17 @@ fn bad_input_is_a_one_line_error() {
         ),
         // 8 s at 0.5 mm/s is far less than two 16 s periods.
         (vec!["--velocity", "0.5"], "ball-pass periods"),
-        (vec![], "velocity"),
+        // Issue 18 item 5: the fixture's encoder runs at 18 mm/s.
+        (
+            vec!["--velocity", "200"],
+            "the encoder (position_mm) says the stage moves at 18.0000 mm/s, but the stated velocity is 200 mm/s",
+        ),
+        (
+            vec!["--velocity", "5000", "--force-velocity"],
+            "616.4 Hz, is at or above the Nyquist frequency 100 Hz",
+        ),
+        (vec!["--window", "hann"], "--welch-window"),
+        (vec!["--window", "20:30"], "the window 20–30 s holds 0 samples"),
     ] {
         let mut a = vec!["analyze", r, "--out", o];
         a.extend(args.iter());

@@ -13,6 +13,8 @@ use ballpass::recording::write_csv;
 use ballpass::report::{write_report, ReportOptions};
 use clap::Args;
 
+use crate::{output, text};
+
 /// Arguments of `ballpass demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
@@ -37,9 +39,9 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         seed: a.seed,
         ..DemoSettings::default()
     };
+    let staging = output::open_dir(&a.out, "demo")?;
     let demo = run_demo(&settings).context("demo")?;
-    let out = &a.out;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let out = staging.path();
     write_outputs(&demo.analysis, &out.join("analyze"))?;
     let sweep_dir = out.join("sweep");
     let diag_dir = out.join("diagnose");
@@ -88,8 +90,10 @@ pub fn run(a: &DemoArgs) -> Result<()> {
             ..Default::default()
         },
     )?;
+    let html = staging.final_path(&files.html);
+    let dir = output::commit(staging)?;
 
-    let mut o = std::io::stdout().lock();
+    let mut o = output::stdout();
     writeln!(
         o,
         "simulated the thesis campaign (seed {}): 100 sweep records (1–20 mm/s × 5) and 50 batch records (5 bearings × 10 at 20 mm/s, bearing 4 sticking)",
@@ -117,8 +121,9 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         o,
         "wrote {} figures and tables under {}\nopen {}",
         files.svgs.len(),
-        out.display(),
-        files.html.display()
+        text::path(&dir),
+        text::path(&html)
     )?;
+    o.flush()?;
     Ok(())
 }

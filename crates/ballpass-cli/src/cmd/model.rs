@@ -17,7 +17,8 @@ use serde::Serialize;
 use ballpass::report::{self, Block, Level, Report, Section, Table, Verdict};
 
 use crate::args::{command_line, BearingArgs, ReportArgs};
-use crate::output::{ensure_dir, write_csv, write_json};
+use crate::output::{self, write_csv, write_json};
+use crate::text;
 
 /// Arguments of `ballpass model`.
 #[derive(Debug, Args)]
@@ -340,9 +341,10 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
             });
         }
     }
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("correlations.csv"), &rows)?;
-    write_csv(&a.out.join("spectral_lines.csv"), &lines)?;
+    let out = output::open_dir(&a.out, "model signals")?;
+    let dir = out.path().to_path_buf();
+    write_csv(&dir.join("correlations.csv"), &rows)?;
+    write_csv(&dir.join("spectral_lines.csv"), &lines)?;
     let json = SignalsJson {
         schema: "ballpass.model.signals/1",
         version: ballpass::VERSION,
@@ -356,7 +358,7 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
         peaks,
         spectral_lines: lines,
     };
-    write_json(&a.out.join("signals.json"), &json)?;
+    write_json(&dir.join("signals.json"), &json)?;
     let tau: Vec<f64> = rows.iter().map(|r| r.tau_s).collect();
     let col = |g: fn(&CorrelationRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
     let cols = [
@@ -390,8 +392,9 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
             &pairs,
             m.tau_c_s(),
         ));
-    let written = a.report.write(&rep, &a.out)?;
-    let mut out = std::io::stdout().lock();
+    let written = a.report.write(&rep, &dir)?;
+    output::commit(out)?;
+    let mut out = output::stdout();
     writeln!(
         out,
         "sinusoid model signals at f_c = {f_c:.6} Hz (tau_c = {:.5} s)",
@@ -415,7 +418,7 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
     writeln!(
         out,
         "wrote {}/{{correlations.csv, spectral_lines.csv, signals.json{}}}",
-        a.out.display(),
+        text::path(&a.out),
         report_note(&written)
     )?;
     Ok(())
@@ -546,11 +549,12 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
         fit_rms_gaussian_series: rms(&|x| x.gaussian_series - x.gaussian),
         fit_rms_rectangular_series: rms(&|x| x.rectangular_series - x.rectangular),
     };
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("gaussian_coefficients.csv"), &grows)?;
-    write_csv(&a.out.join("rectangular_coefficients.csv"), &rrows)?;
-    write_csv(&a.out.join("trains.csv"), &trows)?;
-    write_json(&a.out.join("pulses.json"), &json)?;
+    let out = output::open_dir(&a.out, "model pulses")?;
+    let dir = out.path().to_path_buf();
+    write_csv(&dir.join("gaussian_coefficients.csv"), &grows)?;
+    write_csv(&dir.join("rectangular_coefficients.csv"), &rrows)?;
+    write_csv(&dir.join("trains.csv"), &trows)?;
+    write_json(&dir.join("pulses.json"), &json)?;
     let ns: Vec<f64> = grows.iter().map(|r| r.n as f64).collect();
     let cn: Vec<f64> = grows.iter().map(|r| r.c_over_p).collect();
     let printed: Vec<f64> = grows.iter().map(|r| r.thesis_printed_c_over_p).collect();
@@ -613,8 +617,9 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
             (&rs_name, &rs, true),
         ],
     ));
-    let written = a.report.write(&rep, &a.out)?;
-    let mut out = std::io::stdout().lock();
+    let written = a.report.write(&rep, &dir)?;
+    output::commit(out)?;
+    let mut out = output::stdout();
     writeln!(
         out,
         "pulse trains, tau_c = {tau_c:.5} s, sigma/tau_c = {sigma_ratio:.5} (FWHM/tau_c = {:.5}), P = {}",
@@ -647,7 +652,7 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     writeln!(
         out,
         "wrote {}/{{gaussian_coefficients.csv, rectangular_coefficients.csv, trains.csv, pulses.json{}}}",
-        a.out.display(),
+        text::path(&a.out),
         report_note(&written)
     )?;
     Ok(())
@@ -717,12 +722,13 @@ fn run_stage(a: &StageArgs) -> Result<()> {
         }
         None => None,
     };
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("bode.csv"), &bode)?;
-    write_csv(&a.out.join("difference.csv"), &diff)?;
+    let out = output::open_dir(&a.out, "model stage")?;
+    let dir = out.path().to_path_buf();
+    write_csv(&dir.join("bode.csv"), &bode)?;
+    write_csv(&dir.join("difference.csv"), &diff)?;
     let mut written = vec!["bode.csv", "difference.csv"];
     if let Some((_, r)) = &resp {
-        write_csv(&a.out.join("harmonics.csv"), &r.harmonics)?;
+        write_csv(&dir.join("harmonics.csv"), &r.harmonics)?;
         let rows: Vec<VelocityRow> = (0..r.time_s.len())
             .map(|i| VelocityRow {
                 t_s: r.time_s[i],
@@ -732,7 +738,7 @@ fn run_stage(a: &StageArgs) -> Result<()> {
                 velocity_magnitude_only_mm_s: r.velocity_magnitude_only_mm_s[i],
             })
             .collect();
-        write_csv(&a.out.join("velocity_response.csv"), &rows)?;
+        write_csv(&dir.join("velocity_response.csv"), &rows)?;
         written.extend(["harmonics.csv", "velocity_response.csv"]);
     }
     let json = StageJson {
@@ -749,7 +755,7 @@ fn run_stage(a: &StageArgs) -> Result<()> {
             magnitude_only_error_of_peak: r.magnitude_only_error_of_peak,
         }),
     };
-    write_json(&a.out.join("stage.json"), &json)?;
+    write_json(&dir.join("stage.json"), &json)?;
     written.push("stage.json");
     let rep = stage_report(
         &json,
@@ -759,9 +765,10 @@ fn run_stage(a: &StageArgs) -> Result<()> {
         &diff,
         resp.as_ref().map(|(_, r)| r),
     )?;
-    if a.report.write(&rep, &a.out)?.is_some() {
+    if a.report.write(&rep, &dir)?.is_some() {
         written.extend(["report.html", "figures/"]);
     }
+    output::commit(out)?;
     summarize_stage(&json, f_c, a.fs, &diff, &a.out, &written)
 }
 
@@ -869,7 +876,7 @@ fn summarize_stage(
     written: &[&str],
 ) -> Result<()> {
     let f = &json.features;
-    let mut out = std::io::stdout().lock();
+    let mut out = output::stdout();
     writeln!(
         out,
         "PD stage: m = {} kg, K*KP = {:.6e} N/m, K*KD = {:.6e} N*s/m",
@@ -937,7 +944,7 @@ fn summarize_stage(
     writeln!(
         out,
         "wrote {}/{{{}}}",
-        out_dir.display(),
+        text::path(out_dir),
         written.join(", ")
     )?;
     Ok(())

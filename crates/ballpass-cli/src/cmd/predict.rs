@@ -44,7 +44,7 @@ struct Output<'a> {
 
 /// Runs `ballpass predict`.
 pub fn run(a: &PredictArgs) -> Result<()> {
-    let mut out = std::io::stdout().lock();
+    let mut out = crate::output::stdout();
     if a.list_bearings {
         for e in bearing::CATALOG {
             let g = e.geometry;

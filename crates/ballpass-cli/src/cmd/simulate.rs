@@ -5,10 +5,13 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use ballpass::fsutil::{commit_all, Pending};
 use ballpass::recording::{write_csv, write_mat};
 use ballpass::sim::{self, campaign, Condition, SimSettings, Simulation, Start};
 use clap::{Args, ValueEnum};
 use rayon::prelude::*;
+
+use crate::{output, text};
 
 /// Bearing condition on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -81,6 +84,12 @@ pub struct SimFlags {
     /// Period of the interference drift, s [default: 5].
     #[arg(long, value_name = "S")]
     interference_period: Option<f64>,
+    /// A multi-speed run instead of one velocity: the lab's benchmark run,
+    /// plateaus of 3.5 s at 42, 83 and 125 mm/s, each forward then
+    /// backward, ramps at 400 mm/s² (the truth lists the plateaus; any
+    /// profile can be given in the --settings file's `profile`).
+    #[arg(long)]
+    multi_speed: bool,
 }
 
 impl SimFlags {
@@ -129,6 +138,9 @@ impl SimFlags {
         if let Some(v) = self.interference_period {
             s.optical.interference_period_s = v;
         }
+        if self.multi_speed {
+            s.profile = Some(sim::SpeedProfile::lab_run());
+        }
         Ok(s)
     }
 }
@@ -154,11 +166,12 @@ fn read_settings(path: &Path) -> Result<SimSettings> {
 /// Arguments of `ballpass simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Tracking velocity, mm/s [default with --settings: the file's].
+    /// Tracking velocity, mm/s [default with --settings: the file's; not
+    /// needed with --multi-speed].
     #[arg(
         long,
         short = 'v',
-        required_unless_present = "settings",
+        required_unless_present_any = ["settings", "multi_speed"],
         allow_hyphen_values = true
     )]
     velocity: Option<f64>,
@@ -197,18 +210,36 @@ pub fn run(a: &SimulateArgs) -> Result<()> {
     }
     check_output(&a.output)?;
     let sim = sim::simulate(&s)?;
-    let truth_file = write_pair(&sim, &a.output)?;
+    let truth_file = sim::truth_path(&a.output);
+    // Temporary files of a killed earlier run of these two targets.
+    if let (Some(dir), Some(n1), Some(n2)) = (
+        a.output.parent(),
+        a.output.file_name(),
+        truth_file.file_name(),
+    ) {
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        ballpass::fsutil::remove_stale_temps(dir, Some(&[n1, n2]))?;
+    }
+    write_pair(&sim, &a.output)?;
     let t = &sim.truth;
-    let mut out = std::io::stdout().lock();
+    let mut out = output::stdout();
+    let speed = if t.plateaus.is_empty() {
+        format!("{} mm/s", t.velocity_mm_s)
+    } else {
+        format!("{} plateaus", t.plateaus.len())
+    };
     writeln!(
         out,
-        "wrote {} ({} samples at {} Hz, {} bearing, {} mm/s) and {}",
-        a.output.display(),
+        "wrote {} ({} samples at {} Hz, {} bearing, {speed}) and {}",
+        text::path(&a.output),
         t.n_samples,
         t.fs_hz,
         t.condition.name(),
-        t.velocity_mm_s,
-        truth_file.display()
+        text::path(&truth_file)
     )?;
     writeln!(
         out,
@@ -236,18 +267,28 @@ fn check_output(path: &Path) -> Result<()> {
     }
 }
 
-/// Writes the recording and its truth; returns the truth file's path.
+/// Writes the recording and its truth together: both go to temporary
+/// names beside their targets first and are put in place only when both
+/// are whole ([`ballpass::fsutil::commit_all`]), so a failure or an
+/// interrupt never leaves a recording without its truth. Returns the
+/// truth file's path.
 fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
     let is_mat = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
-    if is_mat {
-        write_mat(&sim.recording, path)?;
-    } else {
-        write_csv(&sim.recording, path)?;
-    }
     let truth_file = sim::truth_path(path);
-    sim.truth.write_json(&truth_file)?;
+    let rec = Pending::new(path)?;
+    let truth = Pending::new(&truth_file)?;
+    if is_mat {
+        write_mat(&sim.recording, rec.path())
+    } else {
+        write_csv(&sim.recording, rec.path())
+    }
+    .with_context(|| format!("writing {}", path.display()))?;
+    sim.truth
+        .write_json(truth.path())
+        .with_context(|| format!("writing {}", truth_file.display()))?;
+    commit_all(vec![rec, truth])?;
     Ok(truth_file)
 }
 
@@ -271,15 +312,20 @@ pub struct CampaignArgs {
 pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
     let base = a.flags.settings()?;
     base.validate()?;
+    if base.profile.is_some() {
+        bail!("--multi-speed (a speed profile) does not apply to the thesis campaign, whose records each have one velocity");
+    }
     let plan = campaign::plan(&base, a.seed);
+    let out = output::open_dir(&a.out, "simulate-campaign")?;
+    let staged = out.path().to_path_buf();
     for sub in ["sweep", "diagnosis"] {
-        let d = a.out.join(sub);
+        let d = staged.join(sub);
         std::fs::create_dir_all(&d)
             .with_context(|| format!("cannot create folder {}", d.display()))?;
     }
     let work = || -> Result<()> {
         plan.par_iter().try_for_each(|e| -> Result<()> {
-            let path = a.out.join(format!("{}.csv", e.path));
+            let path = staged.join(format!("{}.csv", e.path));
             let sim =
                 sim::simulate(&e.settings).with_context(|| format!("simulating {}", e.path))?;
             write_pair(&sim, &path)?;
@@ -306,13 +352,15 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
             e.condition.name()
         ));
     }
-    let manifest_path = a.out.join("manifest.csv");
-    ballpass::fsutil::write_atomic(&manifest_path, manifest.as_bytes())?;
+    ballpass::fsutil::write_atomic(&staged.join("manifest.csv"), manifest.as_bytes())?;
+    let dir = output::commit(out)?;
+    let mut o = output::stdout();
     writeln!(
-        std::io::stdout().lock(),
+        o,
         "wrote {} recordings with truth files and {}",
         plan.len(),
-        manifest_path.display()
+        text::path(&dir.join("manifest.csv"))
     )?;
+    o.flush()?;
     Ok(())
 }

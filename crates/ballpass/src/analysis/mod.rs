@@ -46,6 +46,7 @@ pub mod export;
 pub mod load_cell;
 pub mod passage;
 pub mod phase;
+pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;

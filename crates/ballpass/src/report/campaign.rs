@@ -284,7 +284,7 @@ pub fn diagnosis_parts(
         .map(|b| {
             let level = match b.verdict {
                 Condition::Good => Level::Pass,
-                Condition::Suspect => Level::Warn,
+                Condition::Inconclusive | Condition::Suspect => Level::Warn,
                 Condition::Bad => Level::Fail,
             };
             Verdict::new(
@@ -299,9 +299,10 @@ pub fn diagnosis_parts(
         "bearing",
         "verdict",
         "records",
+        "periods",
+        "spikes (bad at)",
+        "typical rise × batch",
         "low band × median",
-        "spikes / record",
-        "at ball-pass multiples",
         "f_c line (dB)",
     ]);
     for b in &d.bearings {
@@ -310,13 +311,12 @@ pub fn diagnosis_parts(
             b.bearing.clone(),
             b.verdict.name().to_string(),
             b.records.to_string(),
+            b.periods.to_string(),
+            format!("{} ({})", b.spikes, b.spikes_for_bad),
+            b.typical_over_batch
+                .map(|r| fmt_sig(r, 3))
+                .unwrap_or_else(|| "–".into()),
             fmt_sig(b.low_band_ratio, 3),
-            b.events_per_record
-                .map(|m| fmt_sig(m.mean, 2))
-                .unwrap_or_else(|| "–".into()),
-            b.timing_fraction
-                .map(|f| format!("{:.0} %", 100.0 * f))
-                .unwrap_or_else(|| "–".into()),
             b.harmonics
                 .first()
                 .and_then(|h| h.ratio_db)

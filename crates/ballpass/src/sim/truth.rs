@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::profile::PlateauTruth;
 use super::settings::{Condition, SimSettings};
 use crate::error::Result;
 use crate::recording::Recording;
@@ -133,6 +134,13 @@ pub struct Truth {
     pub velocity_error_true_std_mm_s: f64,
     /// Phase of the interference drift at the first sample, rad (when enabled).
     pub interference_phase_rad: Option<f64>,
+    /// With a speed profile: each plateau's commanded interval and velocity
+    /// and the stage's mean velocity over it (absent otherwise). The
+    /// single-speed fields above then refer to the first plateau's speed,
+    /// `mean_velocity_mm_s` is the mean speed over the record, and the
+    /// passage times are first forward crossings only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plateaus: Vec<PlateauTruth>,
     /// All parameters.
     pub settings: SimSettings,
 }

@@ -310,6 +310,75 @@ pub fn parabolic_peak(a: f64, b: f64, c: f64) -> (f64, f64) {
 mod tests {
     use super::*;
 
+    fn noise(n: usize, seed: u64) -> Vec<f64> {
+        // splitmix64 → two uniforms → Box–Muller; fixed seed.
+        let mut s = seed;
+        let mut next = || {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let (u, v) = (next().max(1e-300), next());
+                (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+            })
+            .collect()
+    }
+
+    /// The selection median and robust σ (`crate::stats`, by order keys)
+    /// equal the sorting ones bit for bit (odd and even counts, ties, NaN
+    /// and infinities dropped, signed zeros, empty input).
+    #[test]
+    fn selection_median_equals_the_sorting_median() {
+        fn sorting_median(x: &[f64]) -> Option<f64> {
+            let mut v: Vec<f64> = x.iter().copied().filter(|x| x.is_finite()).collect();
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            (n > 0).then(|| {
+                if n % 2 == 1 {
+                    v[n / 2]
+                } else {
+                    0.5 * (v[n / 2 - 1] + v[n / 2])
+                }
+            })
+        }
+        let mut scratch = Vec::new();
+        let mut cases: Vec<Vec<f64>> = vec![
+            vec![],
+            vec![f64::NAN],
+            vec![1.0],
+            vec![2.0, 1.0],
+            vec![0.0, -0.0, 0.0, -0.0],
+            vec![3.0, f64::NAN, 1.0, f64::INFINITY, 2.0, 2.0],
+        ];
+        for n in [7, 8, 450, 451, 30_000] {
+            cases.push(noise(n, n as u64));
+            cases.push(noise(n, 3).iter().map(|v| (v * 4.0).round()).collect());
+        }
+        for x in &cases {
+            let want = sorting_median(x);
+            assert_eq!(
+                median_with(x, &mut scratch).map(f64::to_bits),
+                want.map(f64::to_bits),
+                "{} values",
+                x.len()
+            );
+            let want_sigma = want.and_then(|m| {
+                let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
+                sorting_median(&dev).map(|d| 1.482_602_218_505_602 * d)
+            });
+            assert_eq!(
+                robust_sigma_with(x, &mut scratch).map(f64::to_bits),
+                want_sigma.map(f64::to_bits),
+                "{} values",
+                x.len()
+            );
+        }
+    }
+
     #[test]
     fn order_keys_sort_as_total_cmp_and_come_back() {
         let v = [

@@ -408,6 +408,7 @@ impl Bench {
             load_cell: self.load_cell,
             encoder: Default::default(),
             optical: self.optical,
+            profile: None,
         }
     }
 }

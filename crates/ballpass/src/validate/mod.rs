@@ -4,5 +4,8 @@
 //! detection rates with their binomial intervals).
 
 pub mod bench;
+pub mod fleets;
+pub mod score;
 
 pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
+pub use score::Rate;
