@@ -4,6 +4,7 @@
 //! exact Fourier coefficients ([`pulse_train`]), and the PD-controlled stage
 //! with its frequency responses and predicted velocity ([`stage`]).
 
+pub mod identify;
 pub mod pulse_train;
 pub mod signals;
 pub mod stage;
