@@ -470,8 +470,10 @@ pub struct Analysis {
     pub harmonics: Vec<HarmonicRow>,
     /// Coherence at the harmonics.
     pub coherence: Vec<CoherenceRow>,
-    /// Velocity-error statistics of the (first, or only) record; see
-    /// [`Analysis::repeats`] for every record.
+    /// Velocity-error statistics: of the record, or for repeats the mean
+    /// over the records of each record's statistics (see
+    /// [`VelocityErrorStats::mean_of`]; every record's own value is in
+    /// [`Analysis::repeats`]).
     pub velocity_error: Option<VelocityErrorStats>,
     /// Per-record results and spread, when more than one record was given.
     pub repeats: Option<Repeats>,

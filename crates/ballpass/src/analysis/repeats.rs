@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
-use super::preprocess::{self, Prepared};
+use super::preprocess::{self, Prepared, VelocityErrorStats};
 use super::spectra::{self, HarmonicRow, Spectra};
 use super::{
     pair_name, Absent, Analysis, AnalyzeSettings, InputInfo, SeriesInfo, Signal, Verdict, SCHEMA,
@@ -734,7 +734,12 @@ pub(crate) fn run(
         phases: findings.phases,
         harmonics: findings.harmonics,
         coherence: findings.coherence,
-        velocity_error: prepared[0].velocity_error.clone(),
+        velocity_error: VelocityErrorStats::mean_of(
+            &prepared
+                .iter()
+                .filter_map(|p| p.velocity_error.as_ref())
+                .collect::<Vec<_>>(),
+        ),
         repeats,
         verdict,
         passages,
