@@ -57,7 +57,7 @@ pub use repeats::{RecordScalars, Repeats, Spread};
 pub use spectra::{CoherenceRow, HarmonicRow, HarmonicValue, Spectra, SpectrumInfo};
 
 /// Schema tag of `analysis.json`.
-pub const SCHEMA: &str = "ballpass.analysis/1";
+pub const SCHEMA: &str = "ballpass.analysis/2";
 
 /// One of the three analysed signals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -462,6 +462,8 @@ pub struct Analysis {
     pub spectrum_full: SpectrumInfo,
     /// High-resolution spectrum parameters.
     pub spectrum_hires: SpectrumInfo,
+    /// Parameters of the full-range spectrum of the unfiltered signals.
+    pub spectrum_unfiltered: SpectrumInfo,
     /// Period measured from the autocorrelations.
     pub measured_period: MeasuredPeriod,
     /// Phases of the cross pairs.
@@ -493,6 +495,12 @@ pub struct Analysis {
     /// High-resolution spectra, exported as `spectra_hires.csv`.
     #[serde(skip)]
     pub spectra_hires: Spectra,
+    /// Full-range spectra of the signals before the low-pass and detrend
+    /// (thesis Figs. 62 and 64: the white-noise floor above the band of
+    /// interest), exported as `spectra_unfiltered.csv`. Welch still removes
+    /// each segment's mean.
+    #[serde(skip)]
+    pub spectra_unfiltered: Spectra,
 }
 
 /// Runs the whole analysis on one record or several repeats at the same

@@ -27,6 +27,10 @@ pub struct Prepared {
     pub signals: Vec<(Signal, Vec<f64>)>,
     /// Velocity-error statistics, when the position channel is present.
     pub velocity_error: Option<VelocityErrorStats>,
+    /// The same signals after step 1 only (trimmed; velocity error
+    /// `v - V`), neither low-passed nor detrended: what the full-range
+    /// spectra of the thesis' Figs. 62 and 64 are computed from.
+    pub unfiltered: Vec<(Signal, Vec<f64>)>,
     /// Samples removed at the start.
     pub trimmed_samples: usize,
 }
@@ -175,6 +179,7 @@ pub(crate) fn prepare(
     let ctx = |what: &str| format!("{name}: {what}");
     let mut signals = Vec::with_capacity(3);
     let mut velocity_error = None;
+    let mut unfiltered = Vec::with_capacity(3);
     for s in Signal::ALL {
         let raw: Vec<f64> = match s {
             Signal::Friction => match rec.channel(Channel::Friction) {
@@ -221,12 +226,14 @@ pub(crate) fn prepare(
         detrend_in_place(&mut y, settings.detrend.to_dsp())
             .map_err(|e| Error::dsp(ctx(&format!("detrend of {}", s.name())), e))?;
         signals.push((s, y));
+        unfiltered.push((s, raw));
     }
     Ok(Prepared {
         fs_hz: fs,
         n: n_keep,
         signals,
         velocity_error,
+        unfiltered,
         trimmed_samples: trim,
     })
 }
