@@ -228,7 +228,16 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     }
     analysis::write_outputs(&analysis, &a.out)?;
     if !a.report.no_report {
-        let report = ballpass::report::analysis::report(&analysis, recs.first())?
+        let links = ballpass::report::analysis::AnalysisLinks {
+            tables_dir: String::new(),
+            recording: a
+                .recs
+                .first()
+                .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone()))
+                .map(|p| p.display().to_string()),
+            id_prefix: String::new(),
+        };
+        let report = ballpass::report::analysis::report(&analysis, recs.first(), &links)?
             .with_command(command_line());
         a.report.write(&report, &a.out)?;
     }
@@ -302,9 +311,13 @@ fn summary<W: Write>(w: &mut W, a: &Analysis, bearing: &str) -> std::io::Result<
         writeln!(w)?;
     }
     if let Some(v) = &a.velocity_error {
+        let of = match v.std_spread_um_s {
+            Some(sd) => format!(" ± {sd:.1} (mean of {} records ± their spread)", v.records),
+            None => String::new(),
+        };
         writeln!(
             w,
-            "velocity error std {:.1} µm/s (low-passed {:.1}, quantisation floor {:.1})",
+            "velocity error std {:.1}{of} µm/s (low-passed {:.1}, quantisation floor {:.1})",
             v.std_um_s, v.lowpassed_std_um_s, v.quantisation_floor_um_s
         )?;
     }

@@ -21,7 +21,7 @@ use ballpass::report::{Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
-use crate::args::{LoadArgs, ReportArgs};
+use crate::args::{command_line, LoadArgs, ReportArgs};
 
 /// Arguments shared by `sweep` and `diagnose`.
 #[derive(Debug, Args)]
@@ -282,7 +282,8 @@ fn campaign_report(
     parts: ReportParts,
     settings: &CampaignSettings,
 ) -> Result<Report> {
-    let mut report = Report::new(title).with_command(title);
+    let mut report = Report::new(format!("{title}: {}", b.manifest.source.display()))
+        .with_command(command_line());
     let mut inputs = vec![
         (
             "source".to_string(),
@@ -442,7 +443,7 @@ pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
             result: &s,
             summary: s.findings.clone(),
         },
-        || Ok(sweep_parts(&s, "")?),
+        || Ok(sweep_parts(&s, "", "")?),
     )
 }
 
@@ -496,7 +497,7 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         || {
             let f_c = ok.first().map(|r| r.f_c_predicted_hz);
             let examples = examples(&d, &b.entries, c)?;
-            Ok(diagnosis_parts(&d, f_c, &examples, "")?)
+            Ok(diagnosis_parts(&d, f_c, &examples, "", "")?)
         },
     )
 }

@@ -186,11 +186,8 @@ fn build_report(
     };
     let mut rep = Report::new(title).with_command(command_line());
     for (k, (rec, r)) in recs.iter().zip(done).enumerate() {
-        for s in report::passage::passage_sections(r) {
+        for s in report::passage::record_sections(k + 1, rec, r, "passages.csv", "")? {
             rep = rep.with_section(s);
-        }
-        for f in report::passage::passage_figures(k + 1, rec, r)? {
-            rep = rep.with_figure(f);
         }
     }
     if !failed.is_empty() {

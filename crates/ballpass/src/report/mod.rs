@@ -63,10 +63,13 @@ pub mod campaign;
 mod draw;
 mod html;
 pub mod kinds;
+mod live;
 pub mod model;
+mod page;
 pub mod passage;
 mod prepare;
 mod spec;
+mod text;
 mod ticks;
 
 pub use draw::{render_png, render_svg, Rendered};
@@ -75,6 +78,6 @@ pub use html::{
     ReportOptions, Section, Table, Verdict, FIGURES_DIR, REPORT_FILE,
 };
 pub use spec::{
-    Axis, Figure, Marker, MarkerStyle, Panel, Rgb, Scale, Series, SeriesStyle,
+    Axis, DataFile, Figure, Marker, MarkerStyle, Panel, Rgb, Scale, Series, SeriesStyle,
     DEFAULT_PANEL_HEIGHT_PX, DEFAULT_WIDTH_PX,
 };

@@ -2,8 +2,9 @@
 //! passages found, the pulses with the fitted Gaussian and rectangular trains
 //! (thesis Figs. 47–48), `τ_c` and `τ_p` per passage, and the summary.
 
+use super::campaign::recording_link;
 use super::html::{Block, Level, Section, Table, Verdict};
-use super::kinds::{fmt_sig, pulses_with_models};
+use super::kinds::{fmt_pm, fmt_sig, pulses_with_models};
 use super::spec::{Axis, Figure, Marker, Panel, Rgb, Series, SeriesStyle};
 use crate::analysis::passage::PassageAnalysis;
 use crate::error::Result;
@@ -71,7 +72,8 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
             fmt_sig(a.prominence_threshold_v, 3),
             fmt_sig(a.noise_v, 3)
         ))
-        .with_panel(panel),
+        .with_panel(panel)
+        .interactive(),
     );
 
     // Pulses with the fitted models over the first periods of the fit.
@@ -127,7 +129,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
                 f.from_s,
                 f.to_s
             ));
-            figs.push(fig);
+            figs.push(fig.interactive());
         }
     }
 
@@ -189,7 +191,68 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
 }
 
 fn pm(m: &crate::stats::MeanStd, sig: usize) -> String {
-    format!("{} ± {}", fmt_sig(m.mean, sig), fmt_sig(m.std, 2))
+    fmt_pm(m.mean, m.std, sig)
+}
+
+/// One record's sections with its figures placed in them: the passages
+/// (with the optical signal, the fitted pulses and the widths per passage),
+/// prediction vs measurement, the pulse-train fits and the conditions.
+/// `k` numbers the record's figures (`optical_<k>`, ...); `table` is the
+/// file holding the passages (relative to the report: `passages.csv`, or
+/// `passage/passage.json` in the demo); `id_prefix` starts the figure ids.
+///
+/// # Errors
+/// [`crate::Error::MissingChannel`] when `rec` has no optical channel.
+pub fn record_sections(
+    k: usize,
+    rec: &Recording,
+    a: &PassageAnalysis,
+    table: &str,
+    id_prefix: &str,
+) -> Result<Vec<Section>> {
+    let mut figures = passage_figures(k, rec, a)?;
+    let link = recording_link(rec);
+    for f in &mut figures {
+        f.id = format!("{id_prefix}{}", f.id);
+        if f.id.ends_with(&format!("optical_{k}")) || f.id.ends_with(&format!("pulses_{k}")) {
+            if let Some(l) = &link {
+                f.data.push(super::spec::DataFile {
+                    path: l.clone(),
+                    what: "the recording (optical_V)".into(),
+                });
+            }
+        }
+        f.data.push(super::spec::DataFile {
+            path: table.to_string(),
+            what: "every passage: time, τc, τp, amplitude".into(),
+        });
+    }
+    let mut sections = passage_sections(a);
+    let refs: Vec<String> = figures
+        .iter()
+        .map(|f| format!("{{fig:{}}}", f.id))
+        .collect();
+    let text = match refs.as_slice() {
+        [optical, pulses, widths] => format!(
+            "{optical} shows the optical signal with each passage found; {pulses} the first \
+             pulses with the fitted pulse trains; {widths} the period τc to the next passage \
+             and the width τp of each one."
+        ),
+        [optical, widths] => format!(
+            "{optical} shows the optical signal with each passage found; {widths} the period \
+             τc to the next passage and the width τp of each one (no pulse train was fitted)."
+        ),
+        _ => String::new(),
+    };
+    if let Some(first) = sections.first_mut() {
+        if !text.is_empty() {
+            first.blocks.push(Block::Paragraph(text));
+        }
+        for f in figures {
+            first.blocks.push(Block::Figure(Box::new(f)));
+        }
+    }
+    Ok(sections)
 }
 
 /// The summary sections of one record: measurements, prediction vs
@@ -227,7 +290,7 @@ pub fn passage_sections(a: &PassageAnalysis) -> Vec<Section> {
         kv.push((
             "ball spacing v τc / 2".into(),
             format!(
-                "{}–{} mm (std {} mm) against [{}, {}] mm; spread uses {}% of d_ext, {} outside",
+                "{}–{} mm (std {} mm) against the possible [{}, {}] mm (balls touching to all free space d_ext in one gap); the spread uses {} % of d_ext, {} outside",
                 fmt_sig(s.min_mm, 4),
                 fmt_sig(s.max_mm, 4),
                 fmt_sig(s.std_mm, 2),
