@@ -84,6 +84,21 @@ fn sweep_and_diagnose_run_a_campaign_and_report_a_broken_record() {
     }
     let sweep_csv = std::fs::read_to_string(d.join("sw/sweep.csv")).unwrap();
     assert_eq!(sweep_csv.lines().count(), 1 + 5, "{sweep_csv}");
+    // Regression: the report's header said "ballpass sweep" without the
+    // arguments; it carries the command line and names the source.
+    let html = std::fs::read_to_string(d.join("sw/report.html")).unwrap();
+    assert!(
+        html.contains("<title>ballpass sweep: manifest.csv</title>"),
+        "report title"
+    );
+    let code = html
+        .split("<code>")
+        .nth(1)
+        .unwrap()
+        .split("</code>")
+        .next()
+        .unwrap();
+    assert!(code.contains("sweep manifest.csv --out sw"), "{code}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("sw/sweep.json")).unwrap()).unwrap();
     // tau_c ∝ 1/v on the simulator: the fitted exponent is −1 within 1 %.

@@ -66,7 +66,7 @@ fn f_c_and_optical_lag_match_the_truth_from_1_to_20_mm_s() {
         );
         // f_c: within 1 % of the rate the balls really passed at in the
         // (first) record; the long-run rate can differ by more over a few
-        // passages because the ball gaps are random (ERRATA §1).
+        // passages because the ball gaps are random (docs/methods.md §1).
         let (f_err, lag_err) = errors(&a, &sims[0]);
         eprintln!(
             "v = {v} mm/s ({repeats} record(s)): f_c {:+.3} %, lag {lag_err:+.4} tau_c",

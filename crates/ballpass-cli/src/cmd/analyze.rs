@@ -42,15 +42,15 @@ enum WindowArg {
 /// Arguments of `ballpass analyze`.
 #[derive(Debug, Args)]
 pub struct AnalyzeArgs {
-    /// Recording files (CSV/TSV); several files are repeats at one velocity
-    /// and are averaged.
+    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7);
+    /// several files are repeats at one velocity and are averaged.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
     #[command(flatten)]
     load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
-    /// spectra_hires.csv.
-    #[arg(long, value_name = "DIR")]
+    /// spectra_hires.csv, spectra_unfiltered.csv and the report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Seconds dropped at the start of each record (start transient) [default: 0].
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -80,7 +80,7 @@ pub struct AnalyzeArgs {
     #[arg(long, value_enum)]
     corr_norm: Option<CorrNormArg>,
     /// High-resolution spectrum by the thesis' zoom processing with factor M
-    /// (polyphase average; aliases, see ERRATA §10) instead of decimation.
+    /// (polyphase average; it aliases, see docs/methods.md §10) instead of decimation.
     #[arg(long, value_name = "M")]
     zoom: Option<usize>,
     /// High-resolution decimation factor (default floor(fs / (2.5 lowpass))).

@@ -27,14 +27,16 @@ use crate::args::{command_line, LoadArgs, ReportArgs};
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
     /// A manifest CSV (path, bearing, velocity_mm_s, repeat[, condition, notes]),
-    /// or a folder of recordings together with --pattern.
+    /// or a folder of recordings together with --pattern. Recordings may be
+    /// CSV/TSV or MATLAB .mat (v5/v7).
     source: PathBuf,
     /// File-name pattern inside the folder: `*` matches anything, `{velocity}`,
     /// `{repeat}`, `{bearing}` capture fields (e.g. `v{velocity}_r{repeat}.csv`).
-    #[arg(long)]
+    #[arg(long, value_name = "PATTERN")]
     pattern: Option<String>,
-    /// Output folder.
-    #[arg(long)]
+    /// Output folder for records.csv, the command's tables and JSON, and the
+    /// report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Use only these bearings (repeatable).
     #[arg(long = "only-bearing", value_name = "NAME")]
@@ -43,13 +45,13 @@ pub struct CampaignArgs {
     #[arg(long = "only-velocity", value_name = "MM/S")]
     only_velocity: Vec<f64>,
     /// Butterworth low-pass of the analysis, Hz.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, value_name = "HZ")]
     lowpass: f64,
     /// Harmonics k·f_c examined.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_name = "K")]
     harmonics: usize,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     jobs: Option<usize>,
     #[command(flatten)]
     report: ReportArgs,
@@ -63,19 +65,19 @@ pub struct DiagnoseArgs {
     #[command(flatten)]
     common: CampaignArgs,
     /// Low-band edge, Hz.
-    #[arg(long, default_value_t = 25.0)]
+    #[arg(long, default_value_t = 25.0, value_name = "HZ")]
     low_band: f64,
     /// Low-band power over the batch median that makes a bearing bad.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_name = "X")]
     bad_ratio: f64,
     /// Low-band power over the batch median that makes a bearing suspect.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_name = "X")]
     suspect_ratio: f64,
     /// A sticking spike stands this many robust σ above the friction baseline.
-    #[arg(long, default_value_t = 8.0)]
+    #[arg(long, default_value_t = 8.0, value_name = "X")]
     spike_factor: f64,
     /// Spikes per record (at ball-pass multiples) that make a bearing bad.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_name = "N")]
     bad_spikes: f64,
 }
 

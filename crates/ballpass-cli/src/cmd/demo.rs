@@ -13,8 +13,8 @@ use clap::Args;
 /// Arguments of `ballpass demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
-    /// Output folder.
-    #[arg(long, default_value = "ballpass-demo")]
+    /// Output folder for the report and every part's tables.
+    #[arg(long, short = 'o', default_value = "ballpass-demo", value_name = "DIR")]
     out: PathBuf,
     /// Campaign seed of the simulation.
     #[arg(long, default_value_t = DemoSettings::default().seed)]

@@ -1,7 +1,7 @@
 //! `ballpass simulate` and `ballpass simulate-campaign`: recordings from the
 //! built-in testbed simulator, each with its truth file beside it.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -41,8 +41,9 @@ pub enum StartArg {
 /// overrides the settings file (if any), which overrides the defaults.
 #[derive(Debug, Clone, Args)]
 pub struct SimFlags {
-    /// Settings file (JSON): a `SimSettings` object, or a truth file whose
-    /// `settings` are reused. Flags given as well override it.
+    /// Settings file (JSON): the simulator's settings, as in the `settings` of
+    /// a truth file (or a whole truth file, whose settings are reused). Flags
+    /// given as well override it.
     #[arg(long, value_name = "FILE")]
     settings: Option<PathBuf>,
     /// Recorded duration, s [default: 30].
@@ -159,7 +160,8 @@ pub struct SimulateArgs {
         long,
         short = 'v',
         required_unless_present = "settings",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_name = "MM/S"
     )]
     velocity: Option<f64>,
     /// Bearing from the catalog [default: sr25w].
@@ -171,8 +173,14 @@ pub struct SimulateArgs {
     /// Random seed; the same seed gives the same bytes [default: 0].
     #[arg(long)]
     seed: Option<u64>,
-    /// Output recording (`.csv`); the truth goes beside it as `NAME.truth.json`.
-    #[arg(long, short = 'o', value_name = "FILE")]
+    /// Output recording (`.csv` or `.mat`); the truth goes beside it as
+    /// `NAME.truth.json`.
+    #[arg(
+        long = "out",
+        short = 'o',
+        visible_alias = "output",
+        value_name = "FILE"
+    )]
     output: PathBuf,
     #[command(flatten)]
     flags: SimFlags,
@@ -255,7 +263,7 @@ fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
     /// Output folder (created if missing): recordings, truth files and `manifest.csv`.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Campaign seed; each record's seed is derived from it and the record's index.
     #[arg(long, default_value_t = 0)]
@@ -277,12 +285,27 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
         std::fs::create_dir_all(&d)
             .with_context(|| format!("cannot create folder {}", d.display()))?;
     }
+    // A progress bar on a terminal (the campaign takes a while), nothing
+    // when stderr is a file or a pipe.
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(plan.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} recordings  {elapsed}  eta {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
     let work = || -> Result<()> {
         plan.par_iter().try_for_each(|e| -> Result<()> {
             let path = a.out.join(format!("{}.csv", e.path));
             let sim =
                 sim::simulate(&e.settings).with_context(|| format!("simulating {}", e.path))?;
             write_pair(&sim, &path)?;
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
             Ok(())
         })
     };
@@ -294,6 +317,9 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
             .context("cannot start worker threads")?
             .install(work)?,
         None => work()?,
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
     }
     let mut manifest = String::from("path,bearing,velocity_mm_s,repeat,condition\n");
     for e in &plan {

@@ -173,7 +173,10 @@ pub fn sections(
             .collect();
         let mut fig = kinds::time_series_stack(
             &id("signals"),
-            &format!("Signals of {}", rec.source_name()),
+            &format!(
+                "Signals of {}",
+                crate::report::passage::short_name(&rec.source_name())
+            ),
             &t,
             &traces,
         )

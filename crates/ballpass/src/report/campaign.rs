@@ -67,7 +67,7 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<Repo
     };
     for r in &sweep.velocities {
         table = table.with_row([
-            fmt_sig(r.velocity_mm_s, 3),
+            format!("{}", r.velocity_mm_s),
             r.records.to_string(),
             fmt_sig(r.f_c_predicted_hz, 5),
             ms(r.f_c_measured_hz, 5),
@@ -78,7 +78,15 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<Repo
         ]);
     }
     let mut section = Section::new("Velocity sweep")
-        .with(Block::Paragraph(sweep.findings.join(". ") + "."))
+        .with(Block::Paragraph(
+            sweep
+                .findings
+                .iter()
+                .map(|f| capitalised(f))
+                .collect::<Vec<_>>()
+                .join(". ")
+                + ".",
+        ))
         .with(Block::Table(table))
         .with(Block::Paragraph(
             "Each value is the mean over the repeats at that velocity ± their sample standard \
@@ -274,6 +282,15 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<Repo
     Ok(parts)
 }
 
+/// A sentence with its first letter in capitals.
+fn capitalised(s: &str) -> String {
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().chain(c).collect(),
+        None => String::new(),
+    }
+}
+
 /// "the velocity-error std (Figure 1), τc and τp (Figure 2), ..." from the
 /// figures' ids.
 fn figure_list(figures: &[Figure], refs: &[String]) -> String {
@@ -440,8 +457,26 @@ pub fn diagnosis_parts(
             .collect();
         let spectra_csv = format!("{tables_dir}friction_spectra.csv");
         let y = Axis::log("Friction PSD", "N²/Hz");
+        // up to 1.5 times the highest frequency where a spectrum still
+        // stands above the axis' floor (the low-passed spectra fall below
+        // it within a few times the cut-off)
         let first = d.freq_hz.iter().copied().find(|f| *f > 0.0);
-        let last = d.freq_hz.last().copied();
+        let psds: Vec<&[f64]> = d.friction_psd.iter().map(Vec::as_slice).collect();
+        let floor =
+            kinds::log_range(&d.freq_hz, &psds, None, kinds::LOG_DECADES_FILTERED).map(|r| r.0);
+        let last = floor.and_then(|lo| {
+            d.freq_hz
+                .iter()
+                .enumerate()
+                .rfind(|(i, _)| psds.iter().any(|p| p.get(*i).is_some_and(|v| *v >= lo)))
+                .map(|(_, f)| *f)
+        });
+        let nyquist = d.freq_hz.last().copied();
+        let last = match (last, nyquist) {
+            (Some(l), Some(n)) => Some((1.5 * l).min(n)),
+            (None, n) => n,
+            (l, None) => l,
+        };
         let x_full = match (first, last) {
             (Some(a), Some(b)) if b > a => Axis::log("Frequency", "Hz").with_range(a, b),
             _ => Axis::log("Frequency", "Hz"),
@@ -462,9 +497,10 @@ pub fn diagnosis_parts(
                 },
             )
             .with_caption(format!(
-                "Full range on log–log axes; the signals are low-passed as analysed, so the \
-                 spectra fall off above the low-pass and are cut {} decades below their peak. \
-                 Bad in red, suspect in orange; dashed lines at k·f_c.",
+                "On log–log axes; the signals are low-passed as analysed, so the spectra fall \
+                 off above the low-pass: they are shown down to {} decades below their peak \
+                 and up to 1.5 times the frequency where they reach that floor. Bad in red, \
+                 suspect in orange; dashed lines at k·f_c.",
                 kinds::LOG_DECADES_FILTERED
             ))
             .with_data(

@@ -208,10 +208,11 @@ fn draw<DB: DrawingBackend>(
     } else {
         let (top, rest) = root.split_vertically((TITLE_PX * s) as u32);
         let (w, h) = top.dim_in_pixel();
+        let (title, em) = fit_text(&p.title, FIGURE_TITLE_PX * s, f64::from(w) - 24.0 * s, s);
         top.draw(&Text::new(
-            p.title.clone(),
+            title,
             ((w / 2) as i32, (h / 2) as i32 + (3.0 * s) as i32),
-            font(FIGURE_TITLE_PX * s).pos(Pos::new(HPos::Center, VPos::Center)),
+            font(em).pos(Pos::new(HPos::Center, VPos::Center)),
         ))?;
         rest
     };
@@ -221,6 +222,31 @@ fn draw<DB: DrawingBackend>(
         geometry.push(draw_panel(area, panel, s, bitmap)?);
     }
     Ok(geometry)
+}
+
+/// A title that fits `max_px`: drawn smaller down to 13 px, then cut in the
+/// middle with an ellipsis (a long file path keeps its start and its name).
+fn fit_text(text: &str, em: f64, max_px: f64, s: f64) -> (String, f64) {
+    let w = text::text_width(text, em);
+    if w <= max_px {
+        return (text.to_string(), em);
+    }
+    let small = (em * max_px / w).max(13.0 * s).min(em);
+    if text::text_width(text, small) <= max_px {
+        return (text.to_string(), small);
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let mut keep = chars.len();
+    while keep > 2 {
+        keep -= 1;
+        let head: String = chars[..keep / 2].iter().collect();
+        let tail: String = chars[chars.len() - (keep - keep / 2)..].iter().collect();
+        let t = format!("{head}…{tail}");
+        if text::text_width(&t, small) <= max_px {
+            return (t, small);
+        }
+    }
+    ("…".into(), small)
 }
 
 /// One legend entry laid out: which series, and its width in px.
@@ -364,10 +390,11 @@ fn draw_panel<DB: DrawingBackend>(
     if !p.title.is_empty() {
         let (top, below) = rest.split_vertically((PANEL_TITLE_STRIP * s) as u32);
         let (_, h) = top.dim_in_pixel();
+        let (title, em) = fit_text(&p.title, PANEL_TITLE_PX * s, plot_x1 - plot_x0, s);
         top.draw(&Text::new(
-            p.title.clone(),
+            title,
             (((plot_x0 + plot_x1) / 2.0) as i32, (h as f64 * 0.6) as i32),
-            font(PANEL_TITLE_PX * s).pos(Pos::new(HPos::Center, VPos::Center)),
+            font(em).pos(Pos::new(HPos::Center, VPos::Center)),
         ))?;
         rest = below;
     }
@@ -701,6 +728,21 @@ mod tests {
         for gone in ["2f_c", "3f_c"] {
             assert!(!t.contains(&gone.to_string()), "{gone} in {t:?}");
         }
+    }
+
+    /// Regression: long titles (a full file path) ran off the figure. They
+    /// are drawn smaller, then cut in the middle.
+    #[test]
+    fn long_titles_fit_the_figure() {
+        let long = format!(
+            "{}/v09_r1.csv: optical signal",
+            "/a/very/long/folder".repeat(8)
+        );
+        let (t, em) = fit_text(&long, 20.0, 850.0, 1.0);
+        assert!(text::text_width(&t, em) <= 850.0);
+        assert!(t.contains('…') && t.ends_with("optical signal"), "{t}");
+        let (t, em) = fit_text("short", 20.0, 850.0, 1.0);
+        assert_eq!((t.as_str(), em), ("short", 20.0));
     }
 
     /// A marker label near the right edge is drawn left of its line, inside

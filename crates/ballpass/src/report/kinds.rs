@@ -145,14 +145,19 @@ pub fn spectrum_panel_loglog(
     y: Axis,
     view: SpectrumView,
 ) -> Panel {
+    // the 0 Hz bin has no place on a log axis: left out, not a drawing note
+    let (f, v): (Vec<f64>, Vec<f64>) = f_hz
+        .iter()
+        .zip(p)
+        .filter(|(f, _)| **f > 0.0)
+        .map(|(f, v)| (*f, *v))
+        .unzip();
     let x = Axis::log("Frequency", "Hz");
-    let first = f_hz.iter().copied().find(|f| *f > 0.0);
-    let last = f_hz.last().copied();
-    let x = match (first, last) {
-        (Some(a), Some(b)) if b > a => x.with_range(a, b),
+    let x = match (f.first(), f.last()) {
+        (Some(&a), Some(&b)) if b > a => x.with_range(a, b),
         _ => x,
     };
-    spectrum_panel_on(x, f_hz, p, name, y, view)
+    spectrum_panel_on(x, &f, &v, name, y, view)
 }
 
 fn spectrum_panel_on(
@@ -257,9 +262,16 @@ pub fn overlay_spectra(
             y = y.with_range(lo, hi);
         }
     }
+    let log_x = x.scale == super::Scale::Log;
     let mut panel = Panel::new(x, y);
     for o in spectra {
-        let mut s = Series::line(o.name, f_hz.to_vec(), o.values.to_vec()).with_color(o.color);
+        let (f, v): (Vec<f64>, Vec<f64>) = f_hz
+            .iter()
+            .zip(o.values)
+            .filter(|(f, _)| !log_x || **f > 0.0)
+            .map(|(f, v)| (*f, *v))
+            .unzip();
+        let mut s = Series::line(o.name, f, v).with_color(o.color);
         if o.highlight {
             s = s.highlighted();
         }
@@ -450,30 +462,36 @@ pub fn fmt_pm(value: f64, uncertainty: f64, sig: usize) -> String {
     if !(uncertainty.is_finite() && uncertainty > 0.0 && value.is_finite()) {
         return format!("{} ± {}", fmt_sig(value, sig), fmt_sig(uncertainty, 2));
     }
-    let mag = uncertainty.log10().floor() as i32;
-    let decimals = 1 - mag;
-    if decimals >= 0 && (-4..6).contains(&mag) && value.abs() < 1e6 {
-        let d = decimals as usize;
-        let v = format!("{value:.d$}");
-        let u = format!("{uncertainty:.d$}");
-        // a rounded uncertainty of 0.10 → keep two digits: 0.10
-        format!("{} ± {}", minus(&v), u)
-    } else if decimals < 0 && value.abs() < 1e6 && mag < 6 {
+    let mag_u = uncertainty.log10().floor() as i32;
+    let mag_v = if value == 0.0 {
+        mag_u
+    } else {
+        value.abs().log10().floor() as i32
+    };
+    if (-4..6).contains(&mag_v) {
+        let decimals = 1 - mag_u;
+        if decimals >= 0 {
+            let d = decimals.min(15) as usize;
+            return format!("{} ± {uncertainty:.d$}", minus(&format!("{value:.d$}")));
+        }
+        // an uncertainty of tens or more: round both to its second digit
         let q = 10f64.powi(-decimals);
-        format!(
+        return format!(
             "{} ± {:.0}",
             minus(&format!("{:.0}", (value / q).round() * q)),
             (uncertainty / q).round() * q
-        )
-    } else {
-        // scientific: both with the uncertainty's exponent
-        let e = 10f64.powi(mag);
-        format!(
-            "({} ± {:.1})e{mag}",
-            minus(&format!("{:.1}", value / e)),
-            uncertainty / e
-        )
+        );
     }
+    // very large or small values: the value's power of ten outside,
+    // the uncertainty still to two significant digits
+    let e = 10f64.powi(mag_v);
+    let d = (mag_v - mag_u + 1).clamp(0, 15) as usize;
+    format!(
+        "({} ± {:.d$})e{}",
+        minus(&format!("{:.d$}", value / e)),
+        uncertainty / e,
+        minus(&mag_v.to_string())
+    )
 }
 
 /// Text with a typographic minus sign.
@@ -515,7 +533,9 @@ mod tests {
         assert_eq!(fmt_pm(4.05598, 0.00071, 5), "4.05598 ± 0.00071");
         assert_eq!(fmt_pm(1234.0, 56.0, 3), "1234 ± 56");
         assert_eq!(fmt_pm(12345.0, 678.0, 3), "12350 ± 680");
-        assert_eq!(fmt_pm(3.2e-7, 4.5e-8, 3), "(32.0 ± 4.5)e-8");
+        assert_eq!(fmt_pm(3.2e-7, 4.5e-8, 3), "(3.20 ± 0.45)e−7");
+        // a tiny uncertainty on an ordinary value stays in plain decimals
+        assert_eq!(fmt_pm(1.232887, 0.0000391, 5), "1.232887 ± 0.000039");
         assert_eq!(fmt_pm(0.9, 0.0, 3), "0.900 ± 0");
     }
 

@@ -62,13 +62,21 @@ fn rich(text: &str, numbers: &HashMap<&str, usize>) -> String {
     no_break_numbers(&out)
 }
 
-/// `a ± b` and `12.3 µm/s` kept on one line.
+/// `a ± b` and `12.3 µm/s` kept on one line, and a hyphen before a number
+/// (after a space, `(` or at the start) written as a minus sign.
 fn no_break_numbers(s: &str) -> String {
     let chars: Vec<char> = s.chars().collect();
     let mut out = String::with_capacity(s.len() + 16);
     for (i, &c) in chars.iter().enumerate() {
         let prev = i.checked_sub(1).map(|j| chars[j]);
         let next = chars.get(i + 1).copied();
+        if c == '-'
+            && next.is_some_and(|n| n.is_ascii_digit())
+            && prev.is_none_or(|p| p == ' ' || p == '(' || p == '[')
+        {
+            out.push('−');
+            continue;
+        }
         let joins = c == ' '
             && (next == Some('±')
                 || prev == Some('±')
@@ -101,6 +109,7 @@ th, td { border: 1px solid var(--line); padding: .25rem .6rem; text-align: left;
 th { background: var(--bg2); }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 table.kv th { font-weight: normal; color: var(--muted); }
+table.kv td.num { text-align: left; }
 ul.verdicts { list-style: none; padding: 0; }
 ul.verdicts li { margin: .3rem 0; }
 .badge { display: inline-block; min-width: 3.6em; text-align: center; font-weight: bold; font-size: .8rem;
@@ -480,6 +489,15 @@ mod tests {
         assert_eq!(
             rich("99.5 ± 4.1 µm/s over 5 records", &n),
             "99.5&nbsp;±&nbsp;4.1&nbsp;µm/s over 5&nbsp;records"
+        );
+    }
+
+    #[test]
+    fn minus_signs_are_typographic() {
+        let n = HashMap::new();
+        assert_eq!(
+            rich("phase -165° (-0.1 dB), 1e-5", &n),
+            "phase −165° (−0.1&nbsp;dB), 1e-5"
         );
     }
 

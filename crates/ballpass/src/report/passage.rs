@@ -13,12 +13,21 @@ use crate::recording::{Channel, Recording};
 /// Ball-pass periods of signal shown with the fitted models overlaid.
 pub const MODEL_WINDOW_PERIODS: f64 = 6.0;
 
+/// The name a report shows for a record: its file name without the folders
+/// (the full path is in the command line and the data links).
+pub(crate) fn short_name(source: &str) -> String {
+    std::path::Path::new(source)
+        .file_name()
+        .map_or_else(|| source.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
 /// One record's figures: `optical_<k>`, `pulses_<k>` (when fitted) and
 /// `widths_<k>`, `k` being the record's 1-based number in the report.
 ///
 /// # Errors
 /// [`crate::Error::MissingChannel`] when `rec` has no optical channel.
 pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result<Vec<Figure>> {
+    let name = short_name(&a.source);
     let x = rec.require(Channel::Optical, "the passage report")?;
     let fs = rec.fs_hz();
     let t0 = rec.meta.start_time_s;
@@ -63,7 +72,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
     figs.push(
         Figure::new(
             format!("optical_{k}"),
-            format!("{}: optical signal and the passages found", a.source),
+            format!("{name}: optical signal and the passages found"),
         )
         .with_caption(format!(
             "{} passages ({} inverted); dots at each passage's centre and height; prominence threshold {} V, noise {} V.",
@@ -115,7 +124,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
             }
             let fig = pulses_with_models(
                 &format!("pulses_{k}"),
-                &format!("{}: pulses and the fitted pulse trains", a.source),
+                &format!("{name}: pulses and the fitted pulse trains"),
                 &tw,
                 &yw,
                 Axis::linear("Optical − baseline", "V"),
@@ -173,7 +182,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
         )]);
     let mut fig = Figure::new(
         format!("widths_{k}"),
-        format!("{}: period τc and width τp per passage", a.source),
+        format!("{name}: period τc and width τp per passage"),
     )
     .with_caption(format!(
         "τc: time to the next passage; τp: width at half prominence. τp/τc = {} ± {} (thesis 0.155).",
@@ -301,8 +310,9 @@ pub fn passage_sections(a: &PassageAnalysis) -> Vec<Section> {
             ),
         ));
     }
-    let mut sections =
-        vec![Section::new(format!("{}: passages", a.source)).with(Block::KeyValues(kv))];
+    let mut sections = vec![
+        Section::new(format!("{}: passages", short_name(&a.source))).with(Block::KeyValues(kv))
+    ];
 
     let mut table = Table::new(["quantity", "predicted", "measured", "difference"]);
     let f_pred = a

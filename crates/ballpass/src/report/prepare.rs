@@ -321,10 +321,12 @@ fn prepare_panel(
         .map(|s| to_axis_series(s, panel, what, warnings))
         .collect::<Result<_>>()?;
 
+    // points (and error bars) at the ends of the axis get a margin, so they
+    // do not sit on the frame; pure line plots run edge to edge
     let point_like = panel
         .series
         .iter()
-        .all(|s| !matches!(s.style, SeriesStyle::Line | SeriesStyle::DashedLine));
+        .any(|s| !matches!(s.style, SeriesStyle::Line | SeriesStyle::DashedLine));
     let (x_lo, x_hi) = match x_range {
         Some(r) => r,
         None => {
