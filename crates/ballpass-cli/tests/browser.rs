@@ -426,7 +426,20 @@ fn zoom_pan_and_readout_work_with_the_mouse() {
     let (_, after) = plot_area(&mut b, "corr_friction", 1);
     assert_eq!(before, after);
 
-    let shot = b.screenshot(None);
+    // the zoomed figure, with the readout, for a person to look at
+    let ([l, t, w, h], _) = plot_area(&mut b, "corr_friction", 1);
+    b.mouse("mouseMoved", l + 0.3 * w, t + h / 2.0, json!({}));
+    let r = b.eval(
+        "(() => { const r = document.getElementById('fig-corr_friction').getBoundingClientRect(); \
+         return [r.left + window.scrollX, r.top + window.scrollY, r.width, r.height]; })()",
+    );
+    let r: Vec<f64> = r
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let shot = b.screenshot(Some((r[0], r[1], r[2], r[3])));
     std::fs::write(d.dir.parent().unwrap().join("zoomed.png"), shot).unwrap();
     let problems = b.problems();
     assert!(problems.is_empty(), "page errors: {problems:#?}");

@@ -37,6 +37,16 @@ fn run() -> &'static Run {
     })
 }
 
+/// The figure of the demo's report with this id.
+fn figure(r: &'static Run, id: &str) -> &'static ballpass::report::Figure {
+    r.demo
+        .report
+        .all_figures()
+        .into_iter()
+        .find(|f| f.id == id)
+        .unwrap_or_else(|| panic!("no figure {id}"))
+}
+
 /// The page without its scripts, settings tables, code spans and the data
 /// links under the figures (which name files and columns on purpose).
 fn visible_text(html: &str) -> String {
@@ -221,13 +231,7 @@ fn one_plus_minus_notation() {
 #[test]
 fn bad_is_red_in_the_fleet_and_in_the_headline() {
     let r = run();
-    let fig = r
-        .demo
-        .report
-        .all_figures()
-        .into_iter()
-        .find(|f| f.id == "diagnose_fleet_spectra")
-        .unwrap();
+    let fig = figure(r, "diagnose_fleet_spectra");
     let series = &fig.panels[0].series;
     assert_eq!(series.len(), 5);
     for s in series {
@@ -257,13 +261,7 @@ fn bad_is_red_in_the_fleet_and_in_the_headline() {
 #[test]
 fn full_range_spectra_are_unfiltered_on_log_axes_with_a_floor() {
     let r = run();
-    let fig = r
-        .demo
-        .report
-        .all_figures()
-        .into_iter()
-        .find(|f| f.id == "spectra")
-        .unwrap();
+    let fig = figure(r, "spectra");
     let u = &r.demo.analysis.spectra_unfiltered;
     assert_eq!(fig.panels.len(), 3);
     for (p, (_, psd)) in fig.panels.iter().zip(&u.auto) {
@@ -302,13 +300,7 @@ fn full_range_spectra_are_unfiltered_on_log_axes_with_a_floor() {
 #[test]
 fn the_difference_phase_panel_shows_the_error_against_j_omega() {
     let r = run();
-    let fig = r
-        .demo
-        .report
-        .all_figures()
-        .into_iter()
-        .find(|f| f.id == "difference")
-        .unwrap();
+    let fig = figure(r, "difference");
     let phase = &fig.panels[1];
     assert!(phase.title.contains("phase error"));
     let (centred, forward) = (&phase.series[0], &phase.series[1]);
@@ -356,13 +348,7 @@ fn interactive_figures_are_embedded_and_nothing_is_fetched() {
         "spectra_hires",
         "diagnose_fleet_spectra",
     ] {
-        let f = r
-            .demo
-            .report
-            .all_figures()
-            .into_iter()
-            .find(|f| f.id == id)
-            .unwrap();
+        let f = figure(r, id);
         assert!(f.interactive, "{id}");
     }
     let lower = r.html.to_lowercase();

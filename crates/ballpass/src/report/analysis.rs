@@ -370,95 +370,38 @@ pub fn sections(
             fmt_sig(f_c, 5)
         )
     };
-    if !u.auto.is_empty() {
-        let mut fig = Figure::new(id("spectra"), "Auto-spectra, full range, unfiltered")
-            .with_caption(info(u))
-            .with_data(table("spectra_unfiltered.csv"), "freq_hz, psd_*");
-        for (sig, psd) in &u.auto {
-            fig = fig.with_panel(
-                kinds::spectrum_panel_loglog(
-                    &u.freq_hz,
-                    psd,
-                    sig.words(),
-                    Axis::log(format!("PSD of {}", sig.words()), unit2(*sig)),
-                    view_full,
-                )
-                .titled(sig.words()),
-            );
-        }
-        spectra = spectra.with_figure(fig.interactive());
-    }
-    if !u.cross.is_empty() {
-        let mut fig = Figure::new(
+    let full = SpectrumFigure {
+        spectra: u,
+        view: view_full,
+        log_frequency: true,
+        caption: info(u),
+        table: table("spectra_unfiltered.csv"),
+    };
+    let hires = SpectrumFigure {
+        spectra: h,
+        view: view_hires,
+        log_frequency: false,
+        caption: format!("{}, {lp}. {}", h.info.method, info(h)),
+        table: table("spectra_hires.csv"),
+    };
+    for fig in [
+        full.auto(id("spectra"), "Auto-spectra, full range, unfiltered"),
+        full.cross(
             id("cross_spectra"),
             "Cross-spectra magnitude, full range, unfiltered",
-        )
-        .with_caption(info(u))
-        .with_data(
-            table("spectra_unfiltered.csv"),
-            "freq_hz, csd_*_re, csd_*_im",
-        );
-        for cr in &u.cross {
-            let mag: Vec<f64> = cr.pxy.iter().map(|z| z.norm()).collect();
-            fig = fig.with_panel(
-                kinds::spectrum_panel_loglog(
-                    &u.freq_hz,
-                    &mag,
-                    &pair_words(cr.x, cr.y),
-                    Axis::log("|CSD|", format!("{}/Hz", product_unit(cr.x, cr.y))),
-                    view_full,
-                )
-                .titled(pair_words(cr.x, cr.y)),
-            );
-        }
-        spectra = spectra.with_figure(fig.interactive());
-    }
-    if !h.auto.is_empty() {
-        let mut fig = Figure::new(id("spectra_hires"), "Auto-spectra, high resolution")
-            .with_caption(format!("{}, {lp}. {}", h.info.method, info(h)))
-            .with_data(
-                table("spectra_hires.csv"),
-                h.auto
-                    .iter()
-                    .map(|(s, _)| psd_column(*s))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            );
-        for (sig, psd) in &h.auto {
-            fig = fig.with_panel(
-                kinds::spectrum_panel(
-                    &h.freq_hz,
-                    psd,
-                    sig.words(),
-                    Axis::log(format!("PSD of {}", sig.words()), unit2(*sig)),
-                    view_hires,
-                )
-                .titled(sig.words()),
-            );
-        }
-        spectra = spectra.with_figure(fig.interactive());
-    }
-    if !h.cross.is_empty() {
-        let mut fig = Figure::new(
+        ),
+        hires.auto(id("spectra_hires"), "Auto-spectra, high resolution"),
+        hires.cross(
             id("cross_spectra_hires"),
             "Cross-spectra magnitude, high resolution",
-        )
-        .with_caption(format!("{}, {lp}. {}", h.info.method, info(h)))
-        .with_data(table("spectra_hires.csv"), "freq_hz, csd_*_re, csd_*_im");
-        for cr in &h.cross {
-            let mag: Vec<f64> = cr.pxy.iter().map(|z| z.norm()).collect();
-            fig = fig.with_panel(
-                kinds::spectrum_panel(
-                    &h.freq_hz,
-                    &mag,
-                    &pair_words(cr.x, cr.y),
-                    Axis::log("|CSD|", format!("{}/Hz", product_unit(cr.x, cr.y))),
-                    view_hires,
-                )
-                .titled(pair_words(cr.x, cr.y)),
-            );
-        }
-        spectra = spectra.with_figure(fig.interactive());
+        ),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        spectra = spectra.with_figure(fig);
+    }
+    if !h.cross.is_empty() {
         let mut fig = Figure::new(id("coherence"), "Coherence, high resolution")
             .with_caption(format!(
                 "Magnitude-squared coherence |Pxy|²/(Pxx·Pyy) of the averaged spectra; {}",
@@ -498,6 +441,71 @@ pub fn sections(
     )));
     out.push(settings);
     Ok(out)
+}
+
+/// The auto- and cross-spectrum figures of one [`crate::analysis::Spectra`].
+struct SpectrumFigure<'a> {
+    spectra: &'a crate::analysis::Spectra,
+    view: SpectrumView,
+    /// Log–log axes over the full range (else linear frequency).
+    log_frequency: bool,
+    caption: String,
+    table: String,
+}
+
+impl SpectrumFigure<'_> {
+    fn panel(&self, values: &[f64], name: &str, y: Axis) -> crate::report::Panel {
+        let f = &self.spectra.freq_hz;
+        if self.log_frequency {
+            kinds::spectrum_panel_loglog(f, values, name, y, self.view)
+        } else {
+            kinds::spectrum_panel(f, values, name, y, self.view)
+        }
+        .titled(name)
+    }
+
+    /// One panel per auto-spectrum; `None` without any.
+    fn auto(&self, id: String, title: &str) -> Option<Figure> {
+        let s = self.spectra;
+        if s.auto.is_empty() {
+            return None;
+        }
+        let columns: Vec<String> = s.auto.iter().map(|(x, _)| psd_column(*x)).collect();
+        let mut fig = Figure::new(id, title)
+            .with_caption(self.caption.clone())
+            .with_data(
+                self.table.clone(),
+                format!("freq_hz, {}", columns.join(", ")),
+            );
+        for (sig, psd) in &s.auto {
+            fig = fig.with_panel(self.panel(
+                psd,
+                sig.words(),
+                Axis::log(format!("PSD of {}", sig.words()), unit2(*sig)),
+            ));
+        }
+        Some(fig.interactive())
+    }
+
+    /// One panel per cross pair, the magnitude |P_xy|; `None` without any.
+    fn cross(&self, id: String, title: &str) -> Option<Figure> {
+        let s = self.spectra;
+        if s.cross.is_empty() {
+            return None;
+        }
+        let mut fig = Figure::new(id, title)
+            .with_caption(self.caption.clone())
+            .with_data(self.table.clone(), "freq_hz, csd_*_re, csd_*_im");
+        for cr in &s.cross {
+            let mag: Vec<f64> = cr.pxy.iter().map(|z| z.norm()).collect();
+            fig = fig.with_panel(self.panel(
+                &mag,
+                &pair_words(cr.x, cr.y),
+                Axis::log("|CSD|", format!("{}/Hz", product_unit(cr.x, cr.y))),
+            ));
+        }
+        Some(fig.interactive())
+    }
 }
 
 fn fmt_percent(p: f64) -> String {

@@ -585,8 +585,16 @@ pub fn diagnosis_parts(
     section = section
         .with(Block::Table(table))
         .with(Block::Paragraph(format!(
-            "Every number per bearing is in {tables_dir}diagnosis.csv and per record in \
-         {tables_dir}records.csv."
+            "A sticking spike stands more than {} robust σ above the friction's slowly \
+             varying baseline; the robust σ is 1.4826 × the median absolute deviation of the \
+             friction about that baseline: the ordinary noise level, which rare spikes do not \
+             inflate. \"Spikes at ball-pass multiples\" is the fraction of intervals between \
+             spikes within ±{} τc of a whole number of periods (random spikes give about {}). \
+             Every number per bearing is in {tables_dir}diagnosis.csv and per record in \
+             {tables_dir}records.csv.",
+            fmt_sig(d.settings.sticking.spike_factor, 3),
+            fmt_sig(d.settings.sticking.timing_tolerance_periods, 2),
+            fmt_sig(2.0 * d.settings.sticking.timing_tolerance_periods, 2),
         )));
     if !d.warnings.is_empty() {
         section = section.with(Block::Warnings(d.warnings.clone()));
