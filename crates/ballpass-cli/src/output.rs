@@ -34,3 +34,19 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     bytes.push(b'\n');
     Ok(write_atomic(path, &bytes)?)
 }
+
+/// A progress bar over `len` items named `what` on a terminal; `None` when
+/// stderr is a file or a pipe (logs stay clean).
+pub fn progress(len: usize, what: &str) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(len as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(&format!(
+                "{{bar:40}} {{pos}}/{{len}} {what}  {{elapsed}}  eta {{eta}}"
+            ))
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    })
+}

@@ -1,7 +1,7 @@
 //! `ballpass simulate` and `ballpass simulate-campaign`: recordings from the
 //! built-in testbed simulator, each with its truth file beside it.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -287,16 +287,7 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
     }
     // A progress bar on a terminal (the campaign takes a while), nothing
     // when stderr is a file or a pipe.
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(plan.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} recordings  {elapsed}  eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = crate::output::progress(plan.len(), "recordings");
     let work = || -> Result<()> {
         plan.par_iter().try_for_each(|e| -> Result<()> {
             let path = a.out.join(format!("{}.csv", e.path));
