@@ -282,11 +282,13 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<Repo
     Ok(parts)
 }
 
-/// A sentence with its first letter in capitals.
+/// A sentence with its first letter in capitals, unless it starts with a
+/// symbol (τc stays τc, not Τc).
 fn capitalised(s: &str) -> String {
     let mut c = s.chars();
     match c.next() {
-        Some(f) => f.to_uppercase().chain(c).collect(),
+        Some(f) if f.is_ascii_lowercase() => f.to_uppercase().chain(c).collect(),
+        Some(f) => std::iter::once(f).chain(c).collect(),
         None => String::new(),
     }
 }
@@ -607,4 +609,18 @@ pub fn diagnosis_parts(
         .sections
         .push(Section::new("Diagnosis thresholds").with(Block::settings(&d.settings)?));
     Ok(parts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::capitalised;
+
+    /// Findings start with a capital, but a symbol keeps its case (a
+    /// capital τ reads as a T).
+    #[test]
+    fn sentences_are_capitalised_but_not_symbols() {
+        assert_eq!(capitalised("the velocity error"), "The velocity error");
+        assert_eq!(capitalised("τc ∝ v^(−1)"), "τc ∝ v^(−1)");
+        assert_eq!(capitalised(""), "");
+    }
 }

@@ -104,7 +104,8 @@ h3 { font-size: 1.1rem; margin: 1.6rem 0 .4rem; }
 h4 { font-size: 1rem; margin: 1.2rem 0 .4rem; }
 .meta { color: var(--muted); margin: 0; font-size: .9rem; }
 code { background: var(--bg2); padding: .05rem .3rem; border-radius: 3px; overflow-wrap: anywhere; }
-table { border-collapse: collapse; margin: .5rem 0 1rem; font-size: .92rem; }
+table { border-collapse: collapse; margin: .5rem 0 1rem; font-size: .9rem; }
+.scroll { overflow-x: auto; max-width: 100%; }
 th, td { border: 1px solid var(--line); padding: .25rem .6rem; text-align: left; vertical-align: top; }
 th { background: var(--bg2); }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
@@ -133,7 +134,7 @@ figcaption .files { color: var(--muted); display: block; margin-top: .2rem; }
 .bp-hint { margin-left: .5rem; }
 .note { color: #9a6700; font-size: .88rem; }
 footer { color: var(--muted); font-size: .85rem; border-top: 1px solid var(--line); margin-top: 2rem; padding-top: .5rem; }
-@media print { .bp-tools, nav.toc { display: none; } }
+@media print { .bp-tools, nav.toc { display: none; } .scroll { overflow: visible; } }
 "#;
 
 /// Whether a cell looks like a number (right-aligned, not wrapped).
@@ -419,7 +420,9 @@ fn block(w: &mut Writer<'_>, block: &Block) -> Result<()> {
             w.h.push_str("</table>\n");
         }
         Block::Table(t) => {
-            w.h.push_str("<table>\n<thead><tr>");
+            // a wide table (numbers are not wrapped) scrolls sideways
+            // instead of running off the page
+            w.h.push_str("<div class=\"scroll\"><table>\n<thead><tr>");
             for c in &t.headers {
                 let _ = write!(w.h, "<th scope=\"col\">{}</th>", e(c));
             }
@@ -432,7 +435,7 @@ fn block(w: &mut Writer<'_>, block: &Block) -> Result<()> {
                 }
                 w.h.push_str("</tr>\n");
             }
-            w.h.push_str("</tbody>\n</table>\n");
+            w.h.push_str("</tbody>\n</table></div>\n");
         }
         Block::Verdicts(vs) => {
             w.h.push_str("<ul class=\"verdicts\">\n");
