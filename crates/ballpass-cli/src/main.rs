@@ -37,7 +37,7 @@ enum Command {
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
-    /// Signal and stage models of thesis chapter 6 (ERRATA-corrected) as tables.
+    /// Signal and stage models of thesis chapter 6, with its formulas corrected (docs/methods.md), as tables.
     Model(cmd::model::ModelArgs),
     /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
     Passage(cmd::passage::PassageArgs),
