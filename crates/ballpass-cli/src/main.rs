@@ -37,7 +37,7 @@ enum Command {
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
-    /// Signal and stage models of thesis chapter 6 (ERRATA-corrected) as tables.
+    /// Signal and stage models of thesis chapter 6, with its formulas corrected (docs/methods.md), as tables.
     Model(cmd::model::ModelArgs),
     /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
     Passage(cmd::passage::PassageArgs),
@@ -45,6 +45,8 @@ enum Command {
     Simulate(cmd::simulate::SimulateArgs),
     /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
     SimulateCampaign(cmd::simulate::CampaignArgs),
+    /// How far to trust each verdict on a bench: simulate many seeded records and fleets of it and measure false-alarm and detection rates.
+    Validate(Box<cmd::validate::ValidateArgs>),
 }
 
 /// Exit code after SIGINT/SIGTERM/SIGHUP (128 + SIGINT, as shells report
@@ -93,6 +95,7 @@ fn main() -> ExitCode {
         Command::Passage(a) => cmd::passage::run(&a),
         Command::Simulate(a) => cmd::simulate::run(&a),
         Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
+        Command::Validate(a) => cmd::validate::run(&a),
     };
     let result = result.and_then(|()| {
         std::io::stdout()

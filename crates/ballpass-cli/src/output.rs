@@ -82,3 +82,19 @@ impl Drop for Stdout {
         let _ = self.0.flush();
     }
 }
+
+/// A progress bar over `len` items named `what` on a terminal; `None` when
+/// stderr is a file or a pipe (logs stay clean).
+pub fn progress(len: usize, what: &str) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(len as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(&format!(
+                "{{bar:40}} {{pos}}/{{len}} {what}  {{elapsed}}  eta {{eta}}"
+            ))
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    })
+}

@@ -84,6 +84,21 @@ fn sweep_and_diagnose_run_a_campaign_and_report_a_broken_record() {
     }
     let sweep_csv = std::fs::read_to_string(d.join("sw/sweep.csv")).unwrap();
     assert_eq!(sweep_csv.lines().count(), 1 + 5, "{sweep_csv}");
+    // Regression: the report's header said "ballpass sweep" without the
+    // arguments; it carries the command line and names the source.
+    let html = std::fs::read_to_string(d.join("sw/report.html")).unwrap();
+    assert!(
+        html.contains("<title>ballpass sweep: manifest.csv</title>"),
+        "report title"
+    );
+    let code = html
+        .split("<code>")
+        .nth(1)
+        .unwrap()
+        .split("</code>")
+        .next()
+        .unwrap();
+    assert!(code.contains("sweep manifest.csv --out sw"), "{code}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("sw/sweep.json")).unwrap()).unwrap();
     // tau_c ∝ 1/v on the simulator: the fitted exponent is −1 within 1 %.
@@ -224,7 +239,15 @@ fn item13_identical_runs_write_identical_outputs() {
         assert_eq!(runs[0].len(), runs[1].len());
         for (a, b) in runs[0].iter().zip(&runs[1]) {
             assert_eq!(a.0, b.0);
-            assert!(a.1 == b.1, "{cmd}: {} differs between identical runs", a.0);
+            // The report quotes its command line, which names its own
+            // output folder: that one difference is expected.
+            let a_bytes = String::from_utf8_lossy(&a.1).replace("--out a ", "--out b ");
+            let b_bytes = String::from_utf8_lossy(&b.1).into_owned();
+            assert!(
+                a_bytes == b_bytes,
+                "{cmd}: {} differs between identical runs",
+                a.0
+            );
         }
         let json = if cmd == "sweep" {
             "sweep.json"

@@ -45,7 +45,8 @@ fn the_window_is_applied_and_stated_in_the_outputs() {
         .iter()
         .any(|n| n.as_str().unwrap().starts_with("window 2–6 s")));
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert!(html.contains("Record operations") && html.contains("2–6 s"));
+    // The report keeps a number and its unit together with a no-break space.
+    assert!(html.contains("Record operations") && html.contains("2–6&nbsp;s"));
     // inspect and passage take it too.
     let (ok, stdout, stderr) = run(&["inspect", r, "--window", "1:", "--json"]);
     assert!(ok, "{stderr}");

@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight::{self, VelocitySource};
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
@@ -45,18 +46,20 @@ enum WindowArg {
 /// Arguments of `ballpass analyze`.
 #[derive(Debug, Args)]
 pub struct AnalyzeArgs {
-    /// Recording files (CSV/TSV/MAT); several files are repeats at one
-    /// velocity and are averaged. The velocity is --velocity, else the
-    /// files' (profile, metadata), else measured from the encoder; with
-    /// --segment, each speed's plateaus are analysed into DIR/v<speed>/.
+    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7);
+    /// several files are repeats at one velocity and are averaged. The
+    /// velocity is --velocity, else the files' (profile, metadata), else
+    /// measured from the encoder; with --segment, each speed's plateaus are
+    /// analysed into DIR/v<speed>/.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
     #[command(flatten)]
     load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
-    /// spectra_hires.csv, the report and ballpass-run.json (written last:
-    /// the folder holds a complete run exactly when it is there).
-    #[arg(long, value_name = "DIR")]
+    /// spectra_hires.csv, spectra_unfiltered.csv, the report and
+    /// ballpass-run.json (written last: the folder holds a complete run
+    /// exactly when it is there).
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Seconds dropped at the start of each record (start transient) [default: 0].
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -80,13 +83,13 @@ pub struct AnalyzeArgs {
     #[arg(long, value_name = "N")]
     noverlap: Option<usize>,
     /// Welch window [default: hann] (`--window` is the time window).
-    #[arg(long = "welch-window", value_enum)]
+    #[arg(long = "welch-window", value_enum, value_name = "WINDOW")]
     welch_window: Option<WindowArg>,
     /// Correlation normalisation [default: coeff].
     #[arg(long, value_enum)]
     corr_norm: Option<CorrNormArg>,
     /// High-resolution spectrum by the thesis' zoom processing with factor M
-    /// (polyphase average; aliases, see ERRATA §10) instead of decimation.
+    /// (polyphase average; it aliases, see docs/methods.md §10) instead of decimation.
     #[arg(long, value_name = "M")]
     zoom: Option<usize>,
     /// High-resolution decimation factor (default floor(fs / (2.5 lowpass))).
@@ -104,6 +107,11 @@ pub struct AnalyzeArgs {
     /// Confidence of the significance tests [default: 0.99].
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     confidence: Option<f64>,
+    /// The quartz load cell's discharge time constant in seconds, undone
+    /// before the analysis; `auto` (default) estimates it from each record,
+    /// `off` leaves the friction as recorded (a DC-coupled sensor).
+    #[arg(long, value_name = "S|auto|off", value_parser = parse_load_cell)]
+    load_cell_tau: Option<LoadCellCorrection>,
     #[command(flatten)]
     report: ReportArgs,
     /// Print analysis.json to stdout instead of the summary.
@@ -134,6 +142,9 @@ impl AnalyzeArgs {
         }
         if let Some(v) = self.trim {
             s.trim_start_s = v;
+        }
+        if let Some(v) = self.load_cell_tau {
+            s.load_cell = v;
         }
         if self.no_lowpass {
             s.lowpass_hz = None;
@@ -340,15 +351,40 @@ impl Ctx<'_> {
         }
         analysis::write_outputs(&analysis, dir)?;
         if !a.report.no_report {
-            let report = ballpass::report::analysis::report(&analysis, checked.recordings.first())?
-                .with_command(command_line())
-                .with_section(
-                    ballpass::report::Section::new("Record operations")
-                        .with(ballpass::report::Block::KeyValues(operations)),
-                );
+            let links = ballpass::report::analysis::AnalysisLinks {
+                tables_dir: String::new(),
+                recording: checked
+                    .recordings
+                    .first()
+                    .and_then(|r| r.meta.source.as_ref())
+                    .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone()))
+                    .map(|p| p.display().to_string()),
+                id_prefix: String::new(),
+            };
+            let report =
+                ballpass::report::analysis::report(&analysis, checked.recordings.first(), &links)?
+                    .with_command(command_line())
+                    .with_section(
+                        ballpass::report::Section::new("Record operations")
+                            .with(ballpass::report::Block::KeyValues(operations)),
+                    );
             a.report.write(&report, dir)?;
         }
         Ok((analysis, checked.velocity_source))
+    }
+}
+
+/// `--load-cell-tau`: seconds, `auto` or `off`.
+fn parse_load_cell(v: &str) -> std::result::Result<LoadCellCorrection, String> {
+    match v {
+        "auto" => Ok(LoadCellCorrection::Auto),
+        "off" | "none" | "dc" => Ok(LoadCellCorrection::Off),
+        _ => match v.parse::<f64>() {
+            Ok(t) if t.is_finite() && t > 0.0 => Ok(LoadCellCorrection::TimeConstant(t)),
+            _ => Err(format!(
+                "expected a time constant in seconds (> 0), `auto` or `off`, got `{v}`"
+            )),
+        },
     }
 }
 
@@ -438,9 +474,13 @@ fn summary<W: Write>(
         writeln!(w, "  {}", ph.words)?;
     }
     if let Some(v) = &a.velocity_error {
+        let of = match v.std_spread_um_s {
+            Some(sd) => format!(" ± {sd:.1} (mean of {} records ± their spread)", v.records),
+            None => String::new(),
+        };
         writeln!(
             w,
-            "velocity error std {:.1} µm/s (low-passed {:.1}, quantisation floor {:.1})",
+            "velocity error std {:.1}{of} µm/s (low-passed {:.1}, quantisation floor {:.1})",
             v.std_um_s, v.lowpassed_std_um_s, v.quantisation_floor_um_s
         )?;
     }

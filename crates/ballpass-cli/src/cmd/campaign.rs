@@ -1,7 +1,7 @@
 //! `ballpass sweep` and `ballpass diagnose`: campaigns over many recordings.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
 
 use ballpass::outdir::OutputDir;
@@ -23,7 +23,7 @@ use ballpass::report::{Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
-use crate::args::{LoadArgs, ReportArgs};
+use crate::args::{command_line, LoadArgs, ReportArgs};
 use crate::records::CheckArgs;
 use crate::{output, text};
 
@@ -31,14 +31,16 @@ use crate::{output, text};
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
     /// A manifest CSV (path, bearing, velocity_mm_s, repeat[, condition, notes]),
-    /// or a folder of recordings together with --pattern.
+    /// or a folder of recordings together with --pattern. Recordings may be
+    /// CSV/TSV or MATLAB .mat (v5/v7).
     source: PathBuf,
     /// File-name pattern inside the folder: `*` matches anything, `{velocity}`,
     /// `{repeat}`, `{bearing}` capture fields (e.g. `v{velocity}_r{repeat}.csv`).
-    #[arg(long)]
+    #[arg(long, value_name = "PATTERN")]
     pattern: Option<String>,
-    /// Output folder.
-    #[arg(long)]
+    /// Output folder for records.csv, the command's tables and JSON, and the
+    /// report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Use only these bearings (repeatable).
     #[arg(long = "only-bearing", value_name = "NAME")]
@@ -47,13 +49,13 @@ pub struct CampaignArgs {
     #[arg(long = "only-velocity", value_name = "MM/S")]
     only_velocity: Vec<f64>,
     /// Butterworth low-pass of the analysis, Hz.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, value_name = "HZ")]
     lowpass: f64,
     /// Harmonics k·f_c examined.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_name = "K")]
     harmonics: usize,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     jobs: Option<usize>,
     #[command(flatten)]
     report: ReportArgs,
@@ -69,7 +71,7 @@ pub struct DiagnoseArgs {
     #[command(flatten)]
     common: CampaignArgs,
     /// Low-band edge, Hz.
-    #[arg(long, default_value_t = 25.0)]
+    #[arg(long, default_value_t = 25.0, value_name = "HZ")]
     low_band: f64,
     /// A ball-pass period is a sticking spike when it rises this many
     /// spreads above the bearing's typical period.
@@ -184,16 +186,7 @@ fn run(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs.unwrap_or(0))
         .build()?;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(entries.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} records  {elapsed}  eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = crate::output::progress(entries.len(), "records");
     let t0 = Instant::now();
     let outcome = pool.install(|| {
         run_batch(
@@ -310,7 +303,8 @@ fn campaign_report(
     parts: ReportParts,
     settings: &CampaignSettings,
 ) -> Result<Report> {
-    let mut report = Report::new(title).with_command(title);
+    let mut report = Report::new(format!("{title}: {}", b.manifest.source.display()))
+        .with_command(command_line());
     let mut inputs = vec![
         (
             "source".to_string(),
@@ -473,7 +467,7 @@ pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
             result: &s,
             summary: s.findings.clone(),
         },
-        || Ok(sweep_parts(&s, "")?),
+        || Ok(sweep_parts(&s, "", "")?),
     )?;
     drop(ok);
     conclude(b, html, summary)
@@ -527,7 +521,7 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         || {
             let f_c = ok.first().map(|r| r.f_c_predicted_hz);
             let examples = examples(&d, &b.entries, c)?;
-            Ok(diagnosis_parts(&d, f_c, &examples, "")?)
+            Ok(diagnosis_parts(&d, f_c, &examples, "", "")?)
         },
     )?;
     drop(ok);

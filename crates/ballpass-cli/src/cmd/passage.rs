@@ -30,16 +30,16 @@ pub struct PassageArgs {
     #[command(flatten)]
     load: LoadArgs,
     /// Smallest pulse prominence, in noise standard deviations.
-    #[arg(long, default_value_t = PassageSettings::default().min_snr)]
+    #[arg(long, default_value_t = PassageSettings::default().min_snr, value_name = "X")]
     min_snr: f64,
     /// Pulses in the Gaussian/rectangular train fits (0: no fits).
-    #[arg(long, default_value_t = PassageSettings::default().fit_pulses)]
+    #[arg(long, default_value_t = PassageSettings::default().fit_pulses, value_name = "N")]
     fit_pulses: usize,
     /// Order of the rectangular Fourier series fitted.
-    #[arg(long, default_value_t = PassageSettings::default().rectangular_order)]
+    #[arg(long, default_value_t = PassageSettings::default().rectangular_order, value_name = "N")]
     order: usize,
-    /// Output directory for passages.csv, passage.json and the report.
-    #[arg(long)]
+    /// Output folder for passages.csv, passage.json and the report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
@@ -280,11 +280,8 @@ fn build_report(
     };
     let mut rep = Report::new(title).with_command(command_line());
     for (k, (rec, r)) in recs.iter().zip(done).enumerate() {
-        for s in report::passage::passage_sections(r) {
+        for s in report::passage::record_sections(k + 1, rec, r, "passages.csv", "")? {
             rep = rep.with_section(s);
-        }
-        for f in report::passage::passage_figures(k + 1, rec, r)? {
-            rep = rep.with_figure(f);
         }
     }
     if !failed.is_empty() {

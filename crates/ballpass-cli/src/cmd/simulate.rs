@@ -44,8 +44,9 @@ pub enum StartArg {
 /// overrides the settings file (if any), which overrides the defaults.
 #[derive(Debug, Clone, Args)]
 pub struct SimFlags {
-    /// Settings file (JSON): a `SimSettings` object, or a truth file whose
-    /// `settings` are reused. Flags given as well override it.
+    /// Settings file (JSON): the simulator's settings, as in the `settings` of
+    /// a truth file (or a whole truth file, whose settings are reused). Flags
+    /// given as well override it.
     #[arg(long, value_name = "FILE")]
     settings: Option<PathBuf>,
     /// Recorded duration, s [default: 30].
@@ -172,7 +173,8 @@ pub struct SimulateArgs {
         long,
         short = 'v',
         required_unless_present_any = ["settings", "multi_speed"],
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_name = "MM/S"
     )]
     velocity: Option<f64>,
     /// Bearing from the catalog [default: sr25w].
@@ -184,8 +186,14 @@ pub struct SimulateArgs {
     /// Random seed; the same seed gives the same bytes [default: 0].
     #[arg(long)]
     seed: Option<u64>,
-    /// Output recording (`.csv`); the truth goes beside it as `NAME.truth.json`.
-    #[arg(long, short = 'o', value_name = "FILE")]
+    /// Output recording (`.csv` or `.mat`); the truth goes beside it as
+    /// `NAME.truth.json`.
+    #[arg(
+        long = "out",
+        short = 'o',
+        visible_alias = "output",
+        value_name = "FILE"
+    )]
     output: PathBuf,
     #[command(flatten)]
     flags: SimFlags,
@@ -296,7 +304,7 @@ fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
     /// Output folder (created if missing): recordings, truth files and `manifest.csv`.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Campaign seed; each record's seed is derived from it and the record's index.
     #[arg(long, default_value_t = 0)]
@@ -323,12 +331,18 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
         std::fs::create_dir_all(&d)
             .with_context(|| format!("cannot create folder {}", d.display()))?;
     }
+    // A progress bar on a terminal (the campaign takes a while), nothing
+    // when stderr is a file or a pipe.
+    let bar = crate::output::progress(plan.len(), "recordings");
     let work = || -> Result<()> {
         plan.par_iter().try_for_each(|e| -> Result<()> {
             let path = staged.join(format!("{}.csv", e.path));
             let sim =
                 sim::simulate(&e.settings).with_context(|| format!("simulating {}", e.path))?;
             write_pair(&sim, &path)?;
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
             Ok(())
         })
     };
@@ -340,6 +354,9 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
             .context("cannot start worker threads")?
             .install(work)?,
         None => work()?,
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
     }
     let mut manifest = String::from("path,bearing,velocity_mm_s,repeat,condition\n");
     for e in &plan {

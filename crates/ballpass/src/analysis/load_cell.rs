@@ -135,7 +135,7 @@ impl DcRestoration {
         self.unknown_high_pass.then(|| {
             let tau_10 = 1.0 / (std::f64::consts::TAU * f_c_hz * 10f64.to_radians().tan());
             format!(
-                "the friction channel averages {:.2} of its standard deviation, as a quartz load cell does once its DC has discharged, and the record shows no discharge to estimate its time constant τ from: friction phases at f_c = {f_c_hz:.4} Hz are advanced by atan(1 / (2π f_c τ)) (10° or more if τ < {tau_10:.2} s) and amplitudes reduced; give the load cell's τ (profile load_cell_time_constant_s, or --load-cell-tau)",
+                "the friction channel averages {:.2} of its standard deviation, as a quartz load cell does once its DC has discharged, and the record shows no discharge to estimate its time constant τ from: friction phases at f_c = {f_c_hz:.4} Hz are advanced by atan(1 / (2π f_c τ)) (10° or more if τ < {tau_10:.2} s) and amplitudes reduced; give the load cell's τ (--load-cell-tau, or the profile's [analysis] load_cell = {{ time_constant = τ }})",
                 self.level_over_spread
             )
         })

@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, SignalPeriod};
 use super::phase::{self, LineSpectra, Phase};
-use super::preprocess::{self, Prepared};
+use super::preprocess::{self, Prepared, VelocityErrorStats};
 use super::spectra::{self, HarmonicRow, Spectra};
 use super::{
     pair_name, Absent, Analysis, AnalyzeSettings, InputInfo, SeriesInfo, Signal, Verdict, SCHEMA,
@@ -222,12 +222,10 @@ fn evaluate(
     }
 }
 
-/// Fills in every phase at `f_c` from the records' line spectra; pairs
-/// without the velocity error are pulse trains related by a delay.
+/// Fills in every phase at `f_c` from the records' line spectra.
 fn fill_phases(phases: &mut [Phase], lines: &LineSpectra, f_hz: f64, confidence: f64) {
     for ph in phases {
-        let delay = ph.x != Signal::VelocityError && ph.y != Signal::VelocityError;
-        phase::fill_phase(ph, lines, f_hz, confidence, delay);
+        phase::fill_phase(ph, lines, f_hz, confidence);
     }
 }
 
@@ -553,6 +551,30 @@ pub(crate) fn run(
             notes.push(format!("{}: {}", r.source_name(), d.note));
         }
     }
+    // The stage, identified from every record's friction → velocity-error
+    // response pooled (one segment length for all: the shortest record's).
+    let stage = {
+        let n_min = recs.iter().map(Recording::len).min().unwrap_or(0);
+        let nperseg = crate::model::identify::nperseg_for(n_min, fs);
+        let mut pooled = crate::model::identify::StageSpectra::default();
+        for (r, fr) in recs.iter().zip(&restored) {
+            if let (Some((f, _)), Some(p)) = (fr, r.channel(Channel::Position)) {
+                let sp = crate::model::identify::StageSpectra::of_signals(
+                    f,
+                    p,
+                    fs,
+                    pred.velocity_mm_s,
+                    nperseg,
+                )?;
+                pooled.add(&sp);
+            }
+        }
+        (pooled.records > 0).then(|| (crate::model::identify::identify(&pooled), pooled))
+    };
+    let (stage, stage_spectra) = match stage {
+        Some((id, sp)) => (Some(id), Some(sp)),
+        None => (None, None),
+    };
     let filter = preprocess::lowpass_filter(settings, fs)?;
     let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut warnings)?;
     // Each record's correlations, full and high-resolution spectra are
@@ -560,7 +582,7 @@ pub(crate) fn run(
     // detection of all of them: all run in parallel (rayon), and the
     // results are taken in record order, so they and the first error
     // reported are those of a sequential pass.
-    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<(Prepared, Correlations, Spectra, Spectra)> {
+    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<(Prepared, Correlations, Spectra, Spectra, Spectra)> {
         let friction = fr.as_ref().map(|(f, _)| f.as_ref());
         let mut p = preprocess::prepare(
             r,
@@ -572,6 +594,8 @@ pub(crate) fn run(
             friction,
         )?;
         p.signals.retain(|(s, _)| signals.contains(s));
+        p.unfiltered.retain(|(s, _)| signals.contains(s));
+        let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
         let (c, (f, h)) = rayon::join(
             || {
                 with_correlator(
@@ -589,7 +613,7 @@ pub(crate) fn run(
                 )
             },
         );
-        Ok((p, c?, f?, h?))
+        Ok((p, c?, f?, h?, u))
     };
     let (per_record, passages) = rayon::join(
         || {
@@ -612,12 +636,15 @@ pub(crate) fn run(
     let mut corrs = Vec::with_capacity(recs.len());
     let mut fulls = Vec::with_capacity(recs.len());
     let mut hires = Vec::with_capacity(recs.len());
-    for (p, c, f, h) in per_record? {
+    let mut unfiltered = Vec::with_capacity(recs.len());
+    for (p, c, f, h, u) in per_record? {
         prepared.push(p);
         corrs.push(c);
         fulls.push(f);
         hires.push(h);
+        unfiltered.push(u);
     }
+    let unfiltered = average_spectra(&unfiltered);
     // One record: its correlations are the result (no copy).
     let corr = if corrs.len() == 1 {
         corrs.pop().expect("one record")
@@ -749,12 +776,20 @@ pub(crate) fn run(
         },
         spectrum_full: full.info.clone(),
         spectrum_hires: hr.info.clone(),
+        spectrum_unfiltered: unfiltered.info.clone(),
         measured_period: findings.measured,
         phases: findings.phases,
         harmonics: findings.harmonics,
         coherence: findings.coherence,
-        velocity_error: prepared[0].velocity_error.clone(),
+        velocity_error: VelocityErrorStats::mean_of(
+            &prepared
+                .iter()
+                .filter_map(|p| p.velocity_error.as_ref())
+                .collect::<Vec<_>>(),
+        ),
         load_cell,
+        stage,
+        stage_spectra,
         repeats,
         verdict,
         passages,
@@ -762,6 +797,7 @@ pub(crate) fn run(
         correlations: corr,
         spectra: full,
         spectra_hires: hr,
+        spectra_unfiltered: unfiltered,
     })
 }
 

@@ -67,4 +67,8 @@ pub struct RecordResult {
     /// Friction auto-spectrum, N²/Hz.
     #[serde(skip)]
     pub friction_psd: Vec<f64>,
+    /// The record's friction → velocity-error spectra, pooled by the sweep
+    /// to identify the stage.
+    #[serde(skip)]
+    pub stage_spectra: Option<crate::model::identify::StageSpectra>,
 }

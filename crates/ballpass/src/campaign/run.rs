@@ -226,6 +226,7 @@ pub fn process_recording(
         warnings,
         friction_psd_freq_hz: freq,
         friction_psd: psd,
+        stage_spectra: analysis.stage_spectra.clone(),
     })
 }
 

@@ -48,7 +48,9 @@
 use ballpass_dsp::{Complex64, Welch, WelchSettings};
 use serde::Serialize;
 
+use crate::analysis::load_cell::{restore_friction, LoadCellCorrection};
 use crate::error::{Error, Result};
+use crate::recording::{Channel, Recording};
 
 /// The friction → velocity-error spectra of one or more records, to be
 /// pooled and fitted.
@@ -123,6 +125,54 @@ impl StageSpectra {
             records: 1,
             n_d: nu / 2.0,
         })
+    }
+
+    /// The spectra of a recording with friction and position channels
+    /// (`None` without either): the friction with the load cell's discharge
+    /// undone as `correction` says (`period_s` the predicted ball-pass
+    /// period, for its estimate), the velocity error from the encoder by the
+    /// centred difference.
+    ///
+    /// # Errors
+    /// As [`StageSpectra::of`] and [`restore_friction`].
+    pub fn of_recording(
+        rec: &Recording,
+        velocity_mm_s: f64,
+        period_s: f64,
+        correction: LoadCellCorrection,
+    ) -> Result<Option<StageSpectra>> {
+        let (Some(f), Some(p)) = (
+            rec.channel(Channel::Friction),
+            rec.channel(Channel::Position),
+        ) else {
+            return Ok(None);
+        };
+        let fs = rec.fs_hz();
+        let (friction, _) = restore_friction(f, fs, period_s, correction)?;
+        let nperseg = nperseg_for(friction.len(), fs);
+        StageSpectra::of_signals(&friction, p, fs, velocity_mm_s, nperseg).map(Some)
+    }
+
+    /// The spectra from a friction channel (discharge already undone) and
+    /// the encoder position (mm): the velocity error by the centred
+    /// difference.
+    ///
+    /// # Errors
+    /// As [`StageSpectra::of`].
+    pub fn of_signals(
+        friction_n: &[f64],
+        position_mm: &[f64],
+        fs_hz: f64,
+        velocity_mm_s: f64,
+        nperseg: usize,
+    ) -> Result<StageSpectra> {
+        let v: Vec<f64> =
+            ballpass_dsp::gradient(position_mm, ballpass_dsp::Spacing::Uniform(1.0 / fs_hz))
+                .map_err(|e| Error::dsp("stage identification velocity", e))?
+                .into_iter()
+                .map(|x| x - velocity_mm_s)
+                .collect();
+        StageSpectra::of(friction_n, &v, fs_hz, nperseg)
     }
 
     /// Adds another record's spectra on the same grid; `false` (nothing
@@ -262,7 +312,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             continue;
         }
         let g2 = pfv.norm_sqr() / (pff * pvv);
-        if !(g2 > threshold) {
+        if g2.is_nan() || g2 <= threshold {
             continue;
         }
         let w = std::f64::consts::TAU * f;
@@ -415,7 +465,7 @@ impl Stage {
         let k = p[3];
         let (mut m, mut c, mut tau) = (p[2], p[0], 0.0);
         for _ in 0..200 {
-            if !(m > 0.0) {
+            if m.is_nan() || m <= 0.0 {
                 return None;
             }
             let tau_next = p[1] / m;
@@ -480,7 +530,7 @@ impl Wls2 {
         }
         let r = a[0][1] / (d[0] * d[1]);
         let det = 1.0 - r * r;
-        if !(det > 1e-12) {
+        if det.is_nan() || det <= 1e-12 {
             return None;
         }
         let inv_s = [[1.0 / det, -r / det], [-r / det, 1.0 / det]];

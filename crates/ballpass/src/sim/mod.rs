@@ -23,7 +23,7 @@
 //!   sigmas of their centres.
 //! - Friction opposes motion; the load cell reads `+f` (see [`stage`]).
 //! - Ball gaps are a uniform random split of `d_ext`, re-drawn per recording,
-//!   so passage intervals vary as ERRATA §1 describes while the long-run
+//!   so passage intervals vary as docs/methods.md §1 describes while the long-run
 //!   passage rate is exactly `v / (2 d_avg)`.
 //! - Pulse widths are set as FWHM / `tau_c` ratios (the thesis' `tau_p /
 //!   tau_c = 0.155`, width at half prominence) and are fixed lengths along
@@ -47,7 +47,7 @@
 //! | SR25W geometry | d = 4 mm, d_ext = 2 mm, N_B = 36 | thesis §1, §3.1 |
 //! | sampling, duration | 1 kHz, 30 s | thesis §7 |
 //! | optical pulse width | FWHM = 0.155 tau_c | thesis §6.4 (Fig. 53) |
-//! | optical lag behind friction | 0.39 s at 9 mm/s → sensor offset 1.755 mm | thesis §7.1 (ERRATA §8–9 for the sign) |
+//! | optical lag behind friction | 0.39 s at 9 mm/s → sensor offset 1.755 mm | thesis §7.1 (docs/methods.md §8–9 for the sign) |
 //! | anti-alias filters | 400 Hz (2nd-order Butterworth assumed) | thesis §5.3, §7 |
 //! | encoder | 0.1 µm | thesis §4 |
 //! | interference drift | period 5 s, pulses invert at crests | thesis §5.2 (Fig. 32) |
@@ -251,7 +251,7 @@ const STREAM_BASELINE_DRIFT: u64 = 8;
 /// use ballpass::sim::{simulate, SimSettings};
 /// let sim = simulate(&SimSettings { duration_s: 2.0, ..Default::default() })?;
 /// assert_eq!(sim.recording.len(), 2000); // 2 s at 1 kHz
-/// // SR25W at 9 mm/s: f_c = 9 / (2 * 4.05556) = 1.10959 Hz (ERRATA §1).
+/// // SR25W at 9 mm/s: f_c = 9 / (2 * 4.05556) = 1.10959 Hz (docs/methods.md §1).
 /// assert!((sim.truth.f_c_nominal_hz - 1.10959).abs() < 1e-5);
 /// # Ok::<(), ballpass::Error>(())
 /// ```

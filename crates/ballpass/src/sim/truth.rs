@@ -37,7 +37,7 @@ pub struct Spike {
 /// the realised `f_c`, between the *recorded* channels (sensor filters
 /// included), wrapped into `(-tau_c/2, tau_c/2]`; a positive lag means the
 /// signal lags the friction force, and the phase is `-360 lag / tau_c`
-/// degrees (ERRATA §8 convention). The `*_force_*` lags are the same
+/// degrees (docs/methods.md §8 convention). The `*_force_*` lags are the same
 /// against the friction *force* itself, without the load cell's discharge
 /// high-pass (what an analysis that restores the load cell's DC measures).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

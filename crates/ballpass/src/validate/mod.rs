@@ -6,6 +6,8 @@
 pub mod bench;
 pub mod fleets;
 pub mod score;
+pub mod suite;
 
 pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
 pub use score::Rate;
+pub use suite::{run, SuiteSettings, ValidationReport};
