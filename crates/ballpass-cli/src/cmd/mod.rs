@@ -8,3 +8,4 @@ pub mod model;
 pub mod passage;
 pub mod predict;
 pub mod simulate;
+pub mod validate;

@@ -21,10 +21,7 @@
 //! origin, `T = sum k L_k / sum k^2`.
 //!
 //! # Phase
-//! Within `[-T/2, T/2]` (T measured, else predicted) the maximum of `R_xy`,
-//! parabolic refinement: `tau_phi` is its lag and the phase is
-//! `360 tau_phi / T` wrapped to `(-180, 180]` (ERRATA §8). A negative
-//! `tau_phi` reads "y lags x by |tau_phi|".
+//! See [`super::phase`].
 
 use ballpass_dsp::{CorrelateSettings, Correlator};
 use serde::Serialize;
@@ -256,106 +253,6 @@ fn fit(peaks: &[PeriodPeak]) -> f64 {
     num / den
 }
 
-/// The phase of one cross pair.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Phase {
-    /// Pair name (`friction__optical`).
-    pub pair: String,
-    /// First signal `x` of `R_xy`.
-    pub x: Signal,
-    /// Second signal `y` of `R_xy`.
-    pub y: Signal,
-    /// Lag of the `R_xy` peak nearest zero (within half a period), s.
-    /// Negative: y lags x.
-    pub lag_s: f64,
-    /// `lag_s / T`.
-    pub lag_periods: f64,
-    /// `360 lag / T` wrapped to `(-180, 180]`, degrees.
-    pub phase_deg: f64,
-    /// `R_xy` at the peak (interpolated).
-    pub peak_value: f64,
-    /// Period used, s.
-    pub period_s: f64,
-    /// Phase of the high-resolution cross spectrum `conj(X) Y` at the bin
-    /// nearest `f_c` (same sign convention: y lagging x by d gives
-    /// `-360 f d`), degrees.
-    pub cross_spectrum_phase_deg: Option<f64>,
-    /// Frequency of that bin, Hz.
-    pub cross_spectrum_f_hz: Option<f64>,
-    /// Coherence at that bin.
-    pub cross_spectrum_coherence: Option<f64>,
-    /// Wrapped difference of the two phase estimates, degrees.
-    pub disagreement_deg: Option<f64>,
-    /// The statement in words.
-    pub words: String,
-}
-
-/// Wraps degrees to `(-180, 180]`.
-pub(crate) fn wrap_deg(mut d: f64) -> f64 {
-    d %= 360.0;
-    if d > 180.0 {
-        d -= 360.0;
-    } else if d <= -180.0 {
-        d += 360.0;
-    }
-    d
-}
-
-/// Phase of `R_xy` within half a period of zero lag (module docs).
-pub(crate) fn phase(corr: &Correlations, x: Signal, y: Signal, period_s: f64) -> Option<Phase> {
-    let r = corr.get(x, y)?;
-    let fs = corr.fs_hz;
-    let zero = corr.zero_index() as isize;
-    let h = (0.5 * period_s * fs).floor() as isize;
-    let lo = (zero - h).max(1) as usize;
-    let hi = ((zero + h) as usize).min(r.len() - 2);
-    if lo > hi {
-        return None;
-    }
-    let (i, _) = r[lo..=hi]
-        .iter()
-        .enumerate()
-        .fold((0, f64::NEG_INFINITY), |(bi, bv), (j, &v)| {
-            if v > bv {
-                (j, v)
-            } else {
-                (bi, bv)
-            }
-        });
-    let i = lo + i;
-    let (d, v) = parabolic_peak(r[i - 1], r[i], r[i + 1]);
-    let lag = (i as f64 + d - zero as f64) / fs;
-    let phase_deg = wrap_deg(360.0 * lag / period_s);
-    let words = lag_words(x, y, lag, period_s, phase_deg);
-    Some(Phase {
-        pair: pair_name(x, y),
-        x,
-        y,
-        lag_s: lag,
-        lag_periods: lag / period_s,
-        phase_deg,
-        peak_value: v,
-        period_s,
-        cross_spectrum_phase_deg: None,
-        cross_spectrum_f_hz: None,
-        cross_spectrum_coherence: None,
-        disagreement_deg: None,
-        words,
-    })
-}
-
-/// "optical lags friction by 0.390 s (0.43 τc, −156°)".
-pub(crate) fn lag_words(x: Signal, y: Signal, lag_s: f64, period_s: f64, phase_deg: f64) -> String {
-    let d = lag_s.abs();
-    let verb = if lag_s < 0.0 { "lags" } else { "leads" };
-    format!(
-        "{} {verb} {} by {d:.3} s ({:.2} τc, {phase_deg:+.0}°)",
-        y.words(),
-        x.words(),
-        d / period_s
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -407,22 +304,18 @@ mod tests {
         // Parabolic refinement of a smooth peak sampled at 1 ms, averaged
         // over ~10 peaks: well below 0.1 ms.
         assert!((got - t).abs() < 1e-4, "period {got} vs {t}");
-        let ph = phase(&c, Signal::Friction, Signal::Optical, got).unwrap();
+        let ph =
+            crate::analysis::phase::correlation_peak(&c, Signal::Friction, Signal::Optical, got)
+                .unwrap();
         // y = x delayed by 0.39 s: peak at -0.39 s (Eq. 7.1), within 1 ms.
-        assert!((ph.lag_s + 0.39).abs() < 1e-3, "lag {}", ph.lag_s);
-        assert!((ph.phase_deg - wrap_deg(-360.0 * 0.39 / t)).abs() < 0.5);
         assert!(
-            ph.words.starts_with("optical lags friction by 0.3") && ph.words.contains("τc"),
-            "{}",
-            ph.words
+            (ph.correlation_lag_s + 0.39).abs() < 1e-3,
+            "lag {}",
+            ph.correlation_lag_s
         );
-    }
-
-    #[test]
-    fn wrap_is_half_open() {
-        assert_eq!(wrap_deg(180.0), 180.0);
-        assert_eq!(wrap_deg(-180.0), 180.0);
-        assert_eq!(wrap_deg(190.0), -170.0);
-        assert_eq!(wrap_deg(-370.0), -10.0);
+        assert!(
+            (ph.correlation_phase_deg - crate::analysis::phase::wrap_deg(-360.0 * 0.39 / t)).abs()
+                < 0.5
+        );
     }
 }

@@ -21,7 +21,7 @@
 //!    `q = floor(fs / (2.5 f_lp))` (Chebyshev anti-alias at `0.8 fs/(2q)`,
 //!    at or above the low-pass) then Welch with
 //!    `nperseg = min(next_pow2(4 (fs/q) / f_c), N/q)`; or, with
-//!    [`HiresMethod::PolyphaseZoom`], the thesis' zoom processing (ERRATA §10).
+//!    [`HiresMethod::PolyphaseZoom`], the thesis' zoom processing (docs/methods.md §10).
 //! 5. Harmonics `k f_c` (predicted and measured): PSD, local noise floor,
 //!    ratio, chi-square significance; coherence with its threshold.
 //! 6. [`repeats`]: several records at one velocity are analysed alone, then
@@ -43,21 +43,25 @@ use crate::recording::Recording;
 
 pub mod correlation;
 pub mod export;
+pub mod load_cell;
 pub mod passage;
+pub mod phase;
+pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
 mod train_fit;
 
-pub use correlation::{Correlations, MeasuredPeriod, Phase, SignalPeriod};
+pub use correlation::{Correlations, MeasuredPeriod, SignalPeriod};
 pub use export::{write_outputs, OutputPaths};
 pub use passage::{detect_passages, PassageAnalysis, PassageSettings};
+pub use phase::Phase;
 pub use preprocess::{Prepared, VelocityErrorStats};
 pub use repeats::{RecordScalars, Repeats, Spread};
 pub use spectra::{CoherenceRow, HarmonicRow, HarmonicValue, Spectra, SpectrumInfo};
 
 /// Schema tag of `analysis.json`.
-pub const SCHEMA: &str = "ballpass.analysis/1";
+pub const SCHEMA: &str = "ballpass.analysis/2";
 
 /// One of the three analysed signals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -201,7 +205,7 @@ pub enum HiresMethod {
     Decimate,
     /// The thesis' zoom processing (Fig. 61): mean of the Welch spectra of
     /// the `m` polyphase branches `x[m k + i]`, no anti-alias filter.
-    /// Aliases and gains no averages (ERRATA §10); for reproduction only.
+    /// Aliases and gains no averages (docs/methods.md §10); for reproduction only.
     PolyphaseZoom {
         /// Decimation factor `M`.
         m: usize,
@@ -254,6 +258,9 @@ pub struct AnalyzeSettings {
     /// Encoder resolution for the quantisation floor of the velocity error,
     /// µm. Default 0.1 (Renishaw RGH22).
     pub encoder_resolution_um: f64,
+    /// Load-cell DC restoration (see [`load_cell`]). Default: estimate the
+    /// discharge from each record and undo it where identified.
+    pub load_cell: load_cell::LoadCellCorrection,
 }
 
 impl Default for AnalyzeSettings {
@@ -277,6 +284,7 @@ impl Default for AnalyzeSettings {
             max_period_peaks: None,
             phase_tolerance_deg: 20.0,
             encoder_resolution_um: 0.1,
+            load_cell: load_cell::LoadCellCorrection::Auto,
         }
     }
 }
@@ -355,6 +363,7 @@ impl AnalyzeSettings {
                 ),
             ));
         }
+        self.load_cell.validate()?;
         if self.hires_q == Some(0) {
             return Err(Error::setting(
                 "hires q",
@@ -462,6 +471,8 @@ pub struct Analysis {
     pub spectrum_full: SpectrumInfo,
     /// High-resolution spectrum parameters.
     pub spectrum_hires: SpectrumInfo,
+    /// Parameters of the full-range spectrum of the unfiltered signals.
+    pub spectrum_unfiltered: SpectrumInfo,
     /// Period measured from the autocorrelations.
     pub measured_period: MeasuredPeriod,
     /// Phases of the cross pairs.
@@ -470,9 +481,21 @@ pub struct Analysis {
     pub harmonics: Vec<HarmonicRow>,
     /// Coherence at the harmonics.
     pub coherence: Vec<CoherenceRow>,
-    /// Velocity-error statistics of the (first, or only) record; see
-    /// [`Analysis::repeats`] for every record.
+    /// Velocity-error statistics: of the record, or for repeats the mean
+    /// over the records of each record's statistics (see
+    /// [`VelocityErrorStats::mean_of`]; every record's own value is in
+    /// [`Analysis::repeats`]).
     pub velocity_error: Option<VelocityErrorStats>,
+    /// What was done about each record's load-cell discharge (records with
+    /// a friction channel, in input order).
+    pub load_cell: Vec<load_cell::DcRestoration>,
+    /// The stage identified from the friction → velocity-error response of
+    /// the records pooled (`None` without friction and position channels).
+    pub stage: Option<crate::model::identify::StageIdentification>,
+    /// The pooled spectra behind [`Analysis::stage`], for pooling further
+    /// (a campaign pools them over its records).
+    #[serde(skip)]
+    pub stage_spectra: Option<crate::model::identify::StageSpectra>,
     /// Per-record results and spread, when more than one record was given.
     pub repeats: Option<Repeats>,
     /// Conclusion.
@@ -491,6 +514,12 @@ pub struct Analysis {
     /// High-resolution spectra, exported as `spectra_hires.csv`.
     #[serde(skip)]
     pub spectra_hires: Spectra,
+    /// Full-range spectra of the signals before the low-pass and detrend
+    /// (thesis Figs. 62 and 64: the white-noise floor above the band of
+    /// interest), exported as `spectra_unfiltered.csv`. Welch still removes
+    /// each segment's mean.
+    #[serde(skip)]
+    pub spectra_unfiltered: Spectra,
 }
 
 /// Runs the whole analysis on one record or several repeats at the same
@@ -510,7 +539,7 @@ pub fn analyze(
     prediction: &Prediction,
     settings: &AnalyzeSettings,
 ) -> Result<Analysis> {
-    repeats::run(recs, prediction, settings, true)
+    repeats::run(recs, prediction, settings, true, None)
 }
 
 /// [`analyze`] without the passage summaries ([`Analysis::passages`] is
@@ -520,9 +549,14 @@ pub(crate) fn analyze_without_passages(
     recs: &[Recording],
     prediction: &Prediction,
     settings: &AnalyzeSettings,
+    restored: Option<Vec<Restored<'_>>>,
 ) -> Result<Analysis> {
-    repeats::run(recs, prediction, settings, false)
+    repeats::run(recs, prediction, settings, false, restored)
 }
+
+/// One record's friction after the load-cell correction, and what was done
+/// (`None` for a record without friction).
+pub(crate) type Restored<'a> = Option<(std::borrow::Cow<'a, [f64]>, load_cell::DcRestoration)>;
 
 /// The ball passages of one record in brief (part of `analysis.json`).
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -27,6 +27,10 @@ pub struct Prepared {
     pub signals: Vec<(Signal, Vec<f64>)>,
     /// Velocity-error statistics, when the position channel is present.
     pub velocity_error: Option<VelocityErrorStats>,
+    /// The same signals after step 1 only (trimmed; velocity error
+    /// `v - V`), neither low-passed nor detrended: what the full-range
+    /// spectra of the thesis' Figs. 62 and 64 are computed from.
+    pub unfiltered: Vec<(Signal, Vec<f64>)>,
     /// Samples removed at the start.
     pub trimmed_samples: usize,
 }
@@ -42,8 +46,18 @@ impl Prepared {
 }
 
 /// Statistics of the velocity error `v - V`, µm/s.
+///
+/// Of one record as [`prepare`] computes them; in an [`super::Analysis`] of
+/// several repeats, each field is the mean over the records of that
+/// record's value (the thesis' Fig. 29 averages the per-test standard
+/// deviations), see [`VelocityErrorStats::mean_of`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct VelocityErrorStats {
+    /// Records the statistics are the mean of (1 for one record).
+    pub records: usize,
+    /// Sample standard deviation (ddof 1) over the records of each record's
+    /// `std_um_s`, µm/s; `None` for one record.
+    pub std_spread_um_s: Option<f64>,
     /// Mean of the raw (after trim) velocity error, µm/s.
     pub mean_um_s: f64,
     /// Standard deviation (ddof 0) of the raw velocity error, µm/s (the
@@ -58,8 +72,33 @@ pub struct VelocityErrorStats {
     /// Root mean square of the low-passed velocity error, µm/s.
     pub lowpassed_rms_um_s: f64,
     /// Encoder quantisation noise floor `q / (T_s sqrt(24))` of the centred
-    /// difference, µm/s (ERRATA §2; 20.4 µm/s at 0.1 µm and 1 kHz).
+    /// difference, µm/s (docs/methods.md §2; 20.4 µm/s at 0.1 µm and 1 kHz).
     pub quantisation_floor_um_s: f64,
+}
+
+impl VelocityErrorStats {
+    /// The mean over records of each statistic, with the spread of the
+    /// standard deviations; `None` when `records` is empty.
+    pub fn mean_of(records: &[&VelocityErrorStats]) -> Option<VelocityErrorStats> {
+        let first = records.first()?;
+        let n = records.len() as f64;
+        let mean =
+            |f: fn(&VelocityErrorStats) -> f64| records.iter().map(|r| f(r)).sum::<f64>() / n;
+        let stds: Vec<f64> = records.iter().map(|r| r.std_um_s).collect();
+        Some(VelocityErrorStats {
+            records: records.len(),
+            std_spread_um_s: crate::stats::MeanStd::of(&stds)
+                .filter(|m| m.n > 1)
+                .map(|m| m.std),
+            mean_um_s: mean(|r| r.mean_um_s),
+            std_um_s: mean(|r| r.std_um_s),
+            rms_um_s: mean(|r| r.rms_um_s),
+            lowpassed_mean_um_s: mean(|r| r.lowpassed_mean_um_s),
+            lowpassed_std_um_s: mean(|r| r.lowpassed_std_um_s),
+            lowpassed_rms_um_s: mean(|r| r.lowpassed_rms_um_s),
+            quantisation_floor_um_s: first.quantisation_floor_um_s,
+        })
+    }
 }
 
 fn moments_um_s(x: &[f64]) -> (f64, f64, f64) {
@@ -111,7 +150,8 @@ pub(crate) fn lowpass_filter(
 ///
 /// `velocity_mm_s` is the commanded velocity `V`. Missing channels are
 /// skipped (the caller reports them); `n_keep` truncates the trimmed record
-/// to a common length for repeats.
+/// to a common length for repeats; `friction`, when given, replaces the
+/// recorded friction (its load-cell discharge undone).
 ///
 /// # Errors
 /// [`Error::InvalidRecording`] if the trim leaves too few samples for the
@@ -123,6 +163,7 @@ pub(crate) fn prepare(
     filter: Option<&ZeroPhaseFilter>,
     trim: usize,
     n_keep: usize,
+    friction: Option<&[f64]>,
 ) -> Result<Prepared> {
     let fs = rec.fs_hz();
     let name = rec.source_name();
@@ -140,9 +181,10 @@ pub(crate) fn prepare(
     let ctx = |what: &str| format!("{name}: {what}");
     let mut signals = Vec::with_capacity(3);
     let mut velocity_error = None;
+    let mut unfiltered = Vec::with_capacity(3);
     for s in Signal::ALL {
         let raw: Vec<f64> = match s {
-            Signal::Friction => match rec.channel(Channel::Friction) {
+            Signal::Friction => match friction.or_else(|| rec.channel(Channel::Friction)) {
                 Some(x) => x[range.clone()].to_vec(),
                 None => continue,
             },
@@ -172,6 +214,8 @@ pub(crate) fn prepare(
             let (m, sd, rms) = moments_um_s(&raw);
             let (lm, lsd, lrms) = moments_um_s(&y);
             velocity_error = Some(VelocityErrorStats {
+                records: 1,
+                std_spread_um_s: None,
                 mean_um_s: m,
                 std_um_s: sd,
                 rms_um_s: rms,
@@ -184,12 +228,14 @@ pub(crate) fn prepare(
         detrend_in_place(&mut y, settings.detrend.to_dsp())
             .map_err(|e| Error::dsp(ctx(&format!("detrend of {}", s.name())), e))?;
         signals.push((s, y));
+        unfiltered.push((s, raw));
     }
     Ok(Prepared {
         fs_hz: fs,
         n: n_keep,
         signals,
         velocity_error,
+        unfiltered,
         trimmed_samples: trim,
     })
 }
@@ -215,12 +261,12 @@ mod tests {
         .unwrap();
         let s = AnalyzeSettings::default();
         let f = lowpass_filter(&s, fs).unwrap();
-        let p = prepare(&rec, v, &s, f.as_ref(), 0, 2000).unwrap();
+        let p = prepare(&rec, v, &s, f.as_ref(), 0, 2000, None).unwrap();
         let st = p.velocity_error.unwrap();
         // A ramp differentiates exactly up to rounding of i/fs * 9 (~1e-15 mm
         // relative), amplified by 1/(2 T_s) = 500: far below 1e-6 µm/s.
         assert!(st.std_um_s < 1e-6 && st.mean_um_s.abs() < 1e-6, "{st:?}");
-        // ERRATA §2: 0.1 µm at 1 kHz gives 20.4 µm/s (printed to 3 digits).
+        // docs/methods.md §2: 0.1 µm at 1 kHz gives 20.4 µm/s (printed to 3 digits).
         assert!((st.quantisation_floor_um_s - 20.4).abs() < 0.05);
         assert_eq!(p.signals.len(), 1);
     }

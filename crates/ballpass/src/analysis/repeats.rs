@@ -17,8 +17,9 @@ use ballpass_dsp::{CorrelateSettings, Correlator};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
-use super::preprocess::{self, Prepared};
+use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, SignalPeriod};
+use super::phase::{self, LineSpectra, Phase};
+use super::preprocess::{self, Prepared, VelocityErrorStats};
 use super::spectra::{self, HarmonicRow, Spectra};
 use super::{
     pair_name, Absent, Analysis, AnalyzeSettings, InputInfo, SeriesInfo, Signal, Verdict, SCHEMA,
@@ -80,15 +81,13 @@ struct Findings {
     harmonics: Vec<HarmonicRow>,
     coherence: Vec<spectra::CoherenceRow>,
     showing: Vec<Signal>,
+    /// The ball-pass frequency the phases are taken at (measured, else
+    /// predicted), Hz.
+    f_used: f64,
 }
 
-fn is_sig(r: &HarmonicRow, measured: bool) -> Option<bool> {
-    let v = if measured {
-        r.measured.as_ref().or(r.predicted.as_ref())
-    } else {
-        r.predicted.as_ref()
-    };
-    v.and_then(|v| v.significant)
+fn is_sig(r: &HarmonicRow) -> Option<bool> {
+    r.significant
 }
 
 fn ratio(r: &HarmonicRow) -> f64 {
@@ -109,10 +108,7 @@ fn evaluate(
     // Which signals show f_c at the prediction (chooses the period's source).
     let pre = spectra::harmonics(hires, pred.f_c_hz, None, settings);
     let k1: Vec<&HarmonicRow> = pre.iter().filter(|r| r.k == 1).collect();
-    let shows = |s: Signal| {
-        k1.iter()
-            .any(|r| r.signal == s && is_sig(r, false) == Some(true))
-    };
+    let shows = |s: Signal| pre.iter().any(|r| r.signal == s && is_sig(r) == Some(true));
     let per_signal: Vec<SignalPeriod> = signals
         .iter()
         .filter_map(|&s| correlation::signal_period(corr, s, pred.tau_c_s, settings))
@@ -129,7 +125,7 @@ fn evaluate(
         )
     } else if let Some(r) = k1
         .iter()
-        .filter(|r| is_sig(r, false) == Some(true) && has_period(r.signal))
+        .filter(|r| shows(r.signal) && has_period(r.signal))
         .max_by(|a, b| ratio(a).total_cmp(&ratio(b)))
     {
         (
@@ -191,43 +187,21 @@ fn evaluate(
     let f_used = 1.0 / t_used;
     let mut phases = Vec::new();
     for (x, y) in pairs_for(&signals).into_iter().filter(|(x, y)| x != y) {
-        let Some(mut ph) = correlation::phase(corr, x, y, t_used) else {
+        let Some(ph) = phase::correlation_peak(corr, x, y, t_used) else {
             continue;
         };
-        if let (Some(c), Some(i)) = (hires.cross_of(x, y), hires.nearest_bin(f_used)) {
-            let p = c.pxy[i];
-            let deg = p.im.atan2(p.re).to_degrees();
-            let diff = correlation::wrap_deg(deg - ph.phase_deg);
-            ph.cross_spectrum_phase_deg = Some(deg);
-            ph.cross_spectrum_f_hz = Some(hires.freq_hz[i]);
-            ph.cross_spectrum_coherence = Some(c.coherence[i]);
-            ph.disagreement_deg = Some(diff);
-            // The cross-spectrum phase means something only where the
-            // coherence at that bin is significant; elsewhere it is noise
-            // and a disagreement is not worth a warning.
-            let coherent = coherence_threshold(hires, settings).is_some_and(|t| c.coherence[i] > t);
-            if coherent && diff.abs() > settings.phase_tolerance_deg {
-                warnings.push(format!(
-                    "{}: correlation phase {:+.0}° and cross-spectrum phase {deg:+.0}° at {:.4} Hz \
-                     disagree by {:.0}° (coherence there {:.2})",
-                    ph.pair,
-                    ph.phase_deg,
-                    hires.freq_hz[i],
-                    diff.abs(),
-                    c.coherence[i]
-                ));
-            }
-        }
         phases.push(ph);
     }
-    let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas, settings);
+    let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas.zip(from), settings);
+    // A signal shows f_c when any of its harmonics stands above its floor
+    // after the family correction.
     let showing: Vec<Signal> = signals
         .iter()
         .copied()
         .filter(|&s| {
             harmonics
                 .iter()
-                .any(|r| r.signal == s && r.k == 1 && is_sig(r, true) == Some(true))
+                .any(|r| r.signal == s && is_sig(r) == Some(true))
         })
         .collect();
     let coherence = spectra::coherence_rows(hires, f_used, settings);
@@ -244,13 +218,15 @@ fn evaluate(
         harmonics,
         coherence,
         showing,
+        f_used,
     }
 }
 
-/// Coherence threshold of one bin at the stated confidence (see [`spectra`]).
-fn coherence_threshold(s: &Spectra, settings: &AnalyzeSettings) -> Option<f64> {
-    let n_d = s.info.dof / 2.0;
-    (n_d > 1.0).then(|| 1.0 - (1.0 - settings.confidence).powf(1.0 / (n_d - 1.0)))
+/// Fills in every phase at `f_c` from the records' line spectra.
+fn fill_phases(phases: &mut [Phase], lines: &LineSpectra, f_hz: f64, confidence: f64) {
+    for ph in phases {
+        phase::fill_phase(ph, lines, f_hz, confidence);
+    }
 }
 
 fn average_into(acc: &mut [f64], v: &[f64]) {
@@ -328,16 +304,13 @@ fn scalars(source: String, f: &Findings, p: &Prepared) -> RecordScalars {
         phases: f
             .phases
             .iter()
-            .map(|ph| (ph.pair.clone(), ph.lag_s, ph.phase_deg))
+            .filter_map(|ph| Some((ph.pair.clone(), ph.lag_s?, ph.phase_deg?)))
             .collect(),
         f_c_ratio_db: f
             .harmonics
             .iter()
             .filter(|r| r.k == 1)
-            .map(|r| {
-                let v = r.measured.as_ref().or(r.predicted.as_ref());
-                (r.signal, v.and_then(|v| v.ratio_db))
-            })
+            .map(|r| (r.signal, r.value().and_then(|v| v.ratio_db)))
             .collect(),
         velocity_error_std_um_s: p.velocity_error.as_ref().map(|v| v.std_um_s),
     }
@@ -386,10 +359,7 @@ fn spreads(records: &[RecordScalars]) -> Vec<Spread> {
         // Phases are circular; spread them about the first record's value.
         let degs = collect(&|r| r.phases.iter().find(|p| p.0 == pair).map(|p| p.2));
         if let Some(&d0) = degs.first() {
-            let unwrapped: Vec<f64> = degs
-                .iter()
-                .map(|d| d0 + correlation::wrap_deg(d - d0))
-                .collect();
+            let unwrapped: Vec<f64> = degs.iter().map(|d| d0 + phase::wrap_deg(d - d0)).collect();
             out.extend(spread(format!("phase_deg {pair}"), &unwrapped));
         }
     }
@@ -400,7 +370,7 @@ fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
     let flagged: Vec<usize> = f
         .harmonics
         .iter()
-        .filter(|r| r.signal == Signal::Friction && is_sig(r, true) == Some(true))
+        .filter(|r| r.signal == Signal::Friction && is_sig(r) == Some(true))
         .map(|r| r.k)
         .collect();
     let dev = f
@@ -433,14 +403,10 @@ fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
     if !flagged.is_empty() {
         let ks: Vec<String> = flagged.iter().map(|k| k.to_string()).collect();
         text.push_str(&format!(
-            "; friction stands above its floor at k = {}{}",
-            ks.join(", "),
-            if flagged.len() >= 3 {
-                " (periodic friction disturbance with harmonics: check the bearing for sticking, \
-                 thesis ch. 8)"
-            } else {
-                ""
-            }
+            "; friction stands above its floor at k = {} (a periodic friction ripple at the \
+             ball-pass frequency, which every bearing has; sticking is told by sporadic spikes, \
+             `ballpass diagnose`)",
+            ks.join(", ")
         ));
     } else if f.harmonics.iter().any(|r| r.signal == Signal::Friction) {
         text.push_str("; friction shows no ball-pass harmonic above its floor");
@@ -461,6 +427,7 @@ pub(crate) fn run(
     pred: &Prediction,
     settings: &AnalyzeSettings,
     with_passages: bool,
+    restored: Option<Vec<super::Restored<'_>>>,
 ) -> Result<Analysis> {
     settings.validate()?;
     check_velocity(pred.velocity_mm_s)?;
@@ -559,6 +526,55 @@ pub(crate) fn run(
             needed_for: "analyze (no friction, position or optical channel)",
         });
     }
+    // The load-cell correction of each record (given by a caller that needs
+    // the restored friction itself, else made here).
+    let restored: Vec<super::Restored<'_>> = match restored {
+        Some(r) => r,
+        None => recs
+            .par_iter()
+            .map(|r| {
+                r.channel(Channel::Friction)
+                    .map(|f| {
+                        super::load_cell::restore_friction(f, fs, pred.tau_c_s, settings.load_cell)
+                    })
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?,
+    };
+    let load_cell: Vec<super::load_cell::DcRestoration> =
+        restored.iter().flatten().map(|(_, d)| d.clone()).collect();
+    if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
+        warnings.push(w);
+    }
+    for (r, d) in recs.iter().zip(&restored) {
+        if let Some((_, d)) = d {
+            notes.push(format!("{}: {}", r.source_name(), d.note));
+        }
+    }
+    // The stage, identified from every record's friction → velocity-error
+    // response pooled (one segment length for all: the shortest record's).
+    let stage = {
+        let n_min = recs.iter().map(Recording::len).min().unwrap_or(0);
+        let nperseg = crate::model::identify::nperseg_for(n_min, fs);
+        let mut pooled = crate::model::identify::StageSpectra::default();
+        for (r, fr) in recs.iter().zip(&restored) {
+            if let (Some((f, _)), Some(p)) = (fr, r.channel(Channel::Position)) {
+                let sp = crate::model::identify::StageSpectra::of_signals(
+                    f,
+                    p,
+                    fs,
+                    pred.velocity_mm_s,
+                    nperseg,
+                )?;
+                pooled.add(&sp);
+            }
+        }
+        (pooled.records > 0).then(|| (crate::model::identify::identify(&pooled), pooled))
+    };
+    let (stage, stage_spectra) = match stage {
+        Some((id, sp)) => (Some(id), Some(sp)),
+        None => (None, None),
+    };
     let filter = preprocess::lowpass_filter(settings, fs)?;
     let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut warnings)?;
     // Each record's correlations, full and high-resolution spectra are
@@ -566,9 +582,20 @@ pub(crate) fn run(
     // detection of all of them: all run in parallel (rayon), and the
     // results are taken in record order, so they and the first error
     // reported are those of a sequential pass.
-    let one = |r: &Recording| -> Result<(Prepared, Correlations, Spectra, Spectra)> {
-        let mut p = preprocess::prepare(r, pred.velocity_mm_s, settings, filter.as_ref(), trim, n)?;
+    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<(Prepared, Correlations, Spectra, Spectra, Spectra)> {
+        let friction = fr.as_ref().map(|(f, _)| f.as_ref());
+        let mut p = preprocess::prepare(
+            r,
+            pred.velocity_mm_s,
+            settings,
+            filter.as_ref(),
+            trim,
+            n,
+            friction,
+        )?;
         p.signals.retain(|(s, _)| signals.contains(s));
+        p.unfiltered.retain(|(s, _)| signals.contains(s));
+        let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
         let (c, (f, h)) = rayon::join(
             || {
                 with_correlator(
@@ -586,11 +613,12 @@ pub(crate) fn run(
                 )
             },
         );
-        Ok((p, c?, f?, h?))
+        Ok((p, c?, f?, h?, u))
     };
     let (per_record, passages) = rayon::join(
         || {
             recs.par_iter()
+                .zip(restored.par_iter())
                 .map(one)
                 .collect::<Vec<_>>()
                 .into_iter()
@@ -608,12 +636,15 @@ pub(crate) fn run(
     let mut corrs = Vec::with_capacity(recs.len());
     let mut fulls = Vec::with_capacity(recs.len());
     let mut hires = Vec::with_capacity(recs.len());
-    for (p, c, f, h) in per_record? {
+    let mut unfiltered = Vec::with_capacity(recs.len());
+    for (p, c, f, h, u) in per_record? {
         prepared.push(p);
         corrs.push(c);
         fulls.push(f);
         hires.push(h);
+        unfiltered.push(u);
     }
+    let unfiltered = average_spectra(&unfiltered);
     // One record: its correlations are the result (no copy).
     let corr = if corrs.len() == 1 {
         corrs.pop().expect("one record")
@@ -629,12 +660,24 @@ pub(crate) fn run(
             hr.info.n_segments
         ));
     }
-    let findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
+    let mut findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
+    let lines: Vec<LineSpectra> = prepared
+        .par_iter()
+        .map(|p| LineSpectra::of(p, findings.f_used, settings.harmonics))
+        .collect();
+    fill_phases(
+        &mut findings.phases,
+        &LineSpectra::merge(&lines),
+        findings.f_used,
+        settings.confidence,
+    );
     let repeats = if recs.len() > 1 {
         let mut records = Vec::new();
         for ((r, p), (c, h)) in recs.iter().zip(&prepared).zip(corrs.iter().zip(&hires)) {
             let mut w = Vec::new();
-            let f = evaluate(c, h, pred, settings, &mut w);
+            let mut f = evaluate(c, h, pred, settings, &mut w);
+            let own = LineSpectra::of(p, f.f_used, settings.harmonics);
+            fill_phases(&mut f.phases, &own, f.f_used, settings.confidence);
             records.push(scalars(r.source_name(), &f, p));
         }
         let spread = spreads(&records);
@@ -652,9 +695,10 @@ pub(crate) fn run(
         hr.info.method, plan.q, plan.fs_hz, plan.nperseg, plan.noverlap, hr.info.resolution_hz
     ));
     notes.push(
-        "harmonic floor: median over ±1.5 f_c excluding ±1 bin of every harmonic, converted to a \
-         mean by chi2 median/nu; PSD = max of ±1 bin; threshold chi2_ppf(conf^(1/3), nu)/nu with \
-         nu the Welch equivalent dof (Percival & Walden 292b) times the records"
+        "harmonic test: floor = polynomial fit of ln PSD against ln f around k·f_c (harmonic bins \
+         excluded), mean-corrected for chi2; p-value of the largest tested bin with the floor's own \
+         uncertainty; nu the Welch equivalent dof (Percival & Walden 292b) times the records; a \
+         signal shows f_c when a harmonic is significant after Holm's correction over k = 1..K"
             .into(),
     );
     notes.push(
@@ -665,7 +709,9 @@ pub(crate) fn run(
     );
     notes.push(
         "correlation convention Eq. 7.1: R_xy[m] = sum x[n+m] y[n]; a peak at negative lag means y \
-         lags x; phase = 360 lag / T wrapped to (-180, 180]"
+         lags x. Phases at f_c: cross spectrum conj(X) Y at the measured f_c (segments of three \
+         periods, DFT at f_c itself), 95 % interval from the coherence; lag = phase / (360 f_c). \
+         The correlation-peak lag weighs every shared frequency and is reported beside it"
             .into(),
     );
     if recs.len() > 1 {
@@ -730,11 +776,20 @@ pub(crate) fn run(
         },
         spectrum_full: full.info.clone(),
         spectrum_hires: hr.info.clone(),
+        spectrum_unfiltered: unfiltered.info.clone(),
         measured_period: findings.measured,
         phases: findings.phases,
         harmonics: findings.harmonics,
         coherence: findings.coherence,
-        velocity_error: prepared[0].velocity_error.clone(),
+        velocity_error: VelocityErrorStats::mean_of(
+            &prepared
+                .iter()
+                .filter_map(|p| p.velocity_error.as_ref())
+                .collect::<Vec<_>>(),
+        ),
+        load_cell,
+        stage,
+        stage_spectra,
         repeats,
         verdict,
         passages,
@@ -742,6 +797,7 @@ pub(crate) fn run(
         correlations: corr,
         spectra: full,
         spectra_hires: hr,
+        spectra_unfiltered: unfiltered,
     })
 }
 

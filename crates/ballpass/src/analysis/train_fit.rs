@@ -6,7 +6,7 @@
 //!   s_g(t) = S + Σ_j P_j exp(−u_j² / 2),   u_j = (t − t0 − j τ) / σ
 //!   ∂/∂S = 1   ∂/∂P_j = e_j   ∂/∂t0 = Σ P_j e_j u_j / σ
 //!   ∂/∂τ = Σ j P_j e_j u_j / σ   ∂/∂σ = Σ P_j e_j u_j² / σ
-//! Rectangular of order N (Eq. 6.22, ERRATA §5), θ = [S, P, t_s, τ, r]:
+//! Rectangular of order N (Eq. 6.22, docs/methods.md §5), θ = [S, P, t_s, τ, r]:
 //!   s_r(t) = S + P r + Σ_{n=1}^{N} (2P / nπ) sin(nπ r) cos(n φ),   φ = π (2 (t − t_s) / τ + r)
 //!   A = ∂(Σ)/∂φ = −(2P/π) Σ sin(nπ r) sin(n φ)
 //!   ∂/∂S = 1   ∂/∂P = r + (2/π) Σ sin(nπ r) cos(nφ) / n

@@ -3,7 +3,12 @@
 //! - `records.csv`: one row per record, every scalar the analyses produced
 //!   (failed records too, with their reason);
 //! - `sweep.csv`: one row per velocity; `diagnosis.csv`: one row per bearing;
-//! - `friction_spectra.csv`: the averaged friction spectrum of each bearing;
+//! - `friction_spectra.csv`: the averaged friction spectrum of each bearing
+//!   (`freq_hz`, then `psd_friction_<bearing>_n2_per_hz`);
+//!
+//! Every column name ends in its unit, as in the analysis tables (see
+//! [`crate::analysis::export`]); counts, ratios, fractions and flags have
+//! none.
 //! - `sweep.json` / `diagnosis.json`: everything, with the failures.
 
 use std::fmt::Write as _;
@@ -37,7 +42,7 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
          f_c_correlation_hz,f_c_passages_hz,passages,tau_c_s,tau_c_std_s,tau_p_s,tau_p_std_s,tau_ratio,\
          velocity_error_std_um_s,velocity_error_lowpassed_std_um_s,phase_friction_optical_deg,\
          phase_friction_velocity_error_deg,phase_velocity_error_optical_deg,friction_low_band_power_n2,\
-         sticking_events,sticking_timing_fraction,sticking_max_over_level",
+         periods,typical_period_rise_n,period_spread_n,spikes",
     );
     for k in 1..=harmonics {
         let _ = write!(s, ",friction_h{k}_ratio_db,friction_h{k}_significant");
@@ -57,13 +62,13 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
         match &r.result {
             Err(why) => {
                 let _ = write!(s, "failed,{}", quote(why));
-                s.push_str(&",".repeat(20 + 2 * harmonics));
+                s.push_str(&",".repeat(21 + 2 * harmonics));
             }
             Ok(x) => {
                 let st = x.sticking.as_ref();
                 let _ = write!(
                     s,
-                    "ok,,{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "ok,,{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     x.fs_hz,
                     x.duration_s,
                     x.f_c_predicted_hz,
@@ -81,9 +86,10 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
                     opt(x.phase_friction_velocity_error_deg),
                     opt(x.phase_velocity_error_optical_deg),
                     opt(x.friction_low_band_power_n2),
-                    st.map(|s| s.times_s.len().to_string()).unwrap_or_default(),
-                    opt(st.and_then(|s| s.timing_fraction)),
-                    opt(st.and_then(|s| s.max_height_over_level)),
+                    st.map(|s| s.periods.to_string()).unwrap_or_default(),
+                    opt(st.map(|s| s.typical_n)),
+                    opt(st.map(|s| s.spread_n)),
+                    st.map(|s| s.spikes.to_string()).unwrap_or_default(),
                 );
                 for k in 0..harmonics {
                     let _ = write!(
@@ -131,23 +137,29 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
 /// `diagnosis.csv`: one row per bearing, worst first.
 pub fn diagnosis_csv(d: &Diagnosis) -> String {
     let mut s = String::from(
-        "rank,bearing,verdict,records,manifest_condition,low_band_power_n2,low_band_ratio,\
-         events_per_record,timing_fraction,max_spike_over_level,f_c_ratio_db,evidence\n",
+        "rank,bearing,verdict,records,manifest_condition,periods,typical_period_rise_n,\
+         period_spread_n,spikes,spikes_for_bad,spikes_for_suspect,typical_over_batch,\
+         spread_over_batch,low_band_power_n2,low_band_ratio,f_c_ratio_db,evidence\n",
     );
     for b in &d.bearings {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             b.rank,
             quote(&b.bearing),
             b.verdict.name(),
             b.records,
             quote(b.manifest_condition.as_deref().unwrap_or("")),
+            b.periods,
+            b.typical_n,
+            b.spread_n,
+            b.spikes,
+            b.spikes_for_bad,
+            b.spikes_for_suspect,
+            opt(b.typical_over_batch),
+            opt(b.spread_over_batch),
             b.low_band_power_n2,
             b.low_band_ratio,
-            opt(b.events_per_record.map(|m| m.mean)),
-            opt(b.timing_fraction),
-            opt(b.max_spike_over_level),
             opt(b.harmonics.first().and_then(|h| h.ratio_db)),
             quote(&b.evidence.join("; "))
         );
@@ -155,11 +167,12 @@ pub fn diagnosis_csv(d: &Diagnosis) -> String {
     s
 }
 
-/// `friction_spectra.csv`: `freq_hz` then one column per bearing (worst first).
+/// `friction_spectra.csv`: `freq_hz` then one column per bearing (worst
+/// first), `psd_friction_<bearing>_n2_per_hz`.
 pub fn friction_spectra_csv(d: &Diagnosis) -> String {
     let mut s = String::from("freq_hz");
     for b in &d.bearings {
-        let _ = write!(s, ",{}", quote(&b.bearing));
+        let _ = write!(s, ",{}", quote(&friction_psd_column(&b.bearing)));
     }
     s.push('\n');
     for (i, f) in d.freq_hz.iter().enumerate() {
@@ -170,6 +183,12 @@ pub fn friction_spectra_csv(d: &Diagnosis) -> String {
         s.push('\n');
     }
     s
+}
+
+/// Column of a bearing's averaged friction auto-spectrum in
+/// `friction_spectra.csv`: `psd_friction_<bearing>_n2_per_hz` (N²/Hz).
+pub fn friction_psd_column(bearing: &str) -> String {
+    format!("psd_friction_{bearing}_n2_per_hz")
 }
 
 /// A failed record in the JSON.
@@ -219,6 +238,14 @@ mod tests {
     use super::super::batch::RecordOutcome;
     use super::super::sweep::tests::record;
     use super::*;
+
+    #[test]
+    fn friction_spectra_columns_carry_the_unit() {
+        assert_eq!(
+            friction_psd_column("bearing4"),
+            "psd_friction_bearing4_n2_per_hz"
+        );
+    }
 
     /// Every row of records.csv has as many fields as the header, for good
     /// and failed records alike.

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::sticking::StickingEvents;
+use super::sticking::PassageHeights;
 
 /// One record's results.
 #[derive(Debug, Clone, Serialize)]
@@ -56,8 +56,8 @@ pub struct RecordResult {
     pub friction_harmonic_significant: Vec<Option<bool>>,
     /// Friction power in the low band (0 to the diagnosis band edge), N².
     pub friction_low_band_power_n2: Option<f64>,
-    /// Sticking events.
-    pub sticking: Option<StickingEvents>,
+    /// Friction of each ball-pass period (sticking).
+    pub sticking: Option<PassageHeights>,
     /// Warnings of the analyses.
     pub warnings: Vec<String>,
     /// Friction auto-spectrum (full range, after the analysis' low-pass and
@@ -67,4 +67,8 @@ pub struct RecordResult {
     /// Friction auto-spectrum, N²/Hz.
     #[serde(skip)]
     pub friction_psd: Vec<f64>,
+    /// The record's friction → velocity-error spectra, pooled by the sweep
+    /// to identify the stage.
+    #[serde(skip)]
+    pub stage_spectra: Option<crate::model::identify::StageSpectra>,
 }

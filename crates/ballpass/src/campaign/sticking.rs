@@ -1,132 +1,120 @@
-//! Sticking events: friction spikes far above a bearing's robust level, and
-//! whether they come at ball-pass multiples (thesis ch. 8, Fig. 66).
+//! Sticking: sporadic friction spikes at ball passages, told from the
+//! regular ball-pass ripple every bearing has (thesis ch. 8, Fig. 66).
+//!
+//! A good bearing's friction rises a little at every ball passage (the
+//! ripple); a sticking bearing's jumps, at some passages only, by random
+//! amounts up to many times that. So every ball-pass period of a record is
+//! measured the same way, and a period counts as a spike only when it stands
+//! far above the bearing's *own typical period*, never merely above the
+//! noise:
 //!
 //! ```text
-//! baseline  = linear interpolation of block medians (blocks of tau_c / 2)
-//! residual  = friction − baseline               (removes load-cell drift)
-//! level     = 1.4826 · median(|residual − median(residual)|)   (robust σ)
-//! event     = local maximum of residual with residual > spike_factor · level,
-//!             at least min_separation · tau_c after the previous event
-//! timing    = fraction of intervals between successive events within
-//!             ±tolerance · tau_c of a whole number of periods
+//! smoothed  = friction through three box filters of width w (≈ Gaussian of
+//!             σ = 0.01 τc: noise down, spikes of ≥ 0.02 τc kept)
+//! baseline  = block medians over τc/2, linearly interpolated (follows drift
+//!             and slow wander, not the passages)
+//! height_j  = max over period j (t in [j τc, (j+1) τc)) of smoothed − baseline
+//! typical   = median of the heights,  spread = (median − 10th percentile) / 1.2816
+//! spike     = a period with height > typical + κ · spread      (κ = 8)
 //! ```
 //!
-//! Random spikes would give a timing fraction of about `2 · tolerance` (0.4
-//! with the default 0.2); spikes caused by the balls give close to 1.
+//! The spread comes from the lower half of the heights, which spikes (at
+//! most half the periods) do not reach. For a good bearing the heights are
+//! the ripple's peak plus the largest noise sample of the period: close to
+//! a Gumbel distribution, whose chance of exceeding `typical + 8 spread`
+//! is 4e-4 (a Gaussian's is far smaller); [`super::diagnose`] turns spike
+//! counts into verdicts with that per-period rate and states the resulting
+//! false-alarm rate. The first and last half period are left out (a load
+//! cell's discharge or a start transient there is not a passage).
 
 use serde::{Deserialize, Serialize};
 
-use ballpass_dsp::{find_peaks, Bound, FindPeaksSettings};
-
 use crate::error::{Error, Result};
-use crate::stats::{median_with, robust_sigma_with};
+use crate::stats::percentile_of_keys;
+use crate::stats::{median_with, order_key};
 
-/// Settings of the sticking-event detector.
+/// Settings of the per-period heights.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct StickingSettings {
-    /// A spike counts when it stands this many robust σ above the baseline.
-    pub spike_factor: f64,
-    /// Fewest ball periods between two counted spikes.
-    pub min_separation_periods: f64,
-    /// Half-width of the window around whole periods, in periods.
-    pub timing_tolerance_periods: f64,
+    /// A period is a spike when its height exceeds the typical by this many
+    /// spreads.
+    pub outlier_spreads: f64,
+    /// Smoothing (Gaussian-equivalent σ), in ball-pass periods.
+    pub smoothing_periods: f64,
 }
 
 impl Default for StickingSettings {
     fn default() -> Self {
         Self {
-            spike_factor: 8.0,
-            min_separation_periods: 0.5,
-            timing_tolerance_periods: 0.2,
+            outlier_spreads: 8.0,
+            smoothing_periods: 0.01,
         }
     }
 }
 
-/// Sticking events of one record.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StickingEvents {
-    /// Robust level (σ) of the friction about its baseline, N.
-    pub robust_level_n: f64,
-    /// Threshold used, N above the baseline.
-    pub threshold_n: f64,
-    /// Times of the events, s from the record start.
-    pub times_s: Vec<f64>,
-    /// Heights above the baseline, N.
+/// The friction of each ball-pass period of one record.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassageHeights {
+    /// Ball-pass period used, s.
+    pub period_s: f64,
+    /// Periods measured.
+    pub periods: usize,
+    /// Height of each period above the baseline, N (not in the tables).
+    #[serde(skip)]
     pub heights_n: Vec<f64>,
-    /// Largest height over the robust level.
-    pub max_height_over_level: Option<f64>,
-    /// Events per second.
-    pub rate_per_s: f64,
-    /// Fraction of intervals that are whole numbers of ball periods
-    /// (`None` with fewer than two events).
-    pub timing_fraction: Option<f64>,
+    /// Time of each period's maximum, s from the record start (not in the tables).
+    #[serde(skip)]
+    pub times_s: Vec<f64>,
+    /// Typical period height (median), N.
+    pub typical_n: f64,
+    /// Spread of the heights below the median (robust σ), N.
+    pub spread_n: f64,
+    /// Periods standing above `typical + κ spread`.
+    pub spikes: usize,
+    /// Their times, s.
+    pub spike_times_s: Vec<f64>,
+    /// Their heights, N.
+    pub spike_heights_n: Vec<f64>,
 }
 
-/// Finds the sticking events of a friction record.
-///
-/// # Errors
-/// [`Error::InvalidSetting`] for a non-positive period, rate or setting;
-/// [`Error::Dsp`] if the peak finder rejects the signal (non-finite samples).
-pub fn sticking_events(
-    friction_n: &[f64],
-    fs_hz: f64,
-    tau_c_s: f64,
-    settings: &StickingSettings,
-) -> Result<StickingEvents> {
-    for (name, v) in [
-        ("tau_c", tau_c_s),
-        ("fs", fs_hz),
-        ("spike factor", settings.spike_factor),
-        ("min separation", settings.min_separation_periods),
-        ("timing tolerance", settings.timing_tolerance_periods),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(Error::setting(
-                name,
-                format!("must be a positive number, got {v}"),
-            ));
+/// `(median − 10th percentile) / 1.2816` of `v`: the robust σ of the lower
+/// half (0 for fewer than two values).
+pub(crate) fn lower_spread(v: &[f64]) -> (f64, f64) {
+    let mut keys: Vec<i64> = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .map(|&x| order_key(x))
+        .collect();
+    if keys.is_empty() {
+        return (0.0, 0.0);
+    }
+    let med = percentile_of_keys(&mut keys, 50.0);
+    let p10 = percentile_of_keys(&mut keys, 10.0);
+    (med, (med - p10).max(0.0) / 1.281_551_565_544_600_5)
+}
+
+/// Three passes of a centred moving average of `w` samples (edges: the
+/// mean of what the window holds), `σ² = 3 (w² − 1) / 12`.
+fn triple_box(x: &[f64], w: usize) -> Vec<f64> {
+    let mut cur = x.to_vec();
+    if w <= 1 {
+        return cur;
+    }
+    let h = w / 2;
+    let n = x.len();
+    let mut prefix = vec![0.0; n + 1];
+    for _ in 0..3 {
+        for i in 0..n {
+            prefix[i + 1] = prefix[i] + cur[i];
+        }
+        for (i, c) in cur.iter_mut().enumerate() {
+            let lo = i.saturating_sub(h);
+            let hi = (i + (w - h)).min(n);
+            *c = (prefix[hi] - prefix[lo]) / (hi - lo) as f64;
         }
     }
-    let n = friction_n.len();
-    let block = ((tau_c_s * fs_hz / 2.0).round() as usize).max(8);
-    let residual = detrend_by_block_medians(friction_n, block);
-    let level = robust_sigma_with(&residual, &mut Vec::new()).unwrap_or(0.0);
-    let threshold = settings.spike_factor * level;
-    let distance = (settings.min_separation_periods * tau_c_s * fs_hz).max(1.0);
-    let found = find_peaks(
-        &residual,
-        &FindPeaksSettings {
-            height: Some(Bound::at_least(threshold.max(f64::MIN_POSITIVE))),
-            distance: Some(distance),
-            ..Default::default()
-        },
-    )
-    .map_err(|e| Error::dsp("sticking events", e))?;
-    let times_s: Vec<f64> = found.indices.iter().map(|&i| i as f64 / fs_hz).collect();
-    let heights_n: Vec<f64> = found.indices.iter().map(|&i| residual[i]).collect();
-    let timing_fraction = (times_s.len() >= 2).then(|| {
-        let near = times_s
-            .windows(2)
-            .filter(|w| {
-                let k = (w[1] - w[0]) / tau_c_s;
-                (k - k.round()).abs() <= settings.timing_tolerance_periods && k.round() >= 1.0
-            })
-            .count();
-        near as f64 / (times_s.len() - 1) as f64
-    });
-    let max_height_over_level = (level > 0.0)
-        .then(|| heights_n.iter().copied().fold(f64::NEG_INFINITY, f64::max) / level)
-        .filter(|v| v.is_finite());
-    Ok(StickingEvents {
-        robust_level_n: level,
-        threshold_n: threshold,
-        rate_per_s: times_s.len() as f64 / (n as f64 / fs_hz),
-        times_s,
-        heights_n,
-        max_height_over_level,
-        timing_fraction,
-    })
+    cur
 }
 
 /// `x` minus a baseline made of the medians of consecutive blocks of `block`
@@ -160,6 +148,85 @@ fn detrend_by_block_medians(x: &[f64], block: usize) -> Vec<f64> {
     out
 }
 
+/// The height of each ball-pass period of a friction record (module docs).
+///
+/// # Errors
+/// [`Error::InvalidSetting`] for a non-positive period, rate or setting.
+pub fn passage_heights(
+    friction_n: &[f64],
+    fs_hz: f64,
+    tau_c_s: f64,
+    settings: &StickingSettings,
+) -> Result<PassageHeights> {
+    for (name, v) in [
+        ("tau_c", tau_c_s),
+        ("fs", fs_hz),
+        ("outlier spreads", settings.outlier_spreads),
+        ("smoothing", settings.smoothing_periods),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::setting(
+                name,
+                format!("must be a positive number, got {v}"),
+            ));
+        }
+    }
+    let per = tau_c_s * fs_hz;
+    // Box width for a Gaussian-equivalent σ: w = sqrt(4 σ² + 1).
+    let sigma = settings.smoothing_periods * per;
+    let w = ((4.0 * sigma * sigma + 1.0).sqrt().round() as usize).max(1);
+    let smooth = triple_box(friction_n, w);
+    let block = ((per / 2.0).round() as usize).max(8);
+    let residual = detrend_by_block_medians(&smooth, block);
+    let n = residual.len();
+    // Whole periods after the first half period, ending half a period early.
+    let start = (0.5 * per).round() as usize;
+    let mut heights_n = Vec::new();
+    let mut times_s = Vec::new();
+    let mut j = 0usize;
+    loop {
+        let a = start + (j as f64 * per).round() as usize;
+        let b = start + ((j + 1) as f64 * per).round() as usize;
+        if b + start > n || b <= a {
+            break;
+        }
+        let (i, h) =
+            residual[a..b]
+                .iter()
+                .enumerate()
+                .fold((0, f64::NEG_INFINITY), |(bi, bv), (k, &v)| {
+                    if v > bv {
+                        (k, v)
+                    } else {
+                        (bi, bv)
+                    }
+                });
+        heights_n.push(h);
+        times_s.push((a + i) as f64 / fs_hz);
+        j += 1;
+    }
+    let (typical_n, spread_n) = lower_spread(&heights_n);
+    let limit = typical_n + settings.outlier_spreads * spread_n;
+    let (mut spike_times_s, mut spike_heights_n) = (Vec::new(), Vec::new());
+    for (&h, &t) in heights_n.iter().zip(&times_s) {
+        if spread_n > 0.0 && h > limit {
+            spike_times_s.push(t);
+            spike_heights_n.push(h);
+        }
+    }
+    Ok(PassageHeights {
+        period_s: tau_c_s,
+        periods: heights_n.len(),
+        spikes: spike_times_s.len(),
+        heights_n,
+        times_s,
+        typical_n,
+        spread_n,
+        spike_times_s,
+        spike_heights_n,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -182,109 +249,70 @@ mod tests {
             .collect()
     }
 
-    /// The selection median and robust σ (`crate::stats`, by order keys)
-    /// equal the sorting ones bit for bit (odd and even counts, ties, NaN
-    /// and infinities dropped, signed zeros, empty input).
+    /// A regular ripple far above the noise, on a decaying load cell: no
+    /// period is a spike (the old rule called every one of them a spike).
     #[test]
-    fn selection_median_equals_the_sorting_median() {
-        fn sorting_median(x: &[f64]) -> Option<f64> {
-            let mut v: Vec<f64> = x.iter().copied().filter(|x| x.is_finite()).collect();
-            v.sort_by(f64::total_cmp);
-            let n = v.len();
-            (n > 0).then(|| {
-                if n % 2 == 1 {
-                    v[n / 2]
-                } else {
-                    0.5 * (v[n / 2 - 1] + v[n / 2])
-                }
-            })
-        }
-        let mut scratch = Vec::new();
-        let mut cases: Vec<Vec<f64>> = vec![
-            vec![],
-            vec![f64::NAN],
-            vec![1.0],
-            vec![2.0, 1.0],
-            vec![0.0, -0.0, 0.0, -0.0],
-            vec![3.0, f64::NAN, 1.0, f64::INFINITY, 2.0, 2.0],
-        ];
-        for n in [7, 8, 450, 451, 30_000] {
-            cases.push(noise(n, n as u64));
-            cases.push(noise(n, 3).iter().map(|v| (v * 4.0).round()).collect());
-        }
-        for x in &cases {
-            let want = sorting_median(x);
-            assert_eq!(
-                median_with(x, &mut scratch).map(f64::to_bits),
-                want.map(f64::to_bits),
-                "{} values",
-                x.len()
-            );
-            let want_sigma = want.and_then(|m| {
-                let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
-                sorting_median(&dev).map(|d| 1.482_602_218_505_602 * d)
-            });
-            assert_eq!(
-                robust_sigma_with(x, &mut scratch).map(f64::to_bits),
-                want_sigma.map(f64::to_bits),
-                "{} values",
-                x.len()
-            );
-        }
-    }
-
-    #[test]
-    fn noise_and_drift_alone_give_no_events() {
-        let fs = 1000.0;
-        let x: Vec<f64> = noise(30_000, 1)
+    fn a_regular_ripple_is_not_sticking() {
+        let (fs, tau) = (1000.0, 0.4056);
+        let x: Vec<f64> = noise(60_000, 1)
             .iter()
             .enumerate()
-            .map(|(i, e)| 3.0 * (-(i as f64) / fs / 10.0).exp() + 0.05 * e)
+            .map(|(i, e)| {
+                let t = i as f64 / fs;
+                let ph = (t / tau).fract() - 0.5;
+                let ripple = 0.1 * (-0.5 * (ph / 0.03).powi(2)).exp();
+                3.0 * (-t / 10.0).exp() + ripple + 0.01 * e
+            })
             .collect();
-        let ev = sticking_events(&x, fs, 0.4056, &StickingSettings::default()).unwrap();
-        // 8 robust σ: the chance of one Gaussian sample above it in 30 000 is ~2e-11.
-        assert!(ev.times_s.is_empty(), "{:?}", ev.times_s);
-        assert!(
-            (ev.robust_level_n - 0.05).abs() < 0.005,
-            "{}",
-            ev.robust_level_n
-        );
+        let h = passage_heights(&x, fs, tau, &StickingSettings::default()).unwrap();
+        assert!(h.periods >= 145, "{}", h.periods);
+        assert_eq!(h.spikes, 0, "{:?}", h.spike_heights_n);
+        assert!((h.typical_n - 0.1).abs() < 0.03, "{}", h.typical_n);
     }
 
+    /// Spikes three times the ripple on every seventh passage are found, at
+    /// their times.
     #[test]
-    fn spikes_at_ball_pass_multiples_are_found_and_timed() {
+    fn sporadic_spikes_stand_out_of_the_ripple() {
         let (fs, tau) = (1000.0, 0.4056);
-        let mut x: Vec<f64> = noise(30_000, 2).iter().map(|e| 2.0 + 0.05 * e).collect();
-        // Spikes on every other or third passage, as a sticking bearing does.
         let mut want = Vec::new();
-        let mut k = 1usize;
-        while (k as f64 * tau + 0.1) * fs < 29_900.0 {
-            let c = ((k as f64 * tau + 0.1) * fs) as usize;
-            for d in 0..30usize {
-                let g = (-((d as f64 - 15.0) / 5.0).powi(2) / 2.0).exp();
-                x[c - 15 + d] += 10.0 * g;
-            }
-            want.push(c as f64 / fs);
-            k += if k % 2 == 0 { 3 } else { 2 };
+        let x: Vec<f64> = noise(60_000, 2)
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let t = i as f64 / fs;
+                let k = (t / tau).floor() as usize;
+                let ph = (t / tau).fract() - 0.5;
+                let g = (-0.5 * (ph / 0.03).powi(2)).exp();
+                let spike = if k % 7 == 3 { 0.3 } else { 0.0 };
+                2.0 + (0.1 + spike) * g + 0.01 * e
+            })
+            .collect();
+        for k in (0..148).filter(|k| k % 7 == 3) {
+            want.push((k as f64 + 0.5) * tau);
         }
-        let ev = sticking_events(&x, fs, tau, &StickingSettings::default()).unwrap();
-        assert_eq!(ev.times_s.len(), want.len());
-        for (a, b) in ev.times_s.iter().zip(&want) {
-            assert!((a - b).abs() <= 0.002, "{a} vs {b}");
+        let h = passage_heights(&x, fs, tau, &StickingSettings::default()).unwrap();
+        // The first and the last half periods are not examined.
+        let inside: Vec<f64> = want
+            .iter()
+            .copied()
+            .filter(|t| *t > 0.5 * tau && *t < 60.0 - 0.5 * tau)
+            .collect();
+        assert_eq!(h.spikes, inside.len(), "{:?}", h.spike_times_s);
+        for (a, b) in h.spike_times_s.iter().zip(&inside) {
+            assert!((a - b).abs() < 0.01, "{a} vs {b}");
         }
-        assert_eq!(ev.timing_fraction, Some(1.0));
-        assert!(ev.max_height_over_level.unwrap() > 100.0);
     }
 
     #[test]
     fn bad_settings_are_errors() {
         let x = vec![0.0; 100];
-        assert!(sticking_events(&x, 1000.0, 0.0, &StickingSettings::default()).is_err());
-        assert!(sticking_events(&x, -1.0, 0.4, &StickingSettings::default()).is_err());
+        assert!(passage_heights(&x, 1000.0, 0.0, &StickingSettings::default()).is_err());
+        assert!(passage_heights(&x, -1.0, 0.4, &StickingSettings::default()).is_err());
         let s = StickingSettings {
-            spike_factor: f64::NAN,
+            outlier_spreads: f64::NAN,
             ..Default::default()
         };
-        assert!(sticking_events(&x, 1000.0, 0.4, &s).is_err());
+        assert!(passage_heights(&x, 1000.0, 0.4, &s).is_err());
     }
 }

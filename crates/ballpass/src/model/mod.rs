@@ -1,9 +1,10 @@
-//! Signal and stage models of thesis chapter 6, with the corrections of ERRATA
+//! Signal and stage models of thesis chapter 6, with the corrections of docs/methods.md
 //! §2–7: the sinusoid model signals and their analytic correlations and
 //! spectra ([`signals`]), rectangular and Gaussian pulse trains with their
 //! exact Fourier coefficients ([`pulse_train`]), and the PD-controlled stage
 //! with its frequency responses and predicted velocity ([`stage`]).
 
+pub mod identify;
 pub mod pulse_train;
 pub mod signals;
 pub mod stage;

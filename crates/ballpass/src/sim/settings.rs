@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::profile::SpeedProfile;
 use super::shapes::PulseShape;
 use super::stage::StageSettings;
 use crate::bearing::{self, check_velocity, Geometry};
@@ -257,6 +258,12 @@ pub struct SimSettings {
     pub encoder: EncoderSettings,
     /// Photodetector.
     pub optical: OpticalSettings,
+    /// A multi-speed run instead of one velocity (see [`super::profile`]):
+    /// the stage starts settled at the first plateau's velocity and
+    /// `velocity_mm_s` is not used for the motion. `None` (the default,
+    /// and absent from the JSON) for one constant velocity.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile: Option<SpeedProfile>,
 }
 
 impl Default for SimSettings {
@@ -278,6 +285,7 @@ impl Default for SimSettings {
             load_cell: LoadCellSettings::default(),
             encoder: EncoderSettings::default(),
             optical: OpticalSettings::default(),
+            profile: None,
         }
     }
 }
@@ -388,6 +396,23 @@ impl SimSettings {
                     self.velocity_mm_s, self.duration_s
                 ),
             ));
+        }
+        if let Some(p) = &self.profile {
+            p.validate(10.0 * band)?;
+            if self.start != Start::Settled {
+                return Err(Error::setting(
+                    "start",
+                    "a speed profile starts settled at its first plateau; use start = settled",
+                ));
+            }
+            let passages =
+                p.max_speed_mm_s() * (self.duration_s + 100.0) / (2.0 * self.geometry.d_avg_mm());
+            if passages > 1e7 {
+                return Err(Error::setting(
+                    "profile",
+                    format!("makes up to {passages:.0} ball passages; at most 1e7"),
+                ));
+            }
         }
         positive("acceleration", self.motion.acceleration_mm_s2)?;
         if let Some(d) = self.motion.trigger_distance_mm {

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::profile::PlateauTruth;
 use super::settings::{Condition, SimSettings};
 use crate::error::Result;
 use crate::recording::Recording;
@@ -36,7 +37,7 @@ pub struct Spike {
 /// the realised `f_c`, between the *recorded* channels (sensor filters
 /// included), wrapped into `(-tau_c/2, tau_c/2]`; a positive lag means the
 /// signal lags the friction force, and the phase is `-360 lag / tau_c`
-/// degrees (ERRATA §8 convention). The `*_force_*` lags are the same
+/// degrees (docs/methods.md §8 convention). The `*_force_*` lags are the same
 /// against the friction *force* itself, without the load cell's discharge
 /// high-pass (what an analysis that restores the load cell's DC measures).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -133,6 +134,13 @@ pub struct Truth {
     pub velocity_error_true_std_mm_s: f64,
     /// Phase of the interference drift at the first sample, rad (when enabled).
     pub interference_phase_rad: Option<f64>,
+    /// With a speed profile: each plateau's commanded interval and velocity
+    /// and the stage's mean velocity over it (absent otherwise). The
+    /// single-speed fields above then refer to the first plateau's speed,
+    /// `mean_velocity_mm_s` is the mean speed over the record, and the
+    /// passage times are first forward crossings only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plateaus: Vec<PlateauTruth>,
     /// All parameters.
     pub settings: SimSettings,
 }

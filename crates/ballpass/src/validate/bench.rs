@@ -28,14 +28,18 @@
 use serde::{Deserialize, Serialize};
 
 use crate::bearing::Geometry;
+use crate::error::{Error, Result};
 use crate::sim::rng::Rng;
 use crate::sim::{
     Condition, FrictionSettings, LoadCellSettings, MotionSettings, OpticalSettings, PulseShape,
     SimSettings, StageSettings, Start,
 };
 
-/// A closed range `[lo, hi]` drawn uniformly, or log-uniformly.
+/// A closed range `[lo, hi]` drawn uniformly, or log-uniformly. In JSON
+/// an object `{"lo": .., "hi": .., "log": false}` or a single number (a
+/// fixed value).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(from = "RangeRepr")]
 pub struct Range {
     /// Lower end.
     pub lo: f64,
@@ -44,6 +48,27 @@ pub struct Range {
     /// Draw uniformly in `log` (both ends positive).
     #[serde(default)]
     pub log: bool,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RangeRepr {
+    Fixed(f64),
+    Range {
+        lo: f64,
+        hi: f64,
+        #[serde(default)]
+        log: bool,
+    },
+}
+
+impl From<RangeRepr> for Range {
+    fn from(r: RangeRepr) -> Self {
+        match r {
+            RangeRepr::Fixed(v) => Range::fixed(v),
+            RangeRepr::Range { lo, hi, log } => Range { lo, hi, log },
+        }
+    }
 }
 
 impl Range {
@@ -253,6 +278,81 @@ fn pick<T: Copy>(v: &[T], rng: &mut Rng) -> T {
 }
 
 impl Domain {
+    /// Checks the domain: every range ordered and finite (positive when
+    /// log-uniform), rates positive, probabilities in [0, 1], shape lists
+    /// not empty, and a bench drawn from it a valid simulator setting.
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] naming the key.
+    pub fn validate(&self) -> Result<()> {
+        let ranges = [
+            ("velocity_mm_s", self.velocity_mm_s),
+            ("duration_s", self.duration_s),
+            ("ball_diameter_mm", self.ball_diameter_mm),
+            ("balls_in_race", self.balls_in_race),
+            ("free_space_per_ball", self.free_space_per_ball),
+            ("coulomb_n", self.coulomb_n),
+            ("ripple_fraction", self.ripple_fraction),
+            (
+                "friction_pulse_width_ratio",
+                self.friction_pulse_width_ratio,
+            ),
+            ("roughness_fraction", self.roughness_fraction),
+            ("roughness_length_mm", self.roughness_length_mm),
+            ("friction_noise_n", self.friction_noise_n),
+            ("load_cell_tau_s", self.load_cell_tau_s),
+            ("pre_record_s", self.pre_record_s),
+            ("stage_f_n_hz", self.stage_f_n_hz),
+            ("stage_zeta", self.stage_zeta),
+            ("stage_mass_kg", self.stage_mass_kg),
+            ("optical_width_ratio", self.optical_width_ratio),
+            ("optical_pulse_v", self.optical_pulse_v),
+            ("optical_snr", self.optical_snr),
+            ("ac_tau_s", self.ac_tau_s),
+            ("drift_fraction", self.drift_fraction),
+            ("drift_period_s", self.drift_period_s),
+            ("sticking_severity", self.sticking_severity),
+        ];
+        for (name, r) in ranges {
+            if !(r.lo.is_finite() && r.hi.is_finite() && r.lo <= r.hi) || (r.log && r.lo <= 0.0) {
+                return Err(Error::setting(
+                    format!("domain {name}"),
+                    format!(
+                        "must be a finite range with lo ≤ hi (lo > 0 when log), got [{}, {}]",
+                        r.lo, r.hi
+                    ),
+                ));
+            }
+        }
+        if self.fs_hz.is_empty() || self.fs_hz.iter().any(|f| !(f.is_finite() && *f > 0.0)) {
+            return Err(Error::setting(
+                "domain fs_hz",
+                "must list positive sampling rates",
+            ));
+        }
+        if self.friction_shapes.is_empty() || self.optical_shapes.is_empty() {
+            return Err(Error::setting(
+                "domain shapes",
+                "friction_shapes and optical_shapes must not be empty",
+            ));
+        }
+        for (name, p) in [
+            ("load_cell_dc_probability", self.load_cell_dc_probability),
+            ("ac_probability", self.ac_probability),
+            ("drift_probability", self.drift_probability),
+            ("interference_probability", self.interference_probability),
+        ] {
+            if !(0.0..=1.0).contains(&p) {
+                return Err(Error::setting(
+                    format!("domain {name}"),
+                    format!("must be a probability in [0, 1], got {p}"),
+                ));
+            }
+        }
+        let b = self.draw(0);
+        b.settings(&b.bearing(0, true), 0).validate()
+    }
+
     /// Draws one bench (deterministic in `seed`).
     pub fn draw(&self, seed: u64) -> Bench {
         let mut r = Rng::new(seed);
@@ -408,6 +508,7 @@ impl Bench {
             load_cell: self.load_cell,
             encoder: Default::default(),
             optical: self.optical,
+            profile: None,
         }
     }
 }

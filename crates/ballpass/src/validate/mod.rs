@@ -4,7 +4,11 @@
 //! detection rates with their binomial intervals).
 
 pub mod bench;
+pub mod fleets;
 pub mod passages;
 pub mod score;
+pub mod suite;
 
 pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
+pub use score::Rate;
+pub use suite::{run, SuiteSettings, ValidationReport};

@@ -1,6 +1,6 @@
 //! The pulse-train models of thesis §6.3 fitted to the record: the Gaussian
 //! train (Eq. 6.24) and the rectangular train of order N (Eq. 6.22, as
-//! corrected in ERRATA §5), by [`ballpass_dsp::least_squares`] with the
+//! corrected in docs/methods.md §5), by [`ballpass_dsp::least_squares`] with the
 //! analytic Jacobians of [`crate::analysis::train_fit`].
 
 use super::signal::median;

@@ -3,7 +3,7 @@
 //! Every ball passing the fibre tip reflects light back up the fibre: a pulse
 //! in the photodetector voltage. [`detect_passages`] finds each pulse,
 //! measures it, summarises the record and fits the two pulse-train models of
-//! §6.3 (Gaussian Eq. 6.24 and rectangular Eq. 6.22, as corrected in ERRATA §5).
+//! §6.3 (Gaussian Eq. 6.24 and rectangular Eq. 6.22, as corrected in docs/methods.md §5).
 //!
 //! # Method
 //!
@@ -250,7 +250,7 @@ pub struct GaussianTrainFit {
     pub quality: FitQuality,
 }
 
-/// The rectangular pulse train of order N (Eq. 6.22 as corrected in ERRATA §5).
+/// The rectangular pulse train of order N (Eq. 6.22 as corrected in docs/methods.md §5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RectangularTrainFit {
     /// Base level `S`, V.

@@ -9,6 +9,13 @@
 
 use serde::{Deserialize, Serialize};
 
+mod dist;
+
+pub use dist::{
+    binomial_interval, chi2_cdf, chi2_ppf, digamma, f_cdf, f_ppf, gamma_p, ln_gamma, normal_cdf,
+    reg_inc_beta, student_t_quantile, trigamma,
+};
+
 /// Mean and sample standard deviation (ddof = 1; 0 for a single value).
 ///
 /// Serialised as `{"mean", "std", "n"}` in `analysis.json` and the campaign
@@ -256,238 +263,6 @@ pub fn origin_fit(x: &[f64], y: &[f64]) -> Option<OriginFit> {
     })
 }
 
-/// Quantile of Student's t distribution with `dof` degrees of freedom
-/// (`scipy.stats.t.ppf(p, dof)`), for 0 < p < 1 and dof > 0.
-///
-/// Inverts the regularised incomplete beta function by bisection to full
-/// double precision (the function is monotone, so bisection cannot fail).
-/// Returns NaN outside the domain.
-pub fn student_t_quantile(p: f64, dof: f64) -> f64 {
-    if !(p > 0.0 && p < 1.0 && dof > 0.0) {
-        return f64::NAN;
-    }
-    if p == 0.5 {
-        return 0.0;
-    }
-    let upper = p > 0.5;
-    let q = if upper { 1.0 - p } else { p }; // lower-tail probability of -|t|
-                                             // P(T <= -t) = I_{dof/(dof+t²)}(dof/2, 1/2) / 2, decreasing in t.
-    let tail = |t: f64| 0.5 * reg_inc_beta(dof / 2.0, 0.5, dof / (dof + t * t));
-    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
-    while tail(hi) > q {
-        hi *= 2.0;
-        if hi > 1e300 {
-            break;
-        }
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if tail(mid) > q {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo <= 1e-15 * hi {
-            break;
-        }
-    }
-    let t = 0.5 * (lo + hi);
-    if upper {
-        t
-    } else {
-        -t
-    }
-}
-
-/// Regularised incomplete beta function `I_x(a, b)` by Lentz's continued
-/// fraction (Numerical Recipes §6.4), for a, b > 0 and 0 ≤ x ≤ 1.
-pub fn reg_inc_beta(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    let ln_front = ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln();
-    if x < (a + 1.0) / (a + b + 2.0) {
-        ln_front.exp() * beta_cf(a, b, x) / a
-    } else {
-        1.0 - ln_front.exp() * beta_cf(b, a, 1.0 - x) / b
-    }
-}
-
-fn beta_cf(a: f64, b: f64, x: f64) -> f64 {
-    const TINY: f64 = 1e-300;
-    let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
-    let mut c = 1.0;
-    let mut d = 1.0 - qab * x / qap;
-    if d.abs() < TINY {
-        d = TINY;
-    }
-    d = 1.0 / d;
-    let mut h = d;
-    for m in 1..1000 {
-        let m = f64::from(m);
-        let m2 = 2.0 * m;
-        let aa = m * (b - m) * x / ((qam + m2) * (a + m2));
-        d = 1.0 + aa * d;
-        if d.abs() < TINY {
-            d = TINY;
-        }
-        c = 1.0 + aa / c;
-        if c.abs() < TINY {
-            c = TINY;
-        }
-        d = 1.0 / d;
-        h *= d * c;
-        let aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
-        d = 1.0 + aa * d;
-        if d.abs() < TINY {
-            d = TINY;
-        }
-        c = 1.0 + aa / c;
-        if c.abs() < TINY {
-            c = TINY;
-        }
-        d = 1.0 / d;
-        let del = d * c;
-        h *= del;
-        if (del - 1.0).abs() < 1e-16 {
-            break;
-        }
-    }
-    h
-}
-
-/// Natural log of the gamma function `ln Γ(x)` for x > 0 (Lanczos, g = 7,
-/// 9 terms; relative error ~1e-15 over the range used here).
-pub fn ln_gamma(x: f64) -> f64 {
-    const G: f64 = 7.0;
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        // Reflection: Γ(x) Γ(1-x) = π / sin(πx).
-        let pi = std::f64::consts::PI;
-        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + G + 0.5;
-    for (i, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// Regularised lower incomplete gamma `P(a, x) = γ(a, x) / Γ(a)` for
-/// `a > 0`, `x >= 0` (series below `a + 1`, Lentz continued fraction above;
-/// as `scipy.special.gammainc`).
-pub fn gamma_p(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    let ln_pre = a * x.ln() - x - ln_gamma(a);
-    if x < a + 1.0 {
-        let mut term = 1.0 / a;
-        let mut sum = term;
-        let mut ap = a;
-        for _ in 0..10_000 {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-17 {
-                break;
-            }
-        }
-        (sum.ln() + ln_pre).exp().min(1.0)
-    } else {
-        // Q(a, x) by the continued fraction (modified Lentz).
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        (1.0 - (ln_pre.exp() * h)).max(0.0)
-    }
-}
-
-/// Chi-square CDF with `nu > 0` degrees of freedom: `P(nu/2, x/2)`.
-pub fn chi2_cdf(x: f64, nu: f64) -> f64 {
-    gamma_p(0.5 * nu, 0.5 * x)
-}
-
-/// Chi-square quantile: the `x` with `chi2_cdf(x, nu) = p`, for
-/// `0 < p < 1`, `nu > 0` (as `scipy.stats.chi2.ppf(p, nu)`).
-///
-/// Bracketed bisection on the CDF, finished by Newton steps on the
-/// log-density; relative accuracy ~1e-12. Returns NaN outside the domain.
-pub fn chi2_ppf(p: f64, nu: f64) -> f64 {
-    if !(p > 0.0 && p < 1.0 && nu > 0.0) {
-        return f64::NAN;
-    }
-    let mut lo = 0.0;
-    let mut hi = nu.max(1.0);
-    while chi2_cdf(hi, nu) < p {
-        lo = hi;
-        hi *= 2.0;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if chi2_cdf(mid, nu) < p {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo <= 1e-13 * hi {
-            break;
-        }
-    }
-    let mut x = 0.5 * (lo + hi);
-    // Newton on F(x) - p with density f(x) = x^(k-1) e^(-x/2) / (2^k Γ(k)), k = nu/2.
-    let k = 0.5 * nu;
-    for _ in 0..3 {
-        let ln_f = (k - 1.0) * x.ln() - 0.5 * x - k * 2f64.ln() - ln_gamma(k);
-        let f = ln_f.exp();
-        if !(f.is_finite() && f > 0.0) {
-            break;
-        }
-        let step = (chi2_cdf(x, nu) - p) / f;
-        let next = x - step;
-        if !(next > lo && next < hi) {
-            break;
-        }
-        x = next;
-    }
-    x
-}
-
 /// Equivalent degrees of freedom of a Welch average of `k` segments of
 /// window `w` stepped by `step` samples (Percival & Walden 1993, Eq. 292b;
 /// Welch 1967):
@@ -534,6 +309,75 @@ pub fn parabolic_peak(a: f64, b: f64, c: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn noise(n: usize, seed: u64) -> Vec<f64> {
+        // splitmix64 → two uniforms → Box–Muller; fixed seed.
+        let mut s = seed;
+        let mut next = || {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let (u, v) = (next().max(1e-300), next());
+                (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+            })
+            .collect()
+    }
+
+    /// The selection median and robust σ (`crate::stats`, by order keys)
+    /// equal the sorting ones bit for bit (odd and even counts, ties, NaN
+    /// and infinities dropped, signed zeros, empty input).
+    #[test]
+    fn selection_median_equals_the_sorting_median() {
+        fn sorting_median(x: &[f64]) -> Option<f64> {
+            let mut v: Vec<f64> = x.iter().copied().filter(|x| x.is_finite()).collect();
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            (n > 0).then(|| {
+                if n % 2 == 1 {
+                    v[n / 2]
+                } else {
+                    0.5 * (v[n / 2 - 1] + v[n / 2])
+                }
+            })
+        }
+        let mut scratch = Vec::new();
+        let mut cases: Vec<Vec<f64>> = vec![
+            vec![],
+            vec![f64::NAN],
+            vec![1.0],
+            vec![2.0, 1.0],
+            vec![0.0, -0.0, 0.0, -0.0],
+            vec![3.0, f64::NAN, 1.0, f64::INFINITY, 2.0, 2.0],
+        ];
+        for n in [7, 8, 450, 451, 30_000] {
+            cases.push(noise(n, n as u64));
+            cases.push(noise(n, 3).iter().map(|v| (v * 4.0).round()).collect());
+        }
+        for x in &cases {
+            let want = sorting_median(x);
+            assert_eq!(
+                median_with(x, &mut scratch).map(f64::to_bits),
+                want.map(f64::to_bits),
+                "{} values",
+                x.len()
+            );
+            let want_sigma = want.and_then(|m| {
+                let dev: Vec<f64> = x.iter().map(|v| (v - m).abs()).collect();
+                sorting_median(&dev).map(|d| 1.482_602_218_505_602 * d)
+            });
+            assert_eq!(
+                robust_sigma_with(x, &mut scratch).map(f64::to_bits),
+                want_sigma.map(f64::to_bits),
+                "{} values",
+                x.len()
+            );
+        }
+    }
 
     #[test]
     fn order_keys_sort_as_total_cmp_and_come_back() {

@@ -1,0 +1,485 @@
+//! The validation suite behind `ballpass validate`: every verdict scored on
+//! seeded benches drawn from a [`Domain`] (a lab's own bench, or the whole
+//! randomized grid), against the simulator's truth.
+//!
+//! - **Fleets**: [`super::fleets`]; good bearings called bad or suspect,
+//!   sticking bearings found.
+//! - **Periodicity**: benches with no ball-pass ripple at all, one record per
+//!   bench at each record length; the rate at which the analysis claims that
+//!   friction shows f_c (its harmonic family test is a 99 % test, so the
+//!   nominal rate is 1 %, with the binomial margin of the number of records).
+//! - **Lags**: friction → optical lag at the measured f_c against the
+//!   simulator's truth, in ball-pass periods, where at least 10 periods were
+//!   recorded and the phase is measurable (coherent).
+//! - **Stage**: the closed-loop identification ([`crate::model::identify`])
+//!   against the simulated stage: how often it identifies, and how often an
+//!   identified stage is within ±5 % (f_n) and ±20 % (ζ).
+//!
+//! The rules scored here are the library's defaults, frozen before the
+//! seeds are drawn; nothing is tuned to the benches.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::bench::{Domain, Range};
+use super::fleets::{run_fleet, score, FleetScore, FleetSpec};
+use super::score::Rate;
+use crate::analysis::{analyze, AnalyzeSettings};
+use crate::model::identify::{identify, StageSpectra};
+use crate::sim::simulate;
+
+/// Schema tag of [`ValidationReport`].
+pub const VALIDATION_SCHEMA: &str = "ballpass.validation/1";
+
+/// How much of the suite to run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SuiteSettings {
+    /// Fleets of [`FleetSpec::default`] (5 bearings, 2–10 repeats).
+    pub fleets: usize,
+    /// Records for the lag and stage scores, and per record length for the
+    /// periodicity score.
+    pub records: usize,
+    /// Record lengths of the periodicity score, s.
+    pub durations_s: Vec<f64>,
+    /// First seed; the benches are `seed, seed + 1, …` (fleets, lag/stage
+    /// records and periodicity records use disjoint ranges above it).
+    pub seed: u64,
+}
+
+impl Default for SuiteSettings {
+    fn default() -> Self {
+        Self {
+            fleets: 100,
+            records: 200,
+            durations_s: vec![10.0, 30.0, 120.0, 600.0],
+            seed: 1_000_000,
+        }
+    }
+}
+
+/// False periodicity claims on ripple-free benches at one record length.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PeriodicityScore {
+    /// Record length, s.
+    pub duration_s: f64,
+    /// Records whose analysis claimed that friction shows f_c.
+    pub false_claims: Rate,
+    /// The test's nominal rate.
+    pub nominal: f64,
+    /// Most claims the nominal rate gives with 99 % probability (binomial).
+    pub allowed: usize,
+    /// Whether the claims stay within that margin.
+    pub within_margin: bool,
+    /// Records shorter than two ball-pass periods, which the analysis
+    /// refuses (not counted above).
+    pub too_short: usize,
+    /// Records that could not be analysed, with the reason.
+    pub failed: Vec<String>,
+}
+
+/// The friction → optical phase at f_c against the truth, as a lag in
+/// ball-pass periods.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LagScore {
+    /// Records with ≥ 10 periods and a measurable (coherent) lag.
+    pub measured: Rate,
+    /// Of those, lag within 0.02 τc of the truth.
+    pub within_0_02_tau_c: Rate,
+    /// Of those, lag within the larger of 0.02 τc and its own stated 95 %
+    /// interval.
+    pub within_interval: Rate,
+    /// Median, 90th percentile and largest error, τc.
+    pub error_p50_tau_c: Option<f64>,
+    /// 90th percentile, τc.
+    pub error_p90_tau_c: Option<f64>,
+    /// Largest, τc.
+    pub error_max_tau_c: Option<f64>,
+}
+
+/// The stage identification against the simulated stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StageScore {
+    /// Records where the stage was identified.
+    pub identified: Rate,
+    /// Of those, f_n within ±5 % and ζ within ±20 % of the truth.
+    pub within_tolerance: Rate,
+    /// Of those, both true values inside the stated 95 % intervals.
+    pub inside_intervals: Rate,
+}
+
+/// Everything one suite run measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ValidationReport {
+    /// [`VALIDATION_SCHEMA`].
+    pub schema: &'static str,
+    /// The benches drawn from.
+    pub domain: Domain,
+    /// What was run.
+    pub settings: SuiteSettings,
+    /// Fleet verdicts.
+    pub fleets: Option<FleetScore>,
+    /// Periodicity claims per record length.
+    pub periodicity: Vec<PeriodicityScore>,
+    /// Lags.
+    pub lags: Option<LagScore>,
+    /// Stage identification.
+    pub stage: Option<StageScore>,
+    /// Records of the lag/stage part that could not be simulated or
+    /// analysed, with the reason.
+    pub failed: Vec<String>,
+}
+
+/// Progress: `(part, done, total)`.
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+/// Runs the suite (module docs). Deterministic in `settings.seed`.
+pub fn run(domain: &Domain, settings: &SuiteSettings, progress: Progress<'_>) -> ValidationReport {
+    let base = settings.seed;
+    let fleets = (settings.fleets > 0).then(|| {
+        let spec = FleetSpec::default();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let outcomes: Vec<_> = (0..settings.fleets as u64)
+            .into_par_iter()
+            .map(|k| {
+                let o = run_fleet(domain, &spec, base + k);
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress("fleets", d, settings.fleets);
+                o
+            })
+            .collect();
+        score(&outcomes)
+    });
+    let (lags, stage, failed) = if settings.records > 0 {
+        let (l, s, f) = lags_and_stage(domain, base + 100_000, settings.records, progress);
+        (Some(l), Some(s), f)
+    } else {
+        (None, None, Vec::new())
+    };
+    let periodicity = settings
+        .durations_s
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| {
+            periodicity(
+                domain,
+                t,
+                base + 200_000 + 100_000 * i as u64,
+                settings.records,
+                progress,
+            )
+        })
+        .collect();
+    ValidationReport {
+        schema: VALIDATION_SCHEMA,
+        domain: domain.clone(),
+        settings: settings.clone(),
+        fleets,
+        periodicity,
+        lags,
+        stage,
+        failed,
+    }
+}
+
+impl ValidationReport {
+    /// The report as a table for a person, one verdict per line with its
+    /// rate and 95 % interval.
+    pub fn text(&self) -> String {
+        use std::fmt::Write;
+        let mut o = String::new();
+        let s = &self.settings;
+        let _ = writeln!(
+            o,
+            "validation on benches drawn from the domain (seeds from {}): {} fleets, {} records per part",
+            s.seed, s.fleets, s.records
+        );
+        if let Some(f) = &self.fleets {
+            let _ = writeln!(o, "fleets ({} of 5 bearings, 2–10 repeats):", f.fleets);
+            for (name, r) in [
+                ("good bearings called bad", &f.good_called_bad),
+                ("good bearings called suspect", &f.good_called_suspect),
+                (
+                    "good bearings inconclusive (too few periods)",
+                    &f.good_inconclusive,
+                ),
+                (
+                    "sticking bearings called bad (decided)",
+                    &f.sticking_called_bad,
+                ),
+                (
+                    "sticking bearings bad or suspect (decided)",
+                    &f.sticking_flagged,
+                ),
+                ("sticking bearings inconclusive", &f.sticking_inconclusive),
+                ("mild sticking called bad (decided)", &f.mild_called_bad),
+            ] {
+                let _ = writeln!(o, "  {name:<46} {r}");
+            }
+            if !f.failed.is_empty() {
+                let _ = writeln!(o, "  fleets not analysed: {}", f.failed.len());
+            }
+        }
+        for p in &self.periodicity {
+            let _ = writeln!(
+                o,
+                "no ripple, {:>5} s records: friction periodicity claimed {} (nominal {:.0} %, at most {} expected: {})",
+                p.duration_s,
+                p.false_claims,
+                100.0 * p.nominal,
+                p.allowed,
+                if p.within_margin { "within" } else { "EXCEEDED" }
+            );
+        }
+        if let Some(l) = &self.lags {
+            let _ = writeln!(
+                o,
+                "friction → optical phase at f_c (≥ 10 periods): measurable {}; within 0.02 τc {}; within its 95 % interval (or 0.02 τc) {}; error p50 {} p90 {} max {} τc",
+                l.measured,
+                l.within_0_02_tau_c,
+                l.within_interval,
+                opt(l.error_p50_tau_c),
+                opt(l.error_p90_tau_c),
+                opt(l.error_max_tau_c)
+            );
+        }
+        if let Some(st) = &self.stage {
+            let _ = writeln!(
+                o,
+                "stage identification: identified {}; of those within ±5 % f_n and ±20 % ζ {}; truth inside the 95 % intervals {}",
+                st.identified, st.within_tolerance, st.inside_intervals
+            );
+        }
+        if !self.failed.is_empty() {
+            let _ = writeln!(
+                o,
+                "records not analysed: {} (first: {})",
+                self.failed.len(),
+                self.failed[0]
+            );
+        }
+        o
+    }
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("—".into(), |v| format!("{v:.4}"))
+}
+
+/// Wraps a fraction of a period to (-0.5, 0.5].
+fn wrap(x: f64) -> f64 {
+    let y = x - x.round();
+    if y <= -0.5 {
+        y + 1.0
+    } else {
+        y
+    }
+}
+
+/// One record's lag error (τc, `None` when not measurable) and stage
+/// outcome (`None` when not identified; else within tolerance, inside
+/// intervals).
+type RecordScore = (bool, Option<(f64, f64)>, Option<(bool, bool)>);
+
+fn lags_and_stage(
+    domain: &Domain,
+    base: u64,
+    n: usize,
+    progress: Progress<'_>,
+) -> (LagScore, StageScore, Vec<String>) {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let rows: Vec<Result<RecordScore, String>> = (0..n as u64)
+        .into_par_iter()
+        .map(|k| {
+            let r = one_record(domain, base + k);
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("lags and stage", d, n);
+            r
+        })
+        .collect();
+    let failed: Vec<String> = rows.iter().filter_map(|r| r.clone().err()).collect();
+    let ok: Vec<RecordScore> = rows.into_iter().filter_map(Result::ok).collect();
+    let eligible = ok.iter().filter(|r| r.0).count();
+    let lag_rows: Vec<(f64, f64)> = ok.iter().filter_map(|r| r.1).collect();
+    let inside = lag_rows
+        .iter()
+        .filter(|(e, ci)| e.abs() <= ci.max(0.02))
+        .count();
+    let mut errs: Vec<f64> = lag_rows.iter().map(|r| r.0.abs()).collect();
+    errs.sort_by(f64::total_cmp);
+    let q =
+        |p: f64| (!errs.is_empty()).then(|| errs[((errs.len() - 1) as f64 * p).round() as usize]);
+    let lags = LagScore {
+        measured: Rate::of(errs.len(), eligible),
+        within_0_02_tau_c: Rate::of(errs.iter().filter(|&&e| e <= 0.02).count(), errs.len()),
+        within_interval: Rate::of(inside, errs.len()),
+        error_p50_tau_c: q(0.5),
+        error_p90_tau_c: q(0.9),
+        error_max_tau_c: errs.last().copied(),
+    };
+    let ids: Vec<(bool, bool)> = ok.iter().filter_map(|r| r.2).collect();
+    let stage = StageScore {
+        identified: Rate::of(ids.len(), ok.len()),
+        within_tolerance: Rate::of(ids.iter().filter(|r| r.0).count(), ids.len()),
+        inside_intervals: Rate::of(ids.iter().filter(|r| r.1).count(), ids.len()),
+    };
+    (lags, stage, failed)
+}
+
+fn one_record(domain: &Domain, seed: u64) -> Result<RecordScore, String> {
+    let b = domain.draw(seed);
+    let s = b.settings(&b.bearing(0, false), seed);
+    let sim = simulate(&s).map_err(|e| format!("bench {seed}: {e}"))?;
+    let t = &sim.truth;
+    let pred = b
+        .geometry
+        .predict(b.velocity_mm_s, 5)
+        .map_err(|e| format!("bench {seed}: {e}"))?;
+    let settings = AnalyzeSettings::default();
+    let a = analyze(std::slice::from_ref(&sim.recording), &pred, &settings)
+        .map_err(|e| format!("bench {seed}: {e}"))?;
+    let periods = s.duration_s / t.tau_c_s;
+    let eligible = periods >= 10.0;
+    // The phase at f_c against the truth's phase of the fundamentals (the
+    // lag that explains several harmonics at once differs from it by the
+    // pulse shapes' own harmonic phases, which the truth does not model).
+    let lag = a
+        .phases
+        .iter()
+        .find(|p| p.pair == "friction__optical")
+        .and_then(|p| Some((p.phase_deg?, p.phase_ci95_deg.unwrap_or(0.0) / 360.0)))
+        .filter(|_| eligible)
+        .map(|(phase, ci)| {
+            let truth = if a.load_cell.first().is_some_and(|d| d.applied) {
+                t.optical_lag_force_s
+            } else {
+                t.optical_lag_s
+            };
+            (wrap(-phase / 360.0 - truth / t.tau_c_s), ci)
+        });
+    let spectra = StageSpectra::of_recording(
+        &sim.recording,
+        b.velocity_mm_s,
+        pred.tau_c_s,
+        settings.load_cell,
+    )
+    .map_err(|e| format!("bench {seed}: {e}"))?;
+    let stage = spectra.map(|sp| identify(&sp)).and_then(|id| {
+        let (Some(fe), Some(ze)) = (id.natural_frequency_hz, id.damping_ratio) else {
+            return None;
+        };
+        if !id.identified {
+            return None;
+        }
+        let st = &s.stage;
+        let fn_t = (st.kkp_n_per_m / st.mass_kg).sqrt() / std::f64::consts::TAU;
+        let z_t = st.kkd_n_s_per_m / (2.0 * (st.mass_kg * st.kkp_n_per_m).sqrt());
+        let within = (fe.value / fn_t - 1.0).abs() <= 0.05 && (ze.value / z_t - 1.0).abs() <= 0.2;
+        let inside = (fe.value - fn_t).abs() <= fe.ci95 && (ze.value - z_t).abs() <= ze.ci95;
+        Some((within, inside))
+    });
+    Ok((eligible, lag, stage))
+}
+
+fn periodicity(
+    domain: &Domain,
+    duration_s: f64,
+    base: u64,
+    n: usize,
+    progress: Progress<'_>,
+) -> PeriodicityScore {
+    let d = Domain {
+        duration_s: Range::fixed(duration_s),
+        ripple_fraction: Range::fixed(0.0),
+        ..domain.clone()
+    };
+    let part = format!("periodicity at {duration_s} s");
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let rows: Vec<Result<Option<bool>, String>> = (0..n as u64)
+        .into_par_iter()
+        .map(|k| {
+            let seed = base + k;
+            let r = (|| {
+                let mut b = d.draw(seed);
+                let mut s = b.settings(&b.bearing(0, false), seed);
+                // Long records at the lowest rate of the domain keep the
+                // suite's memory and time bounded (the test's statistics
+                // depend on the record's periods, not its rate).
+                if duration_s > 300.0 {
+                    b.fs_hz = d.fs_hz.iter().copied().fold(f64::INFINITY, f64::min);
+                    s.fs_hz = b.fs_hz;
+                }
+                let sim = simulate(&s).map_err(|e| format!("bench {seed}: {e}"))?;
+                let pred = b
+                    .geometry
+                    .predict(b.velocity_mm_s, 5)
+                    .map_err(|e| format!("bench {seed}: {e}"))?;
+                // The analysis refuses a record of fewer than two periods
+                // (rightly: nothing to claim), counted apart.
+                if s.duration_s < 2.0 * pred.tau_c_s {
+                    return Ok(None);
+                }
+                let a = analyze(
+                    std::slice::from_ref(&sim.recording),
+                    &pred,
+                    &AnalyzeSettings::default(),
+                )
+                .map_err(|e| format!("bench {seed}: {e}"))?;
+                Ok(Some(!a.verdict.friction_harmonics_flagged.is_empty()))
+            })();
+            let dn = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(&part, dn, n);
+            r
+        })
+        .collect();
+    let failed: Vec<String> = rows.iter().filter_map(|r| r.clone().err()).collect();
+    let done: Vec<Option<bool>> = rows.into_iter().filter_map(Result::ok).collect();
+    let too_short = done.iter().filter(|c| c.is_none()).count();
+    let claims: Vec<bool> = done.into_iter().flatten().collect();
+    let k = claims.iter().filter(|&&c| c).count();
+    let nominal = 0.01;
+    let allowed = binomial_upper(claims.len(), nominal, 0.99);
+    PeriodicityScore {
+        duration_s,
+        false_claims: Rate::of(k, claims.len()),
+        nominal,
+        allowed,
+        within_margin: k <= allowed,
+        too_short,
+        failed,
+    }
+}
+
+/// Smallest `c` with `P(Binomial(n, p) ≤ c) ≥ level`.
+fn binomial_upper(n: usize, p: f64, level: f64) -> usize {
+    let mut pmf = (1.0 - p).powi(n as i32);
+    let mut cdf = pmf;
+    let mut c = 0;
+    while cdf < level && c < n {
+        pmf *= (n - c) as f64 / (c + 1) as f64 * p / (1.0 - p);
+        c += 1;
+        cdf += pmf;
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Against scipy.stats.binom.ppf(0.99, n, 0.01): 4 for n = 100, 6 for
+    /// n = 200, 1 for n = 10.
+    #[test]
+    fn binomial_upper_matches_scipy() {
+        assert_eq!(binomial_upper(100, 0.01, 0.99), 4);
+        assert_eq!(binomial_upper(200, 0.01, 0.99), 6);
+        assert_eq!(binomial_upper(10, 0.01, 0.99), 1);
+    }
+
+    #[test]
+    fn wrap_wraps_into_half_open_interval() {
+        assert_eq!(wrap(0.5), 0.5);
+        assert_eq!(wrap(-0.5), 0.5);
+        assert!((wrap(0.7) + 0.3).abs() < 1e-12);
+        assert!((wrap(-1.2) + 0.2).abs() < 1e-12);
+    }
+}
