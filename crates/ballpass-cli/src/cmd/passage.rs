@@ -5,14 +5,14 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
+use ballpass::analysis::passage_table::{PassageFailure, PassageOutput};
 use ballpass::recording::io::load;
 use ballpass::recording::Recording;
 use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
-use serde::Serialize;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
-use crate::output::{ensure_dir, write_csv, write_json};
+use crate::output::ensure_dir;
 
 /// Arguments of `ballpass passage`.
 #[derive(Debug, Args)]
@@ -38,37 +38,6 @@ pub struct PassageArgs {
     out: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
-}
-
-#[derive(Serialize)]
-struct Row<'a> {
-    record: &'a str,
-    index: usize,
-    time_s: f64,
-    peak_time_s: f64,
-    polarity: i8,
-    tau_c_s: Option<f64>,
-    tau_p_s: f64,
-    sigma_s: f64,
-    tau_p_over_tau_c: Option<f64>,
-    amplitude_v: f64,
-    height_v: f64,
-    spacing_mm: Option<f64>,
-}
-
-#[derive(Serialize)]
-struct Failure {
-    record: String,
-    error: String,
-}
-
-#[derive(Serialize)]
-struct Output<'a> {
-    schema: &'static str,
-    version: &'static str,
-    bearing: &'a str,
-    records: &'a [PassageAnalysis],
-    failed: &'a [Failure],
 }
 
 /// Runs `ballpass passage`.
@@ -100,7 +69,7 @@ pub fn run(a: &PassageArgs) -> Result<()> {
                 done.push(r);
                 recs.push(rec);
             }
-            Err(e) => failed.push(Failure {
+            Err(e) => failed.push(PassageFailure {
                 record: path.display().to_string(),
                 error: e.to_string(),
             }),
@@ -116,41 +85,14 @@ pub fn run(a: &PassageArgs) -> Result<()> {
             a.records.len()
         );
     }
-    let rows: Vec<Row> = done
-        .iter()
-        .flat_map(|r| {
-            r.passages.iter().map(move |p| Row {
-                record: &r.source,
-                index: p.index,
-                time_s: p.time_s,
-                peak_time_s: p.peak_time_s,
-                polarity: p.polarity,
-                tau_c_s: p.tau_c_s,
-                tau_p_s: p.tau_p_s,
-                sigma_s: p.sigma_s,
-                tau_p_over_tau_c: p.tau_p_over_tau_c,
-                amplitude_v: p.amplitude_v,
-                height_v: p.height_v,
-                spacing_mm: p.spacing_mm,
-            })
-        })
-        .collect();
     ensure_dir(&a.out)?;
-    write_csv(&a.out.join("passages.csv"), &rows)?;
-    write_json(
-        &a.out.join("passage.json"),
-        &Output {
-            schema: "ballpass.passage/1",
-            version: ballpass::VERSION,
-            bearing: &bearing_name,
-            records: &done,
-            failed: &failed,
-        },
-    )?;
-    let report = build_report(&recs, &done, &failed, &settings, &bearing_name)?;
+    let output = PassageOutput::new(bearing_name.clone(), done, failed);
+    output.write(&a.out)?;
+    let (done, failed) = (&output.records, &output.failed);
+    let report = build_report(&recs, done, failed, &settings, &bearing_name)?;
     let written = a.report.write(&report, &a.out)?;
     let mut out = std::io::stdout().lock();
-    for r in &done {
+    for r in done {
         summarize(&mut out, r)?;
     }
     writeln!(
@@ -176,7 +118,7 @@ pub fn run(a: &PassageArgs) -> Result<()> {
 fn build_report(
     recs: &[Recording],
     done: &[PassageAnalysis],
-    failed: &[Failure],
+    failed: &[PassageFailure],
     settings: &PassageSettings,
     bearing: &str,
 ) -> Result<Report> {

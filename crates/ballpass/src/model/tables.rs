@@ -20,32 +20,7 @@ use super::stage::{
     LoopFeatures, PdLoop, VelocityResponse, VelocityResponseSettings,
 };
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
-
-/// Writes serializable rows as a CSV table with a header row (the `csv`
-/// crate's formatting: shortest round-trip numbers, empty cells for `None`).
-fn write_rows<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
-    let format_err = |reason: String| Error::Format {
-        path: path.to_path_buf(),
-        reason: format!("cannot format the table: {reason}"),
-    };
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(|e| format_err(e.to_string()))?;
-    }
-    let bytes = w.into_inner().map_err(|e| format_err(e.to_string()))?;
-    write_atomic(path, &bytes)
-}
-
-/// Writes a value as pretty JSON with a trailing newline.
-fn write_pretty_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let mut bytes = serde_json::to_vec_pretty(value).map_err(|e| Error::Format {
-        path: path.to_path_buf(),
-        reason: format!("cannot serialise: {e}"),
-    })?;
-    bytes.push(b'\n');
-    write_atomic(path, &bytes)
-}
+use crate::fsutil::{write_csv_rows as write_rows, write_json_pretty as write_pretty_json};
 
 // ---------------------------------------------------------------- signals
 
