@@ -62,6 +62,41 @@ fn manifest<'py>(
     convert::serialize(py, &m)
 }
 
+/// `ballpass.select`: the records of a manifest (or folder) that `ballpass
+/// sweep` or `ballpass diagnose` would use: `{"source", "entries",
+/// "notes"}`.
+#[pyfunction]
+#[pyo3(signature = (kind, source, pattern=None, only_bearings=Vec::new(), only_velocities=Vec::new(), load=None))]
+fn selection<'py>(
+    py: Python<'py>,
+    kind: &str,
+    source: PathBuf,
+    pattern: Option<&str>,
+    only_bearings: Vec<String>,
+    only_velocities: Vec<f64>,
+    load: Option<&str>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let kind = campaign_kind(kind)?;
+    let m = read_source(&source, pattern, &LoadArgs::parse(load)?)?;
+    let Selection { entries, notes } =
+        select(&m, kind, &only_bearings, &only_velocities).map_err(errors::domain)?;
+    let d = PyDict::new(py);
+    d.set_item("source", m.source.display().to_string())?;
+    d.set_item("entries", convert::serialize(py, &entries)?)?;
+    d.set_item("notes", notes)?;
+    Ok(d.into_any())
+}
+
+fn campaign_kind(kind: &str) -> PyResult<CampaignKind> {
+    match kind {
+        "sweep" => Ok(CampaignKind::Sweep),
+        "diagnose" => Ok(CampaignKind::Diagnose),
+        other => Err(errors::value(format!(
+            "unknown campaign {other:?}; expected 'sweep' or 'diagnose'"
+        ))),
+    }
+}
+
 /// Per-record settings of a campaign: the library's defaults with the
 /// command line's flags (`lowpass_hz`, `harmonics`) and, for a diagnosis,
 /// its band edge and sticking settings.
@@ -249,11 +284,7 @@ fn campaign<'py>(
     load: Option<&str>,
     pool: Option<Bound<'py, ThreadPool>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-    let kind = match kind {
-        "sweep" => CampaignKind::Sweep,
-        "diagnose" => CampaignKind::Diagnose,
-        other => return Err(errors::value(format!("unknown campaign {other:?}"))),
-    };
+    let kind = campaign_kind(kind)?;
     let load = LoadArgs::parse(load)?;
     let ds = diagnose_settings(diagnosis)?;
     let settings = match kind {
@@ -294,6 +325,7 @@ fn campaign<'py>(
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(manifest, m)?)?;
+    m.add_function(wrap_pyfunction!(selection, m)?)?;
     m.add_function(wrap_pyfunction!(process_record, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose_records, m)?)?;
     m.add_function(wrap_pyfunction!(campaign, m)?)?;

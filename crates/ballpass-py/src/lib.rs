@@ -10,6 +10,19 @@
 
 use pyo3::prelude::*;
 
+/// The extension's own allocations (kernel scratch, result arrays handed to
+/// numpy) come from mimalloc, which keeps freed pages for reuse. With the
+/// host's glibc malloc every block above its mmap threshold (the
+/// correlation and spectrum buffers, 0.5-1 MB each) is mapped and zeroed
+/// by the kernel anew on every call: measured, a full 30 000-sample
+/// correlation took 3.9 ms that way and 0.9 ms with reuse. The command
+/// line gets the same reuse from `mallopt` (ballpass-cli's `malloc`
+/// module); an extension must not change its host's malloc, so it brings
+/// its own allocator for its own blocks only (numpy's and Python's
+/// allocations are untouched).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod analysis;
 mod campaign;
 mod convert;

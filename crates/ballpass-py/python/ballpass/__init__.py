@@ -52,6 +52,7 @@ __all__ = [
     "analyze",
     "passages",
     "read_manifest",
+    "select",
     "sweep",
     "diagnose",
     "process_record",
@@ -311,6 +312,23 @@ def read_manifest(source: str | os.PathLike, *, pattern: str | None = None,
         _native.manifest(os.fspath(source), pattern,
                          _load_json({"bearing": bearing, "velocity_mm_s": velocity_mm_s})),
         kind="Manifest",
+    )
+
+
+def select(source: str | os.PathLike, kind: str = "diagnose", *, pattern: str | None = None,
+           only_bearings: Iterable[str] = (), only_velocities: Iterable[float] = (),
+           bearing: str | None = None, velocity_mm_s: float | None = None) -> Result:
+    """The records ``ballpass sweep`` (``kind='sweep'``) or ``ballpass
+    diagnose`` (``'diagnose'``) would use from a manifest or folder:
+    ``.entries`` and, in words, ``.notes`` (the outputs' ``selection``). By
+    default the bearing recorded at the most velocities (sweep) or the
+    velocity with the most bearings (diagnose); naming bearings or
+    velocities replaces the default."""
+    return Result(
+        _native.selection(kind, os.fspath(source), pattern, list(only_bearings),
+                          [float(v) for v in only_velocities],
+                          _load_json({"bearing": bearing, "velocity_mm_s": velocity_mm_s})),
+        kind="Selection",
     )
 
 
