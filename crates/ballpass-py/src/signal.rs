@@ -45,6 +45,12 @@ fn map_rows<T: Copy + Send>(
     mut f: impl FnMut(&[f64]) -> dsp::Result<Vec<T>> + Send,
 ) -> PyResult<(Vec<T>, usize)> {
     py.detach(|| {
+        if m == 1 {
+            // One signal: its result is the output buffer, no copy.
+            let r = f(&x[..n])?;
+            let width = r.len();
+            return Ok((r, width));
+        }
         let mut out = Vec::new();
         let mut width = 0;
         for i in 0..m {
@@ -66,6 +72,35 @@ fn stack<'py, T: numpy::Element>(
     Ok(Array2::from_shape_vec((m, width), flat)
         .map_err(errors::value)?
         .into_pyarray(py))
+}
+
+/// Each pair of rows of `x` and `y` (the same number of rows, any row
+/// lengths) through `f`, which returns the frequencies and one row of
+/// results: the frequencies and the rows stacked.
+fn map_pairs<'py, T: Copy + Send + numpy::Element>(
+    py: Python<'py>,
+    x: &PyReadonlyArray2<'py, f64>,
+    y: &PyReadonlyArray2<'py, f64>,
+    mut f: impl FnMut(&[f64], &[f64]) -> dsp::Result<(Vec<f64>, Vec<T>)> + Send,
+) -> PyResult<(Arr1<'py>, Bound<'py, PyArray2<T>>)> {
+    let (xs, m, nx) = rows(x)?;
+    let (ys, my, ny) = rows(y)?;
+    if m != my {
+        return Err(errors::value(format!("x has {m} rows, y has {my}")));
+    }
+    let (freq, flat, width) = py
+        .detach(|| -> dsp::Result<_> {
+            let (mut freq, mut flat, mut width) = (Vec::new(), Vec::new(), 0);
+            for i in 0..m {
+                let (fr, row) = f(&xs[i * nx..(i + 1) * nx], &ys[i * ny..(i + 1) * ny])?;
+                width = row.len();
+                flat.extend_from_slice(&row);
+                freq = fr;
+            }
+            Ok((freq, flat, width))
+        })
+        .map_err(errors::dsp)?;
+    Ok((freq.into_pyarray(py), stack(py, flat, m, width)?))
 }
 
 fn window(w: &Bound<'_, PyAny>) -> PyResult<Window> {
@@ -181,25 +216,12 @@ fn csd<'py>(
     let s = welch_settings(
         window, nperseg, noverlap, nfft, detrend, scaling, onesided, average,
     )?;
-    let (xs, m, nx) = rows(&x)?;
-    let (ys, my, ny) = rows(&y)?;
-    if m != my {
-        return Err(errors::value(format!("x has {m} rows, y has {my}")));
-    }
     let mut w = Welch::new(s).map_err(errors::dsp)?;
-    let (freq, flat, width) = py
-        .detach(|| -> dsp::Result<_> {
-            let (mut freq, mut flat, mut width) = (Vec::new(), Vec::new(), 0);
-            for i in 0..m {
-                let c = w.csd(&xs[i * nx..(i + 1) * nx], &ys[i * ny..(i + 1) * ny], fs)?;
-                width = c.pxy.len();
-                flat.extend(c.pxy.iter().map(|z| Complex64::new(z.re, z.im)));
-                freq = c.freq_hz;
-            }
-            Ok((freq, flat, width))
-        })
-        .map_err(errors::dsp)?;
-    Ok((freq.into_pyarray(py), stack(py, flat, m, width)?))
+    map_pairs(py, &x, &y, |x, y| {
+        let c = w.csd(x, y, fs)?;
+        let pxy = c.pxy.iter().map(|z| Complex64::new(z.re, z.im)).collect();
+        Ok((c.freq_hz, pxy))
+    })
 }
 
 /// `scipy.signal.coherence` on each pair of rows: (freq, cxy rows).
@@ -219,25 +241,11 @@ fn coherence<'py>(
     let s = welch_settings(
         window, nperseg, noverlap, nfft, detrend, "density", true, "mean",
     )?;
-    let (xs, m, nx) = rows(&x)?;
-    let (ys, my, ny) = rows(&y)?;
-    if m != my {
-        return Err(errors::value(format!("x has {m} rows, y has {my}")));
-    }
     let mut w = Welch::new(s).map_err(errors::dsp)?;
-    let (freq, flat, width) = py
-        .detach(|| -> dsp::Result<_> {
-            let (mut freq, mut flat, mut width) = (Vec::new(), Vec::new(), 0);
-            for i in 0..m {
-                let c = w.coherence(&xs[i * nx..(i + 1) * nx], &ys[i * ny..(i + 1) * ny], fs)?;
-                width = c.cxy.len();
-                flat.extend_from_slice(&c.cxy);
-                freq = c.freq_hz;
-            }
-            Ok((freq, flat, width))
-        })
-        .map_err(errors::dsp)?;
-    Ok((freq.into_pyarray(py), stack(py, flat, m, width)?))
+    map_pairs(py, &x, &y, |x, y| {
+        let c = w.coherence(x, y, fs)?;
+        Ok((c.freq_hz, c.cxy))
+    })
 }
 
 /// `scipy.signal.periodogram` on each row (`nfft` already resolved:

@@ -19,18 +19,6 @@ def real_float64(x, name: str = "x") -> np.ndarray:
     return np.asarray(a, dtype=np.float64)
 
 
-def check_finite(a: np.ndarray, name: str = "x") -> None:
-    """A ValueError naming the first NaN or infinity of `a`: ballpass refuses
-    non-finite samples where SciPy would return NaN."""
-    if a.size and not np.isfinite(a).all():
-        flat = a.reshape(-1)
-        i = int(np.flatnonzero(~np.isfinite(flat))[0])
-        raise ValueError(
-            f"{name} holds a non-finite value ({flat[i]}) at flat index {i}; "
-            "ballpass.signal needs finite samples"
-        )
-
-
 def normalize_axis(axis, ndim: int) -> int:
     """`axis` as a non-negative index, with NumPy's AxisError when out of range."""
     axis = int(axis)
@@ -42,6 +30,8 @@ def normalize_axis(axis, ndim: int) -> int:
 def to_rows(a: np.ndarray, axis: int) -> tuple[np.ndarray, tuple[int, ...]]:
     """`a` with `axis` moved last and the other axes flattened: a C-contiguous
     2-D array of rows, and the shape of the other axes."""
+    if axis == a.ndim - 1 and a.flags.c_contiguous:
+        return a.reshape(-1, a.shape[-1]), a.shape[:-1]
     moved = np.moveaxis(a, axis, -1)
     outer = moved.shape[:-1]
     return np.ascontiguousarray(moved.reshape(-1, moved.shape[-1])), outer
@@ -51,4 +41,6 @@ def from_rows(rows: np.ndarray, outer: tuple[int, ...], axis: int, ndim: int) ->
     """The inverse of `to_rows` for rows of any length: the row axis goes
     back to `axis` of an array of `ndim` dimensions."""
     out = rows.reshape(outer + rows.shape[-1:])
+    if axis in (-1, ndim - 1):
+        return out
     return np.moveaxis(out, -1, axis if axis >= 0 else axis + ndim)
