@@ -50,7 +50,7 @@ ax[0].set_xlabel("time (s)")
 ax[0].legend(loc="upper right")
 
 c = a.correlations  # columns of correlations.csv: lag_s, then one per series
-ax[1].plot(c.lag_s, c.friction__optical, lw=0.8)
+ax[1].plot(c.lag_s, c.r_friction__optical, lw=0.8)
 tau_c = a.prediction.tau_c_s
 for k in range(-2, 3):
     ax[1].axvline(k * tau_c, color="0.8", lw=0.8)
@@ -59,7 +59,7 @@ ax[1].set_xlabel("lag (s)  [peak at -d: optical lags friction by d]")
 ax[1].set_ylabel("R friction×optical (coeff)")
 
 s = a.spectra_hires  # freq_hz, then PSDs and cross spectra
-ax[2].semilogy(s.freq_hz, s.friction, lw=0.8)
+ax[2].semilogy(s.freq_hz, s.psd_friction_n2_per_hz, lw=0.8)
 for f in a.prediction.harmonics_hz:
     ax[2].axvline(f, color="tab:red", lw=0.6, alpha=0.5)
 ax[2].set_xlim(0, 6 * a.prediction.f_c_hz)
@@ -69,7 +69,7 @@ ax[2].set_ylabel("friction PSD (N²/Hz)")
 # %%
 # Everything the command line writes as analysis.json is there as a dict:
 summary = a.to_dict()
-sorted(summary)[:8], np.round(a.spectra.friction.max(), 6)
+sorted(summary)[:8], np.round(a.spectra.psd_friction_n2_per_hz.max(), 6)
 
 # %%
 if __name__ == "__main__" and len(sys.argv) > 1:

@@ -15,7 +15,7 @@
    `ballpass.diagnose_records` ranks every bearing of the batch against the
    batch median, giving one row per bearing with its verdict and evidence
    (`DIR/diagnosis.parquet`, and the whole answer as `DIR/diagnosis.json`,
-   equal to the command line's `diagnosis.json` but for `elapsed_s`).
+   equal to the command line's `diagnosis.json`).
 4. The verdicts are printed, worst first, as `ballpass diagnose` prints them.
 
 The verdicts equal `ballpass diagnose MANIFEST`'s (tested in

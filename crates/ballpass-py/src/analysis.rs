@@ -2,6 +2,7 @@
 //! `analyze` and `passage` compute, on recordings already in memory.
 
 use ballpass::analysis::passage_table::{passage_rows, PassageFailure, PassageOutput};
+use ballpass::analysis::preflight::{self, PreflightSettings};
 use ballpass::analysis::{self, export, AnalyzeSettings, PassageSettings};
 use ballpass::bearing;
 use ballpass::recording::Recording;
@@ -36,19 +37,20 @@ fn predict<'py>(
     convert::serialize(py, &t)
 }
 
-/// The velocity of an analysis: the argument, else the one all recordings'
-/// metadata agree on.
-fn common_velocity(recs: &[Recording], given: Option<f64>) -> PyResult<f64> {
-    if let Some(v) = given {
-        return Ok(v);
+/// The velocity stated for an analysis, as `ballpass analyze` takes it: the
+/// argument, else the one all recordings' metadata agree on, else none (the
+/// checks then measure it from the encoder).
+fn stated_velocity(recs: &[Recording], given: Option<f64>) -> PyResult<Option<f64>> {
+    if given.is_some() {
+        return Ok(given);
     }
     let vs: Vec<f64> = recs.iter().filter_map(|r| r.meta.velocity_mm_s).collect();
     match vs.first() {
-        Some(&v) if vs.len() == recs.len() && vs.iter().all(|&w| w == v) => Ok(v),
+        None => Ok(None),
+        Some(&v) if vs.len() == recs.len() && vs.iter().all(|&w| w == v) => Ok(Some(v)),
         Some(_) => Err(errors::value(
             "the recordings' metadata disagree on the velocity or lack it; give velocity_mm_s",
         )),
-        None => Err(errors::value("no velocity: give velocity_mm_s (mm/s)")),
     }
 }
 
@@ -64,10 +66,14 @@ fn spectra_columns<'py>(py: Python<'py>, s: &analysis::Spectra) -> PyResult<Boun
 
 /// `ballpass.analyze`: the analysis of one recording or several repeats at
 /// one velocity. Returns `(analysis.json as a dict, correlations,
-/// spectra, spectra_hires)`, the tables as `{column: array}` with the CSV
-/// files' columns.
+/// spectra, spectra_hires, spectra_unfiltered)`, the tables as
+/// `{column: array}` with the CSV files' columns (units in their names).
+/// The checks before the analysis are the command line's (dead channels
+/// left out, the velocity checked against the encoder or measured from it
+/// when none is stated, Nyquist); their warnings and notes join the
+/// analysis' as there.
 #[pyfunction]
-#[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, settings=None, pool=None))]
+#[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, settings=None, pool=None, force_velocity=false))]
 #[allow(clippy::type_complexity)]
 fn analyze<'py>(
     py: Python<'py>,
@@ -76,8 +82,10 @@ fn analyze<'py>(
     bearing: Option<&str>,
     settings: Option<&str>,
     pool: Option<Bound<'py, ThreadPool>>,
+    force_velocity: bool,
 ) -> PyResult<(
     Bound<'py, PyAny>,
+    Bound<'py, PyDict>,
     Bound<'py, PyDict>,
     Bound<'py, PyDict>,
     Bound<'py, PyDict>,
@@ -87,15 +95,23 @@ fn analyze<'py>(
     s.validate().map_err(errors::domain)?;
     let (_, g) = bearing_args(bearing)?.resolve(None)?;
     let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
-    let v = common_velocity(&recs, velocity_mm_s)?;
-    let prediction = g.predict(v, s.harmonics).map_err(errors::domain)?;
+    let stated = stated_velocity(&recs, velocity_mm_s)?;
+    let pre = PreflightSettings {
+        force_velocity,
+        ..PreflightSettings::default()
+    };
     let a = pool::run(py, pool.as_ref(), || {
-        analysis::analyze(&recs, &prediction, &s)
+        let checked = preflight::check(recs, stated, &g, &pre)?;
+        let prediction = g.predict(checked.velocity_mm_s, s.harmonics)?;
+        let mut a = analysis::analyze(&checked.recordings, &prediction, &s)?;
+        a.warnings.splice(0..0, checked.warnings);
+        a.method_notes.extend(checked.notes);
+        Ok::<_, ballpass::Error>(a)
     })
     .map_err(errors::domain)?;
     let corr = PyDict::new(py);
     corr.set_item("lag_s", convert::array(py, a.correlations.lag_s.clone()))?;
-    for (name, v) in export::correlation_columns(&a.correlations) {
+    for (name, v) in export::correlation_columns(&a.correlations, a.settings.corr_norm) {
         corr.set_item(name, convert::array(py, v.to_vec()))?;
     }
     Ok((
@@ -103,6 +119,7 @@ fn analyze<'py>(
         corr,
         spectra_columns(py, &a.spectra)?,
         spectra_columns(py, &a.spectra_hires)?,
+        spectra_columns(py, &a.spectra_unfiltered)?,
     ))
 }
 

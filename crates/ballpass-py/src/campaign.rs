@@ -4,7 +4,6 @@
 //! processed (`diagnose_records`, the last step of a fleet on Spark).
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
 use ballpass::campaign::output::{CampaignOutput, DIAGNOSIS_SCHEMA, SWEEP_SCHEMA};
@@ -12,7 +11,7 @@ use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
 use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
-    from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind, Manifest,
+    export, from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind, Manifest,
     ManifestEntry, RecordOutcome, Selection,
 };
 use numpy::PyReadonlyArray1;
@@ -198,23 +197,17 @@ fn diagnosis_output<'py>(
     notes: &[String],
     settings: &CampaignSettings,
     ds: &DiagnoseSettings,
-    elapsed_s: f64,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     let ok: Vec<&RecordResult> = outcome.ok().map(|(_, r)| r).collect();
     let d = diagnose(&ok, ds);
-    let out = CampaignOutput::new(
-        DIAGNOSIS_SCHEMA,
-        source,
-        outcome,
-        notes,
-        settings,
-        elapsed_s,
-        &d,
-    );
+    let out = CampaignOutput::new(DIAGNOSIS_SCHEMA, source, outcome, notes, settings, &d);
     let spectra = PyDict::new(py);
     spectra.set_item("freq_hz", convert::array(py, d.freq_hz.clone()))?;
     for (b, p) in d.bearings.iter().zip(&d.friction_psd) {
-        spectra.set_item(&b.bearing, convert::array(py, p.clone()))?;
+        spectra.set_item(
+            export::friction_psd_column(&b.bearing),
+            convert::array(py, p.clone()),
+        )?;
     }
     Ok((convert::serialize(py, &out)?, spectra))
 }
@@ -261,7 +254,7 @@ fn diagnose_records<'py>(
             result: Err(reason),
         });
     }
-    diagnosis_output(py, source, &outcome, &selection, &settings, &ds, 0.0)
+    diagnosis_output(py, source, &outcome, &selection, &settings, &ds)
 }
 
 /// `ballpass.sweep` / `ballpass.diagnose`: a whole campaign as the command
@@ -298,7 +291,6 @@ fn campaign<'py>(
     let fallback = opts
         .geometry
         .ok_or_else(|| errors::value("no bearing geometry"))?;
-    let t0 = Instant::now();
     let outcome = pool::run(py, pool.as_ref(), || {
         run_batch(
             &entries,
@@ -306,18 +298,14 @@ fn campaign<'py>(
             |_, _| {},
         )
     });
-    let elapsed = t0.elapsed().as_secs_f64();
     let src = manifest.source.display().to_string();
     match kind {
-        CampaignKind::Diagnose => {
-            diagnosis_output(py, src, &outcome, &notes, &settings, &ds, elapsed)
-        }
+        CampaignKind::Diagnose => diagnosis_output(py, src, &outcome, &notes, &settings, &ds),
         CampaignKind::Sweep => {
             let ok: Vec<&RecordResult> = outcome.ok().map(|(_, r)| r).collect();
             let g = geometry_for(ok.first().map_or("", |r| r.bearing.as_str()), fallback);
             let s = sweep(&ok, Some(g.d_avg_mm()));
-            let out =
-                CampaignOutput::new(SWEEP_SCHEMA, src, &outcome, &notes, &settings, elapsed, &s);
+            let out = CampaignOutput::new(SWEEP_SCHEMA, src, &outcome, &notes, &settings, &s);
             Ok((convert::serialize(py, &out)?, PyDict::new(py)))
         }
     }

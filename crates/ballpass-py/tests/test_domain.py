@@ -51,10 +51,6 @@ def assert_table_equals_csv(table, path):
             assert np.array_equal(got, v, equal_nan=True), f"{path.name}:{k}"
 
 
-def without(d, *keys):
-    return {k: v for k, v in d.items() if k not in keys}
-
-
 @pytest.fixture(scope="module")
 def recs(tmp_path_factory, cli):
     """Two simulated recordings written by the CLI, 9 mm/s, 20 s."""
@@ -92,11 +88,34 @@ def test_analyze_equals_the_cli(recs, cli, tmp):
         assert_table_equals_csv(a.correlations, out / "correlations.csv")
         assert_table_equals_csv(a.spectra, out / "spectra.csv")
         assert_table_equals_csv(a.spectra_hires, out / "spectra_hires.csv")
+        assert_table_equals_csv(a.spectra_unfiltered, out / "spectra_unfiltered.csv")
+        assert a.schema == "ballpass.analysis/2"
     # paths work too, and the attributes are the JSON's fields
     b = ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0)
     assert b.prediction.f_c_hz == pytest.approx(9.0 / (2 * (4 + 2 / 36)), rel=1e-12)
     assert isinstance(b.prediction.harmonics_hz, np.ndarray)
     assert b.verdict.text and b.correlations.lag_s.shape == (39999,)
+
+
+def test_analyze_runs_the_command_lines_checks(recs, cli, tmp):
+    """As `ballpass analyze`: a stated velocity that the encoder contradicts
+    is an error unless forced (then a warning, and analysis.json equals the
+    command line's), and without a stated velocity the encoder's is used."""
+    rec = ballpass.load(recs / "r3.csv")
+    with pytest.raises(ValueError, match="encoder"):
+        ballpass.analyze(rec, velocity_mm_s=12.0)
+    with pytest.warns(ballpass.BallpassWarning, match="as forced"):
+        forced = ballpass.analyze(rec, velocity_mm_s=12.0, force_velocity=True)
+    out = tmp / "forced"
+    cli("analyze", recs / "r3.csv", "--velocity", "12", "--force-velocity", "--no-report",
+        "--out", out)
+    assert forced.to_dict() == read_json(out / "analysis.json")
+    bare = ballpass.Recording(rec.fs_hz, friction_n=rec.friction_n, position_mm=rec.position_mm,
+                              optical_v=rec.optical_v)
+    measured = ballpass.analyze(bare)
+    assert any("measured from the encoder" in n for n in measured.method_notes)
+    # The simulated stage tracks 9 mm/s to far better than 1 %.
+    assert measured.prediction.f_c_hz == pytest.approx(9.0 / (2 * (4 + 2 / 36)), rel=1e-2)
 
 
 def test_passages_equal_the_cli(recs, cli, tmp):
@@ -171,12 +190,11 @@ def test_sweep_and_diagnose_equal_the_cli(fleet, cli, tmp):
     m = fleet / "manifest.csv"
     cli("sweep", m, "--no-report", "--out", tmp / "s")
     s = ballpass.sweep(m)
-    assert without(s.to_dict(), "elapsed_s") == without(read_json(tmp / "s" / "sweep.json"),
-                                                       "elapsed_s")
+    assert s.to_dict() == read_json(tmp / "s" / "sweep.json")
     cli("diagnose", m, "--no-report", "--out", tmp / "d", "--spike-factor", "7")
     d = ballpass.diagnose(m, spike_factor=7.0, threads=2)
     want = read_json(tmp / "d" / "diagnosis.json")
-    assert without(d.to_dict(), "elapsed_s") == without(want, "elapsed_s")
+    assert d.to_dict() == want
     assert_table_equals_csv(d.friction_spectra, tmp / "d" / "friction_spectra.csv")
     verdicts = {b.bearing: b.verdict for b in d.result.bearings}
     assert verdicts["bearing3"] == "bad", verdicts
@@ -248,7 +266,7 @@ def test_threads_setting_gives_the_same_numbers():
         one = ballpass.analyze(recs)
     two = ballpass.analyze(recs, threads=2)
     assert base.to_dict() == one.to_dict() == two.to_dict()
-    assert np.array_equal(base.spectra.friction, two.spectra.friction)
+    assert np.array_equal(base.spectra.psd_friction_n2_per_hz, two.spectra.psd_friction_n2_per_hz)
 
 
 def test_the_gil_is_released_while_computing():

@@ -7,10 +7,13 @@ use std::path::PathBuf;
 use anyhow::{anyhow, Result};
 use ballpass::recording::inspect::{inspect, InspectSettings, Inspection, Severity};
 use ballpass::recording::load;
+use ballpass::recording::segment::{self, Plateau, SegmentSettings, Window};
 use clap::Args;
 use serde::Serialize;
 
 use crate::args::LoadArgs;
+use crate::records::SegmentArgs;
+use crate::{output, text};
 
 /// Arguments of `ballpass inspect`.
 #[derive(Debug, Args)]
@@ -23,6 +26,8 @@ pub struct InspectArgs {
     /// Print JSON for a program instead of text for a person.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    segment: SegmentArgs,
 }
 
 #[derive(Serialize)]
@@ -30,6 +35,9 @@ struct FileReport {
     path: PathBuf,
     #[serde(skip_serializing_if = "Option::is_none")]
     inspection: Option<Inspection>,
+    /// With --segment: the constant-velocity plateaus from the encoder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    plateaus: Option<Vec<Plateau>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     error: Option<String>,
 }
@@ -39,6 +47,8 @@ struct Output<'a> {
     schema: &'static str,
     version: &'static str,
     settings: InspectSettings,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    window: Option<Window>,
     files: &'a [FileReport],
 }
 
@@ -48,33 +58,46 @@ pub fn run(a: &InspectArgs) -> Result<()> {
     let settings = InspectSettings::default();
     let mut reports = Vec::new();
     let mut first_error = None;
+    let window = a.load.window.parsed()?;
     for path in &a.files {
-        match load(path, &opts) {
-            Ok(rec) => reports.push(FileReport {
+        let one = || -> Result<FileReport> {
+            let rec = a.load.window.apply(load(path, &opts)?)?;
+            let plateaus = if a.segment.segment {
+                Some(segment::plateaus(&rec, &SegmentSettings::default())?)
+            } else {
+                None
+            };
+            Ok(FileReport {
                 path: path.clone(),
                 inspection: Some(inspect(&rec, opts.geometry.as_ref(), &settings)),
+                plateaus,
                 error: None,
-            }),
+            })
+        };
+        match one() {
+            Ok(r) => reports.push(r),
             Err(e) => {
                 let msg = e.to_string();
                 if a.files.len() > 1 {
-                    eprintln!("error: {msg}");
+                    eprintln!("error: {}", text::line(&msg));
                 }
                 first_error.get_or_insert_with(|| msg.clone());
                 reports.push(FileReport {
                     path: path.clone(),
                     inspection: None,
+                    plateaus: None,
                     error: Some(msg),
                 });
             }
         }
     }
-    let mut out = std::io::stdout().lock();
+    let mut out = output::stdout();
     if a.json {
         let o = Output {
             schema: "ballpass.inspect/1",
             version: ballpass::VERSION,
             settings,
+            window,
             files: &reports,
         };
         serde_json::to_writer_pretty(&mut out, &o)?;
@@ -86,6 +109,9 @@ pub fn run(a: &InspectArgs) -> Result<()> {
                     writeln!(out)?;
                 }
                 print_text(&mut out, i)?;
+                if let Some(p) = &r.plateaus {
+                    print_plateaus(&mut out, p)?;
+                }
             }
         }
     }
@@ -101,8 +127,30 @@ pub fn run(a: &InspectArgs) -> Result<()> {
     }
 }
 
+fn print_plateaus(out: &mut impl Write, p: &[Plateau]) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "  {} constant-velocity plateau(s) from the encoder:",
+        p.len()
+    )?;
+    for (k, p) in p.iter().enumerate() {
+        writeln!(
+            out,
+            "    {:>2}. t = {:.3}–{:.3} s ({:.2} s) at {:+.4} mm/s ({:?}), blocks within {:.2} %",
+            k + 1,
+            p.start_s,
+            p.end_s,
+            p.end_s - p.start_s,
+            p.velocity_mm_s,
+            p.direction,
+            100.0 * p.max_deviation
+        )?;
+    }
+    Ok(())
+}
+
 fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
-    writeln!(out, "{}", i.source)?;
+    writeln!(out, "{}", text::line(&i.source))?;
     writeln!(
         out,
         "  {} samples at {} Hz = {:.3} s, first sample at t = {} s",
@@ -139,8 +187,8 @@ fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
             Severity::Warning => "WARNING",
         };
         match &f.channel {
-            Some(c) => writeln!(out, "  {sev}: {c}: {}", f.message)?,
-            None => writeln!(out, "  {sev}: {}", f.message)?,
+            Some(c) => writeln!(out, "  {sev}: {c}: {}", text::line(&f.message))?,
+            None => writeln!(out, "  {sev}: {}", text::line(&f.message))?,
         }
     }
     Ok(())

@@ -236,31 +236,43 @@ def predict(velocity_mm_s: float | Sequence[float], *, bearing: str | None = Non
 
 def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
             ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
-            settings: dict | None = None, threads=None, **setting_overrides) -> Result:
+            force_velocity: bool = False, settings: dict | None = None, threads=None,
+            **setting_overrides) -> Result:
     """Correlations, spectra, measured period, phases and harmonics of one
     recording, or of several repeats at one velocity (averaged), as
     ``ballpass analyze``. ``recordings``: Recording objects or file paths.
-    ``velocity_mm_s`` defaults to the recordings' own. Settings are
+    ``velocity_mm_s`` defaults to the recordings' own, else the encoder's.
+    The command line's checks run first: dead channels are left out (with
+    a warning), and a stated velocity that the encoder contradicts is an
+    error unless ``force_velocity``. Settings are
     ``AnalyzeSettings`` fields by name (``lowpass_hz``, ``order``,
     ``detrend``, ``nperseg``, ``corr_norm``, ``harmonics``, ...), in
     ``settings`` or as keyword arguments.
 
-    ``to_dict()`` equals ``analysis.json``; the tables ``correlations``
-    (``lag_s`` then one column per series), ``spectra`` and
-    ``spectra_hires`` (``freq_hz`` then PSDs, cross spectra ``*_re``,
-    ``*_im`` and coherence ``*_coh``) equal the CSV files. The analysis'
-    warnings are also issued as :class:`BallpassWarning`."""
+    The setting ``window`` is the Welch window (the command line's
+    ``--welch-window``); to analyse part of a record, slice it first.
+
+    ``to_dict()`` equals ``analysis.json`` (schema ``ballpass.analysis/2``);
+    the tables ``correlations`` (``lag_s`` then one column per series:
+    ``r_friction__optical`` under ``corr_norm='coeff'``, else with the
+    product's unit, ``r_friction__optical_n_v``), ``spectra``,
+    ``spectra_hires`` and ``spectra_unfiltered`` (``freq_hz`` then PSDs
+    such as ``psd_friction_n2_per_hz``, cross spectra ``csd_<pair>_re_<unit>``
+    and ``csd_<pair>_im_<unit>``, coherence ``coh_<pair>``) equal the CSV
+    files. The analysis' warnings are also issued as
+    :class:`BallpassWarning`."""
     load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
     recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
-    data, corr, spectra, hires = _native.analyze(
+    data, corr, spectra, hires, unfiltered = _native.analyze(
         recs, velocity_mm_s,
         _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
-        _settings_json(settings, setting_overrides), _pool(threads),
+        _settings_json(settings, setting_overrides), _pool(threads), bool(force_velocity),
     )
     _warn(data)
     return Result(
         data,
-        {"correlations": Table(corr), "spectra": Table(spectra), "spectra_hires": Table(hires)},
+        {"correlations": Table(corr), "spectra": Table(spectra), "spectra_hires": Table(hires),
+         "spectra_unfiltered": Table(unfiltered)},
         "Analysis",
     )
 
@@ -350,8 +362,7 @@ def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = 
     """A velocity sweep over a campaign, as ``ballpass sweep``: velocity-error
     trend, tau_c and tau_p against velocity, d_avg. ``source`` is a manifest
     CSV or a folder with ``pattern``; by default the bearing recorded at the
-    most velocities. ``to_dict()`` equals ``sweep.json`` (but for
-    ``elapsed_s``)."""
+    most velocities. ``to_dict()`` equals ``sweep.json``."""
     data, _ = _native.campaign(
         "sweep", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics), None,
@@ -370,9 +381,9 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
     ``.result.bearings``). ``source`` is a manifest CSV or a folder with
     ``pattern``; by default the velocity with the most bearings. The keyword
     thresholds are the command line's flags; ``settings`` sets any
-    ``DiagnoseSettings`` field. ``to_dict()`` equals ``diagnosis.json``
-    (but for ``elapsed_s``); ``.friction_spectra`` is
-    ``friction_spectra.csv``."""
+    ``DiagnoseSettings`` field. ``to_dict()`` equals ``diagnosis.json``;
+    ``.friction_spectra`` is ``friction_spectra.csv`` (columns
+    ``psd_friction_<bearing>_n2_per_hz``)."""
     data, spectra = _native.campaign(
         "diagnose", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics),

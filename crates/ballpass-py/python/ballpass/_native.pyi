@@ -116,7 +116,8 @@ def analyze(
     bearing: str | None = None,
     settings: str | None = None,
     pool: ThreadPool | None = None,
-) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64], dict[str, F64]]: ...
+    force_velocity: bool = False,
+) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64], dict[str, F64], dict[str, F64]]: ...
 def passages(
     recordings: list[Recording],
     bearing: str | None = None,

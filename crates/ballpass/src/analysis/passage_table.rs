@@ -9,6 +9,7 @@ use serde::Serialize;
 use super::passage::PassageAnalysis;
 use crate::error::Result;
 use crate::fsutil::{write_csv_rows, write_json_pretty};
+use crate::recording::segment::Window;
 
 /// Schema tag of `passage.json`.
 pub const PASSAGE_SCHEMA: &str = "ballpass.passage/1";
@@ -60,14 +61,21 @@ pub struct PassageOutput {
     pub version: &'static str,
     /// Bearing name used for the predictions.
     pub bearing: String,
+    /// The time window of every record, when one was given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<Window>,
     /// The records measured, in the order given.
     pub records: Vec<PassageAnalysis>,
     /// The records that failed.
     pub failed: Vec<PassageFailure>,
+    /// Warnings of the checks before the analysis (dead channels left out,
+    /// a forced velocity).
+    pub warnings: Vec<String>,
 }
 
 impl PassageOutput {
-    /// Wraps the measured records and the failures.
+    /// Wraps the measured records and the failures (no window, no
+    /// warnings; set those fields when there are some).
     pub fn new(
         bearing: impl Into<String>,
         records: Vec<PassageAnalysis>,
@@ -77,8 +85,10 @@ impl PassageOutput {
             schema: PASSAGE_SCHEMA,
             version: crate::VERSION,
             bearing: bearing.into(),
+            window: None,
             records,
             failed,
+            warnings: Vec::new(),
         }
     }
 

@@ -6,6 +6,7 @@ pub mod diagnose;
 pub mod export;
 pub mod manifest;
 pub mod output;
+pub mod pattern;
 pub mod record;
 pub mod run;
 pub mod select;
@@ -13,6 +14,6 @@ pub mod sticking;
 pub mod sweep;
 
 pub use batch::{run_batch, BatchOutcome, RecordOutcome};
-pub use manifest::{from_directory, manifest_csv, read_manifest, Manifest, ManifestEntry};
+pub use manifest::{from_directory, manifest_csv, read_manifest, Manifest, ManifestEntry, Skipped};
 pub use output::CampaignOutput;
 pub use select::{select, CampaignKind, Selection};

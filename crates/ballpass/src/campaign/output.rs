@@ -27,8 +27,6 @@ pub struct CampaignOutput<'a, T: Serialize> {
     pub selection: &'a [String],
     /// Per-record settings.
     pub settings: &'a CampaignSettings,
-    /// Wall time of the per-record work, s.
-    pub elapsed_s: f64,
     /// The campaign's answer.
     pub result: &'a T,
     /// The records that succeeded, in manifest order.
@@ -43,14 +41,12 @@ pub const DIAGNOSIS_SCHEMA: &str = "ballpass.diagnosis/1";
 impl<'a, T: Serialize> CampaignOutput<'a, T> {
     /// The output of a batch: its failures and the records that succeeded
     /// are taken from `outcome`.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         schema: &'static str,
         source: String,
         outcome: &'a BatchOutcome<RecordResult>,
         selection: &'a [String],
         settings: &'a CampaignSettings,
-        elapsed_s: f64,
         result: &'a T,
     ) -> Self {
         Self {
@@ -61,7 +57,6 @@ impl<'a, T: Serialize> CampaignOutput<'a, T> {
             failed: failures(outcome),
             selection,
             settings,
-            elapsed_s,
             result,
             record_results: outcome.ok().map(|(_, r)| r).collect(),
         }

@@ -4,7 +4,8 @@
 //! `diagnose` the velocity with the most bearings (leaving out a bearing
 //! that is also recorded at other velocities, a sweep's bearing, when at
 //! least two others remain); naming bearings or velocities replaces the
-//! default. Each choice is explained in a note that the outputs carry.
+//! default. Each choice is explained in a note that the outputs carry, and
+//! so is what folder mode left out of the folder.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -34,7 +35,8 @@ pub struct Selection {
 
 /// Selects the records of `manifest` for `kind`: the default choice when
 /// `only_bearings` and `only_velocities` are both empty, else every entry
-/// of those bearings and velocities.
+/// of those bearings and velocities. The notes end with what folder mode
+/// skipped ([`Manifest::skipped`]).
 ///
 /// # Errors
 /// [`Error::Format`] naming the manifest when no record is left.
@@ -60,6 +62,7 @@ pub fn select(
         entries.retain(|e| only_velocities.contains(&e.velocity_mm_s));
         notes.push(format!("only velocities {only_velocities:?} mm/s"));
     }
+    notes.extend(skipped_notes(manifest));
     if entries.is_empty() {
         return Err(Error::Format {
             path: manifest.source.clone(),
@@ -67,6 +70,25 @@ pub fn select(
         });
     }
     Ok(Selection { entries, notes })
+}
+
+/// What folder mode left out, as selection notes: each entry that matched
+/// but is no readable file by name, the names that do not match counted.
+fn skipped_notes(m: &Manifest) -> Vec<String> {
+    let mut notes: Vec<String> = m
+        .skipped
+        .iter()
+        .filter(|s| !s.reason.starts_with("does not match"))
+        .map(|s| format!("skipped {}: {}", s.name, s.reason))
+        .collect();
+    let unmatched = m.skipped.len() - notes.len();
+    if unmatched > 0 {
+        notes.push(format!(
+            "{unmatched} other entr{} of the folder do not match the pattern",
+            if unmatched == 1 { "y" } else { "ies" }
+        ));
+    }
+    notes
 }
 
 /// Default selection of `sweep`: the bearing recorded at the most velocities.
@@ -161,6 +183,7 @@ mod tests {
         Manifest {
             source: "m.csv".into(),
             entries,
+            skipped: Vec::new(),
         }
     }
 
@@ -185,6 +208,31 @@ mod tests {
         assert!(
             err.to_string().contains("m.csv: no recording left"),
             "{err}"
+        );
+    }
+
+    #[test]
+    fn what_folder_mode_skipped_ends_the_notes() {
+        let skipped = |name: &str, reason: &str| super::super::manifest::Skipped {
+            name: name.into(),
+            reason: reason.into(),
+        };
+        let m = Manifest {
+            skipped: vec![
+                skipped("old", "a folder"),
+                skipped("a.txt", "does not match the pattern"),
+                skipped("b.txt", "does not match the pattern"),
+            ],
+            ..manifest()
+        };
+        let s = select(&m, CampaignKind::Sweep, &["b2".into()], &[]).unwrap();
+        assert_eq!(
+            s.notes,
+            [
+                "only bearings b2",
+                "skipped old: a folder",
+                "2 other entries of the folder do not match the pattern"
+            ]
         );
     }
 }

@@ -45,22 +45,30 @@ impl Default for SignalsTableSettings {
     }
 }
 
-/// One lag of the analytic correlations (`correlations.csv`).
+/// One lag of the analytic correlations (`correlations.csv`); each column
+/// carries the unit of its product (friction N, velocity error mm/s,
+/// optical V).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct CorrelationRow {
     /// Lag, s.
     pub tau_s: f64,
-    /// `R_FF`, N².
+    /// `R_FF`, N² (column `r_ff_n2`).
+    #[serde(rename = "r_ff_n2")]
     pub r_ff: f64,
-    /// `R_vv` of the velocity error, (mm/s)².
+    /// `R_vv` of the velocity error, (mm/s)² (column `r_veve_mm2_s2`).
+    #[serde(rename = "r_veve_mm2_s2")]
     pub r_veve: f64,
-    /// `R_SS`, V².
+    /// `R_SS`, V² (column `r_ss_v2`).
+    #[serde(rename = "r_ss_v2")]
     pub r_ss: f64,
-    /// `R_Fv`, N·mm/s.
+    /// `R_Fv`, N·mm/s (column `r_fve_n_mm_s`).
+    #[serde(rename = "r_fve_n_mm_s")]
     pub r_fve: f64,
-    /// `R_FS`, N·V.
+    /// `R_FS`, N·V (column `r_fs_n_v`).
+    #[serde(rename = "r_fs_n_v")]
     pub r_fs: f64,
-    /// `R_Sv`, V·mm/s.
+    /// `R_Sv`, V·mm/s (column `r_sve_v_mm_s`).
+    #[serde(rename = "r_sve_v_mm_s")]
     pub r_sve: f64,
 }
 
@@ -208,7 +216,7 @@ pub fn signals_tables(
             LagConvention::Eq71 => "R_xy(tau) = <x(t+tau) y(t)> (thesis Eq. 7.1, scipy correlate); a peak at -d means y lags x by d",
             LagConvention::Eq612 => "R_xy(tau) = <x(t) y(t+tau)> (thesis Eq. 6.12); a peak at +d means y lags x by d",
         },
-        spectra_note: "Dirac line weights of the unitary Fourier transform of the Eq. 6.12 correlation (conj(X)*Y, as scipy csd); ERRATA §4 signs",
+        spectra_note: "Dirac line weights of the unitary Fourier transform of the Eq. 6.12 correlation (conj(X)*Y, as scipy csd), with the signs of Eq. 6.17 corrected (docs/methods.md §4)",
         peaks,
         spectral_lines,
         correlations,
@@ -677,7 +685,7 @@ mod tests {
     use super::*;
 
     /// The Eq. 7.1 friction × velocity-error correlation of unit sinusoids
-    /// is `+½ sin ω_c τ` (ERRATA §4 with the Eq. 7.1 mirror); rounding only.
+    /// is `+½ sin ω_c τ` (docs/methods.md §4 with the Eq. 7.1 mirror); rounding only.
     #[test]
     fn signals_table_holds_the_analytic_correlation() {
         let t =
@@ -695,7 +703,7 @@ mod tests {
         assert!(signals_tables(&SinusoidModel::default(), &bad).is_err());
     }
 
-    /// ERRATA §6: |C_1| / P = √(2π) r exp(−2π² r²) = 0.24180 at r = 0.155.
+    /// docs/methods.md §6: |C_1| / P = √(2π) r exp(−2π² r²) = 0.24180 at r = 0.155.
     #[test]
     fn pulses_table_has_the_corrected_coefficients() {
         let t = pulses_tables(&PulsesTableSettings::default()).unwrap();
