@@ -1,16 +1,14 @@
 //! Where results go: output folders ([`ballpass::outdir::OutputDir`]: one
 //! run at a time, outputs staged and committed together with
-//! `ballpass-run.json` last), files written atomically
-//! ([`ballpass::fsutil::write_atomic`]), and standard output with errors
-//! that say it was standard output.
+//! `ballpass-run.json` last; the files in them are written by the library,
+//! atomically), and standard output with errors that say it was standard
+//! output.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use ballpass::fsutil::write_atomic;
 use ballpass::outdir::OutputDir;
-use serde::Serialize;
 
 /// Creates, locks and stages the output folder `dir` of `command`.
 pub fn open_dir(dir: &Path, command: &str) -> Result<OutputDir> {
@@ -23,27 +21,6 @@ pub fn commit(out: OutputDir) -> Result<PathBuf> {
     out.commit()
         .with_context(|| format!("{}: outputs not complete", dir.display()))?;
     Ok(dir)
-}
-
-/// Writes serializable rows as a CSV table with a header row.
-pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r)
-            .with_context(|| format!("formatting {}", path.display()))?;
-    }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| anyhow::anyhow!("formatting {}: {e}", path.display()))?;
-    Ok(write_atomic(path, &bytes)?)
-}
-
-/// Writes a value as pretty JSON with a trailing newline.
-pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let mut bytes = serde_json::to_vec_pretty(value)
-        .with_context(|| format!("formatting {}", path.display()))?;
-    bytes.push(b'\n');
-    Ok(write_atomic(path, &bytes)?)
 }
 
 /// Standard output, locked, whose write errors say "standard output"

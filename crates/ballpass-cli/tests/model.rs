@@ -185,3 +185,135 @@ fn pulses_report_has_the_coefficients_on_a_log_axis_and_no_report_writes_none() 
     assert!(d2.join("pulses.json").exists());
     assert!(!d2.join("report.html").exists() && !d2.join("figures").exists());
 }
+
+/// The text of a golden or written file with the `"version": ...` line of a
+/// JSON file made version-free, so a version bump does not fail the test.
+fn without_version(text: &str) -> String {
+    text.lines()
+        .map(|l| {
+            if l.trim_start().starts_with("\"version\": ") {
+                "  \"version\": \"*\","
+            } else {
+                l
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Regression guard of the move of the model tables from the binary into
+/// `ballpass::model::tables`: every file and the summary (without its last
+/// "wrote ..." line) equal, byte for byte, what the binary wrote before the
+/// move (`tests/data/model/`, written by the commit before it; the units in
+/// the correlation columns, the note on the spectra's signs and the method
+/// references in the pulses summary were regenerated when those outputs
+/// changed on purpose).
+#[test]
+fn model_outputs_equal_the_golden_files_byte_for_byte() {
+    let golden = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/model");
+    let cases: [(&str, &[&str]); 3] = [
+        (
+            "signals",
+            &[
+                "signals",
+                "--f-c",
+                "1.2",
+                "--convention",
+                "eq612",
+                "--points",
+                "51",
+                "--periods",
+                "3",
+                "--friction-amp",
+                "0.3",
+            ],
+        ),
+        (
+            "pulses",
+            &[
+                "pulses",
+                "--velocity",
+                "9",
+                "--ratio",
+                "0.3",
+                "--ratio-kind",
+                "fwhm",
+                "--harmonics",
+                "4",
+                "--order",
+                "7",
+                "--periods",
+                "3",
+                "--points",
+                "40",
+                "--amplitude",
+                "2",
+                "--dc",
+                "0.5",
+            ],
+        ),
+        (
+            "stage",
+            &[
+                "stage",
+                "--mass",
+                "2",
+                "--natural-frequency",
+                "3",
+                "--damping",
+                "0.8",
+                "--f-c",
+                "2.5",
+                "--harmonics",
+                "4",
+                "--period-points",
+                "50",
+                "--points",
+                "40",
+            ],
+        ),
+    ];
+    for (name, args) in cases {
+        let d = scratch_path(&format!("golden-{name}"));
+        let dir = d.to_str().unwrap();
+        let mut full = vec!["model"];
+        full.extend_from_slice(args);
+        full.extend_from_slice(&["--out", dir, "--no-report"]);
+        let (ok, out, err) = run(&full);
+        assert!(ok, "{name}: {err}");
+        let summary: Vec<&str> = out.lines().collect();
+        let want = std::fs::read_to_string(golden.join(name).join("stdout.txt")).unwrap();
+        assert_eq!(
+            summary[..summary.len() - 1].join("\n"),
+            want.trim_end_matches('\n'),
+            "{name}: summary"
+        );
+        let mut files: Vec<String> = std::fs::read_dir(golden.join(name))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|f| f != "stdout.txt")
+            .collect();
+        files.sort();
+        // The run manifest lists the run's files (and their sizes, which
+        // the comparison below checks through the contents).
+        let manifest = ballpass::outdir::RunManifest::read(&d).expect("ballpass-run.json");
+        let listed: Vec<&str> = manifest.files.iter().map(|f| f.path.as_str()).collect();
+        assert_eq!(listed, files, "{name}: files in ballpass-run.json");
+        let mut written: Vec<String> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|f| f != ballpass::outdir::RUN_FILE)
+            .collect();
+        written.sort();
+        assert_eq!(written, files, "{name}: files written");
+        for f in &files {
+            let want = std::fs::read_to_string(golden.join(name).join(f)).unwrap();
+            let got = std::fs::read_to_string(d.join(f)).unwrap();
+            assert!(
+                without_version(&got) == without_version(&want)
+                    && got.ends_with('\n') == want.ends_with('\n'),
+                "{name}/{f} differs from the golden file"
+            );
+        }
+    }
+}

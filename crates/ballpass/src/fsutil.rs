@@ -174,6 +174,40 @@ pub fn write_atomic_with(
     result.map_err(io_err)
 }
 
+/// Writes serializable rows atomically as a CSV table with a header row
+/// (the `csv` crate's formatting: shortest round-trip numbers, empty cells
+/// for `None`).
+///
+/// # Errors
+/// [`Error::Format`] when a row cannot be formatted, [`Error::Io`] naming
+/// `path` when it cannot be written.
+pub fn write_csv_rows<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
+    let format_err = |reason: String| Error::Format {
+        path: path.to_path_buf(),
+        reason: format!("cannot format the table: {reason}"),
+    };
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| format_err(e.to_string()))?;
+    }
+    let bytes = w.into_inner().map_err(|e| format_err(e.to_string()))?;
+    write_atomic(path, &bytes)
+}
+
+/// Writes a value atomically as pretty JSON with a trailing newline.
+///
+/// # Errors
+/// [`Error::Format`] when it cannot be serialised, [`Error::Io`] naming
+/// `path` when it cannot be written.
+pub fn write_json_pretty<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let mut bytes = serde_json::to_vec_pretty(value).map_err(|e| Error::Format {
+        path: path.to_path_buf(),
+        reason: format!("cannot serialise: {e}"),
+    })?;
+    bytes.push(b'\n');
+    write_atomic(path, &bytes)
+}
+
 /// Creates `tmp` (which must not exist) and registers it, both under the
 /// registry's lock, so that [`interrupt`] either sees it or stops it.
 fn create_registered(tmp: &Path) -> std::io::Result<File> {

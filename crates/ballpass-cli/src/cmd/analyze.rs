@@ -243,7 +243,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
                 );
             }
         }
-        output::write_json(
+        ballpass::fsutil::write_json_pretty(
             &out.path().join("segments.json"),
             &serde_json::json!({
                 "schema": "ballpass.segments/1",

@@ -1,6 +1,5 @@
 //! `ballpass sweep` and `ballpass diagnose`: campaigns over many recordings.
 
-use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -9,12 +8,13 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
-use ballpass::campaign::manifest::OrderedVelocity;
+use ballpass::campaign::output::{DIAGNOSIS_SCHEMA, SWEEP_SCHEMA};
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
 use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
-    export, from_directory, read_manifest, run_batch, BatchOutcome, Manifest, ManifestEntry,
+    export, from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind,
+    CampaignOutput, Manifest, ManifestEntry, Selection,
 };
 use ballpass::report::campaign::{
     diagnosis_parts, friction_examples, sweep_parts, FrictionTrace, ReportParts,
@@ -134,53 +134,15 @@ fn settings(
     Ok(s)
 }
 
-/// What folder mode left out, as selection notes: each entry that matched
-/// but is no readable file by name, the names that do not match counted.
-fn skipped_notes(m: &Manifest) -> Vec<String> {
-    let mut notes: Vec<String> = m
-        .skipped
-        .iter()
-        .filter(|s| !s.reason.starts_with("does not match"))
-        .map(|s| format!("skipped {}: {}", s.name, s.reason))
-        .collect();
-    let unmatched = m.skipped.len() - notes.len();
-    if unmatched > 0 {
-        notes.push(format!(
-            "{unmatched} other entr{} of the folder do not match the pattern",
-            if unmatched == 1 { "y" } else { "ies" }
-        ));
-    }
-    notes
-}
-
 fn run(
     a: &CampaignArgs,
     command: &str,
-    pick: impl Fn(&Manifest) -> (Vec<ManifestEntry>, Vec<String>),
+    kind: CampaignKind,
     settings: &CampaignSettings,
 ) -> Result<Batch> {
     let out = output::open_dir(&a.out, command)?;
     let manifest = read_source(a)?;
-    let (mut entries, mut notes) = if a.only_bearing.is_empty() && a.only_velocity.is_empty() {
-        pick(&manifest)
-    } else {
-        (manifest.entries.clone(), Vec::new())
-    };
-    if !a.only_bearing.is_empty() {
-        entries.retain(|e| a.only_bearing.contains(&e.bearing));
-        notes.push(format!("only bearings {}", a.only_bearing.join(", ")));
-    }
-    if !a.only_velocity.is_empty() {
-        entries.retain(|e| a.only_velocity.contains(&e.velocity_mm_s));
-        notes.push(format!("only velocities {:?} mm/s", a.only_velocity));
-    }
-    notes.extend(skipped_notes(&manifest));
-    if entries.is_empty() {
-        bail!(
-            "{}: no recording left after the selection",
-            manifest.source.display()
-        );
-    }
+    let Selection { entries, notes } = select(&manifest, kind, &a.only_bearing, &a.only_velocity)?;
     let load = a.load.options()?;
     let fallback = load.geometry.context("no bearing geometry")?;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -210,89 +172,6 @@ fn run(
         seconds: t0.elapsed().as_secs_f64(),
         out,
     })
-}
-
-/// Default selection of `sweep`: the bearing recorded at the most velocities.
-fn pick_sweep(m: &Manifest) -> (Vec<ManifestEntry>, Vec<String>) {
-    let mut per: BTreeMap<&str, BTreeSet<OrderedVelocity>> = BTreeMap::new();
-    for e in &m.entries {
-        per.entry(&e.bearing)
-            .or_default()
-            .insert(OrderedVelocity(e.velocity_mm_s));
-    }
-    let Some((best, _)) = per.iter().max_by_key(|(_, v)| v.len()) else {
-        return (Vec::new(), Vec::new());
-    };
-    let best = best.to_string();
-    let entries: Vec<ManifestEntry> = m
-        .entries
-        .iter()
-        .filter(|e| e.bearing == best)
-        .cloned()
-        .collect();
-    let notes = if per.len() > 1 {
-        vec![format!(
-            "swept bearing {best} (recorded at the most velocities); --only-bearing picks another"
-        )]
-    } else {
-        Vec::new()
-    };
-    (entries, notes)
-}
-
-/// Default selection of `diagnose`: the velocity with the most bearings,
-/// leaving out a bearing that is also recorded at other velocities (the
-/// sweep's bearing) when at least two others remain.
-fn pick_diagnose(m: &Manifest) -> (Vec<ManifestEntry>, Vec<String>) {
-    let mut per: BTreeMap<OrderedVelocity, BTreeSet<&str>> = BTreeMap::new();
-    for e in &m.entries {
-        per.entry(OrderedVelocity(e.velocity_mm_s))
-            .or_default()
-            .insert(&e.bearing);
-    }
-    let Some((v, bearings)) = per.iter().max_by_key(|(v, b)| (b.len(), *v)) else {
-        return (Vec::new(), Vec::new());
-    };
-    let swept: BTreeSet<&str> = bearings
-        .iter()
-        .copied()
-        .filter(|b| {
-            m.entries
-                .iter()
-                .any(|e| e.bearing == *b && e.velocity_mm_s != v.0)
-        })
-        .collect();
-    let mut notes = vec![format!(
-        "diagnosed the batch at {} mm/s (the velocity with the most bearings)",
-        v.0
-    )];
-    let keep_swept = bearings.len() - swept.len() < 2;
-    if !keep_swept && !swept.is_empty() {
-        notes.push(format!(
-            "left out {} (also recorded at other velocities: a sweep, not the batch); --only-bearing includes it",
-            swept.iter().copied().collect::<Vec<_>>().join(", ")
-        ));
-    }
-    let entries = m
-        .entries
-        .iter()
-        .filter(|e| e.velocity_mm_s == v.0 && (keep_swept || !swept.contains(e.bearing.as_str())))
-        .cloned()
-        .collect();
-    (entries, notes)
-}
-
-#[derive(Serialize)]
-struct CampaignJson<'a, T: Serialize> {
-    schema: &'static str,
-    version: &'static str,
-    source: String,
-    records: usize,
-    failed: Vec<export::Failure>,
-    selection: &'a [String],
-    settings: &'a CampaignSettings,
-    result: &'a T,
-    record_results: Vec<&'a RecordResult>,
 }
 
 /// The campaign report: inputs and selection, the command's sections,
@@ -360,7 +239,6 @@ fn finish<T: Serialize>(
     a: &CampaignArgs,
     b: &Batch,
     settings: &CampaignSettings,
-    ok: &[&RecordResult],
     o: Outputs<'_, T>,
     parts: impl FnOnce() -> Result<ReportParts>,
 ) -> Result<(Option<PathBuf>, Vec<String>)> {
@@ -376,17 +254,14 @@ fn finish<T: Serialize>(
     export::write_json(
         staged,
         o.json_name,
-        &CampaignJson {
-            schema: o.schema,
-            version: ballpass::VERSION,
-            source: b.manifest.source.display().to_string(),
-            records: b.entries.len(),
-            failed: export::failures(&b.outcome),
-            selection: &b.notes,
+        &CampaignOutput::new(
+            o.schema,
+            b.manifest.source.display().to_string(),
+            &b.outcome,
+            &b.notes,
             settings,
-            result: o.result,
-            record_results: ok.to_vec(),
-        },
+            o.result,
+        ),
     )?;
     let report = if a.report.no_report {
         None
@@ -446,7 +321,7 @@ fn conclude(b: Batch, html: Option<PathBuf>, summary: Vec<String>) -> Result<()>
 /// Runs `ballpass sweep`.
 pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
     let settings = settings(a, 25.0, Default::default())?;
-    let b = run(a, "sweep", pick_sweep, &settings)?;
+    let b = run(a, "sweep", CampaignKind::Sweep, &settings)?;
     let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
     let load = a.load.options()?;
     let geometry = geometry_for(
@@ -458,10 +333,9 @@ pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
         a,
         &b,
         &settings,
-        &ok,
         Outputs {
             title: "ballpass sweep",
-            schema: "ballpass.sweep/1",
+            schema: SWEEP_SCHEMA,
             json_name: "sweep.json",
             tables: vec![("sweep.csv", export::sweep_csv(&s))],
             result: &s,
@@ -486,7 +360,7 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         ..Default::default()
     };
     let settings = settings(c, ds.low_band_hz, ds.sticking.clone())?;
-    let b = run(c, "diagnose", pick_diagnose, &settings)?;
+    let b = run(c, "diagnose", CampaignKind::Diagnose, &settings)?;
     let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
     let d = diagnose(&ok, &ds);
     let summary = d
@@ -506,10 +380,9 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         c,
         &b,
         &settings,
-        &ok,
         Outputs {
             title: "ballpass diagnose",
-            schema: "ballpass.diagnosis/1",
+            schema: DIAGNOSIS_SCHEMA,
             json_name: "diagnosis.json",
             tables: vec![
                 ("diagnosis.csv", export::diagnosis_csv(&d)),

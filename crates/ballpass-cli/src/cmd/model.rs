@@ -1,23 +1,26 @@
 //! `ballpass model`: the signal and stage models of thesis chapter 6
 //! (corrected per docs/methods.md §2–7), written as CSV/JSON tables to plot from.
+//!
+//! The tables are computed by [`ballpass::model::tables`]; this module
+//! parses the flags, writes the library's files and report, and prints a
+//! summary.
 
-use std::f64::consts::PI;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use ballpass::model::pulse_train::{sigma_ratio_from_fwhm_ratio, GaussianTrain, RectangularTrain};
-use ballpass::model::signals::{LagConvention, ModelSignal, SinusoidModel};
-use ballpass::model::stage::{
-    difference_responses, velocity_response, FrequencyAxis, PdLoop, VelocityResponseSettings,
+use ballpass::model::signals::{LagConvention, SinusoidModel};
+use ballpass::model::stage::{FrequencyAxis, PdLoop, VelocityResponseSettings};
+use ballpass::model::tables::{
+    pulses_tables, signals_tables, stage_tables, CorrelationRow, PulsesTableSettings,
+    SignalsTableSettings, StageTableSettings, StageTables, TrainRow,
 };
 use clap::{Args, Subcommand, ValueEnum};
-use serde::Serialize;
 
 use ballpass::report::{self, Block, Level, Report, Section, Table, Verdict};
 
 use crate::args::{command_line, BearingArgs, ReportArgs};
-use crate::output::{self, write_csv, write_json};
+use crate::output;
 use crate::text;
 
 /// Arguments of `ballpass model`.
@@ -70,8 +73,7 @@ impl FrequencyArgs {
 }
 
 /// What `--ratio` measures.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum RatioKind {
     /// Gaussian sigma over τ_c (the r of thesis Eq. 6.23 and docs/methods.md §6).
     Sigma,
@@ -90,12 +92,18 @@ struct RatioArgs {
     ratio_kind: RatioKind,
 }
 
+impl From<RatioKind> for ballpass::model::RatioKind {
+    fn from(k: RatioKind) -> Self {
+        match k {
+            RatioKind::Sigma => Self::Sigma,
+            RatioKind::Fwhm => Self::Fwhm,
+        }
+    }
+}
+
 impl RatioArgs {
     fn sigma_ratio(&self) -> f64 {
-        match self.ratio_kind {
-            RatioKind::Sigma => self.ratio,
-            RatioKind::Fwhm => sigma_ratio_from_fwhm_ratio(self.ratio),
-        }
+        ballpass::model::RatioKind::from(self.ratio_kind).sigma_ratio(self.ratio)
     }
 }
 
@@ -288,56 +296,6 @@ fn need_f_c(freq: &FrequencyArgs, what: &str) -> Result<f64> {
     })
 }
 
-/// One lag of `correlations.csv`; each column carries the unit of its
-/// product (friction N, velocity error mm/s, optical V).
-#[derive(Serialize)]
-struct CorrelationRow {
-    tau_s: f64,
-    #[serde(rename = "r_ff_n2")]
-    r_ff: f64,
-    #[serde(rename = "r_veve_mm2_s2")]
-    r_veve: f64,
-    #[serde(rename = "r_ss_v2")]
-    r_ss: f64,
-    #[serde(rename = "r_fve_n_mm_s")]
-    r_fve: f64,
-    #[serde(rename = "r_fs_n_v")]
-    r_fs: f64,
-    #[serde(rename = "r_sve_v_mm_s")]
-    r_sve: f64,
-}
-
-#[derive(Serialize)]
-struct SpectrumRow {
-    pair: String,
-    omega_rad_s: f64,
-    f_hz: f64,
-    weight_re: f64,
-    weight_im: f64,
-}
-
-#[derive(Serialize)]
-struct PeakRow {
-    pair: String,
-    #[serde(skip)]
-    names: (&'static str, &'static str),
-    tau_phi_s: f64,
-    phase_deg: f64,
-    y_lags_x_s: f64,
-}
-
-#[derive(Serialize)]
-struct SignalsJson<'a> {
-    schema: &'static str,
-    version: &'static str,
-    model: &'a SinusoidModel,
-    convention: LagConvention,
-    convention_note: &'static str,
-    spectra_note: &'static str,
-    peaks: Vec<PeakRow>,
-    spectral_lines: Vec<SpectrumRow>,
-}
-
 fn run_signals(a: &SignalsArgs) -> Result<()> {
     let f_c = need_f_c(&a.freq, "model signals")?;
     let m = SinusoidModel {
@@ -348,73 +306,21 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
         optical_dc_v: a.optical_dc,
         optical_amp_v: a.optical_amp,
     };
-    m.validate()?;
-    if !(a.periods.is_finite() && a.periods > 0.0 && (2..=1_000_000).contains(&a.points)) {
-        bail!("invalid --periods/--points: need periods > 0 and 2 to 1000000 points");
-    }
-    let conv = match a.convention {
-        Convention::Eq71 => LagConvention::Eq71,
-        Convention::Eq612 => LagConvention::Eq612,
-    };
-    use ModelSignal::{Friction as F, Optical as S, VelocityError as V};
-    let span = a.periods * m.tau_c_s();
-    let rows: Vec<CorrelationRow> = (0..a.points)
-        .map(|i| {
-            let tau = -span + 2.0 * span * i as f64 / (a.points - 1) as f64;
-            let r = |x, y| m.correlation(x, y, tau, conv);
-            CorrelationRow {
-                tau_s: tau,
-                r_ff: r(F, F),
-                r_veve: r(V, V),
-                r_ss: r(S, S),
-                r_fve: r(F, V),
-                r_fs: r(F, S),
-                r_sve: r(S, V),
-            }
-        })
-        .collect();
-    let pairs = [(F, F), (V, V), (S, S), (F, V), (F, S), (S, V)];
-    let name = |x: ModelSignal, y: ModelSignal| format!("{}_{}", x.symbol(), y.symbol());
-    let mut lines = Vec::new();
-    let mut peaks = Vec::new();
-    for (x, y) in pairs {
-        for l in m.cross_spectrum(x, y) {
-            lines.push(SpectrumRow {
-                pair: name(x, y),
-                omega_rad_s: l.omega_rad_s,
-                f_hz: l.omega_rad_s / (2.0 * PI),
-                weight_re: l.weight_re,
-                weight_im: l.weight_im,
-            });
-        }
-        if let Some(p) = m.correlation_peak(x, y, conv) {
-            peaks.push(PeakRow {
-                pair: name(x, y),
-                names: (x.symbol(), y.symbol()),
-                tau_phi_s: p.tau_phi_s,
-                phase_deg: p.phase_deg,
-                y_lags_x_s: p.y_lags_x_s,
-            });
-        }
-    }
+    let json = signals_tables(
+        &m,
+        &SignalsTableSettings {
+            periods: a.periods,
+            points: a.points,
+            convention: match a.convention {
+                Convention::Eq71 => LagConvention::Eq71,
+                Convention::Eq612 => LagConvention::Eq612,
+            },
+        },
+    )?;
     let out = output::open_dir(&a.out, "model signals")?;
     let dir = out.path().to_path_buf();
-    write_csv(&dir.join("correlations.csv"), &rows)?;
-    write_csv(&dir.join("spectral_lines.csv"), &lines)?;
-    let json = SignalsJson {
-        schema: "ballpass.model.signals/1",
-        version: ballpass::VERSION,
-        model: &m,
-        convention: conv,
-        convention_note: match conv {
-            LagConvention::Eq71 => "R_xy(tau) = <x(t+tau) y(t)> (thesis Eq. 7.1, scipy correlate); a peak at -d means y lags x by d",
-            LagConvention::Eq612 => "R_xy(tau) = <x(t) y(t+tau)> (thesis Eq. 6.12); a peak at +d means y lags x by d",
-        },
-        spectra_note: "Dirac line weights of the unitary Fourier transform of the Eq. 6.12 correlation (conj(X)*Y, as scipy csd), with the signs of Eq. 6.17 corrected (docs/methods.md §4)",
-        peaks,
-        spectral_lines: lines,
-    };
-    write_json(&dir.join("signals.json"), &json)?;
+    json.write(&dir)?;
+    let rows = &json.correlations;
     let tau: Vec<f64> = rows.iter().map(|r| r.tau_s).collect();
     let col = |g: fn(&CorrelationRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
     let cols = [
@@ -482,137 +388,26 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
     Ok(())
 }
 
-#[derive(Serialize)]
-struct GaussianRow {
-    n: usize,
-    f_over_f_c: f64,
-    c_re: f64,
-    c_im: f64,
-    c_abs: f64,
-    c_over_p: f64,
-    thesis_printed_c_over_p: f64,
-}
-
-#[derive(Serialize)]
-struct RectRow {
-    n: usize,
-    a_n: f64,
-    b_n: f64,
-}
-
-#[derive(Serialize)]
-struct TrainRow {
-    t_s: f64,
-    gaussian: f64,
-    gaussian_series: f64,
-    rectangular: f64,
-    rectangular_series: f64,
-}
-
-#[derive(Serialize)]
-struct PulsesJson {
-    schema: &'static str,
-    version: &'static str,
-    tau_c_s: f64,
-    ratio: f64,
-    ratio_kind: RatioKind,
-    gaussian: GaussianTrain,
-    gaussian_fwhm_s: f64,
-    gaussian_series_order: usize,
-    rectangular: RectangularTrain,
-    rectangular_order: usize,
-    rectangular_a0: f64,
-    rectangular_gibbs_overshoot_fraction: f64,
-    fit_rms_gaussian_series: f64,
-    fit_rms_rectangular_series: f64,
-}
-
 fn run_pulses(a: &PulsesArgs) -> Result<()> {
-    let tau_c = a.freq.f_c_hz()?.map_or(1.0, |f| 1.0 / f);
-    let sigma_ratio = a.ratio.sigma_ratio();
-    let g = GaussianTrain::new(tau_c, sigma_ratio, a.amplitude, a.dc, 0.0)?;
-    // The rectangle's duty ratio is --ratio as given, whatever its kind: the
-    // thesis compares both trains at the same r = 0.155 (docs/methods.md §5–6).
-    let r = RectangularTrain::new(tau_c, a.ratio.ratio, a.amplitude, a.dc)?;
-    if a.order == 0 || a.order > 100_000 {
-        bail!("invalid --order: must be 1 to 100000, got {}", a.order);
-    }
-    if a.harmonics > 100_000
-        || a.periods == 0
-        || a.periods > 1000
-        || !(2..=1_000_000).contains(&a.points)
-    {
-        bail!("invalid --harmonics/--periods/--points: need harmonics ≤ 100000, 1 to 1000 periods, 2 to 1000000 points per period");
-    }
-    let grows: Vec<GaussianRow> = (0..=a.harmonics)
-        .map(|n| {
-            let c = g.coefficient(n as i64);
-            GaussianRow {
-                n,
-                f_over_f_c: n as f64,
-                c_re: c.re,
-                c_im: c.im,
-                c_abs: c.norm(),
-                c_over_p: if a.amplitude != 0.0 {
-                    c.norm() / a.amplitude.abs()
-                } else {
-                    0.0
-                },
-                thesis_printed_c_over_p: g.thesis_printed_coefficient(n as i64),
-            }
-        })
-        .collect();
-    let coef = r.coefficients(a.order);
-    let mut rrows = vec![RectRow {
-        n: 0,
-        a_n: coef.a0,
-        b_n: 0.0,
-    }];
-    rrows.extend((1..=a.order).map(|n| RectRow {
-        n,
-        a_n: coef.a[n - 1],
-        b_n: coef.b[n - 1],
-    }));
-    let gorder = g.order_for(1e-16).max(1);
-    let total = a.periods * a.points;
-    let trows: Vec<TrainRow> = (0..total)
-        .map(|i| {
-            let t = tau_c * i as f64 / a.points as f64;
-            TrainRow {
-                t_s: t,
-                gaussian: g.value(t),
-                gaussian_series: g.partial_sum(t, gorder),
-                rectangular: r.value(t),
-                rectangular_series: r.partial_sum(t, a.order),
-            }
-        })
-        .collect();
-    let rms = |f: &dyn Fn(&TrainRow) -> f64| {
-        (trows.iter().map(|x| f(x).powi(2)).sum::<f64>() / trows.len() as f64).sqrt()
-    };
-    let gibbs = r.gibbs_overshoot(a.order)?;
-    let json = PulsesJson {
-        schema: "ballpass.model.pulses/1",
-        version: ballpass::VERSION,
-        tau_c_s: tau_c,
+    let json = pulses_tables(&PulsesTableSettings {
+        f_c_hz: a.freq.f_c_hz()?,
         ratio: a.ratio.ratio,
-        ratio_kind: a.ratio.ratio_kind,
-        gaussian: g,
-        gaussian_fwhm_s: g.fwhm_s(),
-        gaussian_series_order: gorder,
-        rectangular: r,
-        rectangular_order: a.order,
-        rectangular_a0: coef.a0,
-        rectangular_gibbs_overshoot_fraction: gibbs,
-        fit_rms_gaussian_series: rms(&|x| x.gaussian_series - x.gaussian),
-        fit_rms_rectangular_series: rms(&|x| x.rectangular_series - x.rectangular),
-    };
+        ratio_kind: a.ratio.ratio_kind.into(),
+        amplitude: a.amplitude,
+        dc: a.dc,
+        harmonics: a.harmonics,
+        order: a.order,
+        periods: a.periods,
+        points: a.points,
+    })?;
+    let (tau_c, sigma_ratio) = (json.tau_c_s, json.sigma_ratio());
+    let (g, r) = (&json.gaussian, &json.rectangular);
+    let (grows, trows) = (&json.gaussian_coefficients, &json.trains);
+    let gorder = json.gaussian_series_order;
+    let gibbs = json.rectangular_gibbs_overshoot_fraction;
     let out = output::open_dir(&a.out, "model pulses")?;
     let dir = out.path().to_path_buf();
-    write_csv(&dir.join("gaussian_coefficients.csv"), &grows)?;
-    write_csv(&dir.join("rectangular_coefficients.csv"), &rrows)?;
-    write_csv(&dir.join("trains.csv"), &trows)?;
-    write_json(&dir.join("pulses.json"), &json)?;
+    json.write(&dir)?;
     let ns: Vec<f64> = grows.iter().map(|r| r.n as f64).collect();
     let cn: Vec<f64> = grows.iter().map(|r| r.c_over_p).collect();
     let printed: Vec<f64> = grows.iter().map(|r| r.thesis_printed_c_over_p).collect();
@@ -704,13 +499,14 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     for row in grows.iter().take(6) {
         writeln!(out, "  n = {:<2} C_n/P = {:.6e}", row.n, row.c_over_p)?;
     }
+    let first = json.rectangular_coefficients.get(1);
     writeln!(
         out,
         "rectangular (tau_p/tau_c = {:.5}, Eq. 6.22 corrected, docs/methods.md §5): a0 = {:.5}, a1 = {:.5}, b1 = {:.5}",
         r.ratio,
-        coef.a0,
-        coef.a.first().copied().unwrap_or(0.0),
-        coef.b.first().copied().unwrap_or(0.0)
+        json.rectangular_a0,
+        first.map_or(0.0, |c| c.a_n),
+        first.map_or(0.0, |c| c.b_n)
     )?;
     writeln!(
         out,
@@ -729,118 +525,45 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     Ok(())
 }
 
-#[derive(Serialize)]
-struct VelocityRow {
-    t_s: f64,
-    friction_n: f64,
-    velocity_mm_s: f64,
-    position_um: f64,
-    velocity_magnitude_only_mm_s: f64,
-}
-
-#[derive(Serialize)]
-struct StageJson<'a> {
-    schema: &'static str,
-    version: &'static str,
-    stage: PdLoop,
-    features: ballpass::model::LoopFeatures,
-    units_note: &'static str,
-    velocity_response: Option<VelocitySummary<'a>>,
-}
-
-#[derive(Serialize)]
-struct VelocitySummary<'a> {
-    f_c_hz: f64,
-    friction: GaussianTrain,
-    harmonics: &'a [ballpass::model::HarmonicRow],
-    velocity_peak_to_peak_mm_s: f64,
-    magnitude_only_error_of_peak: f64,
-}
-
 fn run_stage(a: &StageArgs) -> Result<()> {
     let stage = match (a.kp, a.kd, a.natural_frequency, a.damping) {
         (Some(kp), Some(kd), None, None) => PdLoop::from_gains(a.mass, a.motor_constant, kp, kd)?,
         (None, None, Some(f), Some(z)) => PdLoop::from_natural(a.mass, f, z)?,
         _ => bail!("model stage needs either --kp and --kd (with --motor-constant) or --natural-frequency and --damping"),
     };
-    let features = stage.features();
-    let bode = stage.bode(&FrequencyAxis {
-        f_min_hz: a.f_min,
-        f_max_hz: a.f_max,
-        points: a.points,
-    })?;
-    let diff = difference_responses(a.fs, 500)?;
+    // The frequency flags are checked before the tables are computed.
     let f_c = a.freq.f_c_hz()?;
-    let resp = match f_c {
-        Some(f) => {
-            let tc = 1.0 / f;
-            let friction = GaussianTrain::new(
-                tc,
-                a.ratio.sigma_ratio(),
-                a.friction_amplitude,
-                0.0,
-                0.5 * tc,
-            )?;
-            let r = velocity_response(
-                &stage,
-                &friction,
-                &VelocityResponseSettings {
-                    harmonics: a.harmonics,
-                    points_per_period: a.period_points,
-                },
-            )?;
-            Some((friction, r))
-        }
-        None => None,
-    };
+    let json = stage_tables(
+        &stage,
+        &StageTableSettings {
+            axis: FrequencyAxis {
+                f_min_hz: a.f_min,
+                f_max_hz: a.f_max,
+                points: a.points,
+            },
+            difference_fs_hz: a.fs,
+            f_c_hz: f_c,
+            sigma_ratio: a.ratio.sigma_ratio(),
+            friction_amplitude_n: a.friction_amplitude,
+            velocity: VelocityResponseSettings {
+                harmonics: a.harmonics,
+                points_per_period: a.period_points,
+            },
+        },
+    )?;
     let out = output::open_dir(&a.out, "model stage")?;
     let dir = out.path().to_path_buf();
-    write_csv(&dir.join("bode.csv"), &bode)?;
-    write_csv(&dir.join("difference.csv"), &diff)?;
-    let mut written = vec!["bode.csv", "difference.csv"];
-    if let Some((_, r)) = &resp {
-        write_csv(&dir.join("harmonics.csv"), &r.harmonics)?;
-        let rows: Vec<VelocityRow> = (0..r.time_s.len())
-            .map(|i| VelocityRow {
-                t_s: r.time_s[i],
-                friction_n: r.friction_n[i],
-                velocity_mm_s: r.velocity_mm_s[i],
-                position_um: r.position_um[i],
-                velocity_magnitude_only_mm_s: r.velocity_magnitude_only_mm_s[i],
-            })
-            .collect();
-        write_csv(&dir.join("velocity_response.csv"), &rows)?;
-        written.extend(["harmonics.csv", "velocity_response.csv"]);
-    }
-    let json = StageJson {
-        schema: "ballpass.model.stage/1",
-        version: ballpass::VERSION,
-        stage,
-        features,
-        units_note: "SI: G_xf in m/N (dB re 1 m/N), G_vf in (m/s)/N (dB re 1 (m/s)/N); velocity response in mm/s, position in um",
-        velocity_response: resp.as_ref().map(|(friction, r)| VelocitySummary {
-            f_c_hz: r.f_c_hz,
-            friction: *friction,
-            harmonics: &r.harmonics,
-            velocity_peak_to_peak_mm_s: r.velocity_peak_to_peak_mm_s,
-            magnitude_only_error_of_peak: r.magnitude_only_error_of_peak,
-        }),
-    };
-    write_json(&dir.join("stage.json"), &json)?;
-    written.push("stage.json");
-    let rep = stage_report(
-        &json,
-        f_c,
-        a.fs,
-        &bode,
-        &diff,
-        resp.as_ref().map(|(_, r)| r),
-    )?;
+    let paths = json.write(&dir)?;
+    let mut written: Vec<String> = paths
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    let rep = stage_report(&json, f_c, a.fs)?;
     if a.report.write(&rep, &dir)?.is_some() {
-        written.extend(["report.html", "figures/"]);
+        written.extend(["report.html".to_string(), "figures/".to_string()]);
     }
     output::commit(out)?;
-    summarize_stage(&json, f_c, a.fs, &diff, &a.out, &written)
+    summarize_stage(&json, f_c, a.fs, &a.out, &written)
 }
 
 fn report_note(written: &Option<ballpass::report::ReportFiles>) -> &'static str {
@@ -851,14 +574,8 @@ fn report_note(written: &Option<ballpass::report::ReportFiles>) -> &'static str 
     }
 }
 
-fn stage_report(
-    json: &StageJson,
-    f_c: Option<f64>,
-    fs: f64,
-    bode: &[ballpass::model::BodeRow],
-    diff: &[ballpass::model::DifferenceRow],
-    resp: Option<&ballpass::model::VelocityResponse>,
-) -> Result<Report> {
+fn stage_report(json: &StageTables, f_c: Option<f64>, fs: f64) -> Result<Report> {
+    let (bode, diff, resp) = (&json.bode, &json.difference, json.response.as_ref());
     let f = &json.features;
     let mut kv = vec![
         (
@@ -985,13 +702,13 @@ fn stage_report(
 }
 
 fn summarize_stage(
-    json: &StageJson,
+    json: &StageTables,
     f_c: Option<f64>,
     fs: f64,
-    diff: &[ballpass::model::DifferenceRow],
     out_dir: &Path,
-    written: &[&str],
+    written: &[String],
 ) -> Result<()> {
+    let diff = &json.difference;
     let f = &json.features;
     let mut out = output::stdout();
     writeln!(

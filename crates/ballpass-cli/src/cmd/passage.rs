@@ -5,17 +5,16 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
+use ballpass::analysis::passage_table::{PassageFailure, PassageOutput};
 use ballpass::analysis::preflight::{check, check_channels, PreflightSettings, VelocitySource};
 use ballpass::bearing::Geometry;
 use ballpass::recording::io::load;
-use ballpass::recording::segment::Window;
 use ballpass::recording::{Channel, Recording};
 use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
-use serde::Serialize;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
-use crate::output::{self, write_csv, write_json};
+use crate::output;
 use crate::records::{self, CheckArgs, SegmentArgs};
 use crate::text;
 
@@ -47,42 +46,6 @@ pub struct PassageArgs {
     check: CheckArgs,
     #[command(flatten)]
     segment: SegmentArgs,
-}
-
-#[derive(Serialize)]
-struct Row<'a> {
-    record: &'a str,
-    index: usize,
-    time_s: f64,
-    peak_time_s: f64,
-    polarity: i8,
-    tau_c_s: Option<f64>,
-    tau_p_s: f64,
-    sigma_s: f64,
-    tau_p_over_tau_c: Option<f64>,
-    amplitude_v: f64,
-    height_v: f64,
-    spacing_mm: Option<f64>,
-}
-
-#[derive(Serialize)]
-struct Failure {
-    record: String,
-    error: String,
-}
-
-#[derive(Serialize)]
-struct Output<'a> {
-    schema: &'static str,
-    version: &'static str,
-    bearing: &'a str,
-    /// The time window of every record, when one was given.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    window: Option<Window>,
-    records: &'a [PassageAnalysis],
-    failed: &'a [Failure],
-    /// Dead channels left out, a forced velocity.
-    warnings: &'a [String],
 }
 
 /// Runs `ballpass passage`.
@@ -128,7 +91,7 @@ pub fn run(a: &PassageArgs) -> Result<()> {
         let parts = match parts {
             Ok(p) => p,
             Err(e) => {
-                failed.push(Failure {
+                failed.push(PassageFailure {
                     record: path.display().to_string(),
                     error: e.to_string(),
                 });
@@ -144,7 +107,7 @@ pub fn run(a: &PassageArgs) -> Result<()> {
                     done.push(r);
                     recs.push(rec);
                 }
-                Err(e) => failed.push(Failure {
+                Err(e) => failed.push(PassageFailure {
                     record: name,
                     error: e.to_string(),
                 }),
@@ -169,44 +132,19 @@ pub fn run(a: &PassageArgs) -> Result<()> {
             a.records.len()
         );
     }
-    let rows: Vec<Row> = done
-        .iter()
-        .flat_map(|r| {
-            r.passages.iter().map(move |p| Row {
-                record: &r.source,
-                index: p.index,
-                time_s: p.time_s,
-                peak_time_s: p.peak_time_s,
-                polarity: p.polarity,
-                tau_c_s: p.tau_c_s,
-                tau_p_s: p.tau_p_s,
-                sigma_s: p.sigma_s,
-                tau_p_over_tau_c: p.tau_p_over_tau_c,
-                amplitude_v: p.amplitude_v,
-                height_v: p.height_v,
-                spacing_mm: p.spacing_mm,
-            })
-        })
-        .collect();
     let staged = out.path();
-    write_csv(&staged.join("passages.csv"), &rows)?;
-    write_json(
-        &staged.join("passage.json"),
-        &Output {
-            schema: "ballpass.passage/1",
-            version: ballpass::VERSION,
-            bearing: &bearing_name,
-            window: a.load.window.parsed()?,
-            records: &done,
-            failed: &failed,
-            warnings: &warnings,
-        },
-    )?;
-    let report = build_report(&recs, &done, &failed, &settings, &bearing_name)?;
+    let result = PassageOutput {
+        window: a.load.window.parsed()?,
+        warnings,
+        ..PassageOutput::new(bearing_name.clone(), done, failed)
+    };
+    result.write(staged)?;
+    let (done, failed) = (&result.records, &result.failed);
+    let report = build_report(&recs, done, failed, &settings, &bearing_name)?;
     let written = a.report.write(&report, staged)?;
     let dir = output::commit(out)?;
     let mut out = output::stdout();
-    for r in &done {
+    for r in done {
         summarize(&mut out, r)?;
     }
     writeln!(
@@ -270,7 +208,7 @@ fn one(
 fn build_report(
     recs: &[Recording],
     done: &[PassageAnalysis],
-    failed: &[Failure],
+    failed: &[PassageFailure],
     settings: &PassageSettings,
     bearing: &str,
 ) -> Result<Report> {

@@ -3,9 +3,8 @@
 use std::io::Write;
 
 use anyhow::Result;
-use ballpass::bearing::{self, Prediction};
+use ballpass::bearing;
 use clap::Args;
-use serde::Serialize;
 
 use crate::args::{parse_velocities, BearingArgs};
 
@@ -34,15 +33,6 @@ pub struct PredictArgs {
     list_bearings: bool,
 }
 
-#[derive(Serialize)]
-struct Output<'a> {
-    schema: &'static str,
-    version: &'static str,
-    bearing: &'a str,
-    geometry: ballpass::bearing::Geometry,
-    predictions: &'a [Prediction],
-}
-
 /// Runs `ballpass predict`.
 pub fn run(a: &PredictArgs) -> Result<()> {
     let mut out = crate::output::stdout();
@@ -65,22 +55,13 @@ pub fn run(a: &PredictArgs) -> Result<()> {
     }
     let (name, geometry) = a.bearing.geometry()?;
     let velocities = parse_velocities(a.velocity.as_deref().unwrap_or_default())?;
-    let predictions = velocities
-        .iter()
-        .map(|&v| geometry.predict(v, a.harmonics))
-        .collect::<ballpass::Result<Vec<_>>>()?;
+    let table = bearing::prediction_table(&*name, geometry, &velocities, a.harmonics)?;
     if a.json {
-        let o = Output {
-            schema: "ballpass.predict/1",
-            version: ballpass::VERSION,
-            bearing: &name,
-            geometry,
-            predictions: &predictions,
-        };
-        serde_json::to_writer_pretty(&mut out, &o)?;
+        serde_json::to_writer_pretty(&mut out, &table)?;
         writeln!(out)?;
         return Ok(());
     }
+    let predictions = &table.predictions;
     writeln!(
         out,
         "{name}: d = {} mm, d_ext = {} mm, N_B = {}  →  d_avg = {:.5} mm, d_var = {:.4} mm",
@@ -112,7 +93,7 @@ pub fn run(a: &PredictArgs) -> Result<()> {
             "{:>10} {:>12} {:>10} {:>12} {:>12}",
             "v mm/s", "f_c Hz", "tau_c s", "band lo Hz", "band hi Hz"
         )?;
-        for p in &predictions {
+        for p in predictions {
             writeln!(
                 out,
                 "{:>10.3} {:>12.6} {:>10.5} {:>12.6} {:>12.6}",

@@ -93,7 +93,7 @@ pub fn run(a: &ValidateArgs) -> Result<()> {
         b.finish_and_clear();
     }
     if let Some(p) = &a.out {
-        crate::output::write_json(p, &report)?;
+        ballpass::fsutil::write_json_pretty(p, &report)?;
     }
     let mut out = crate::output::stdout();
     write!(out, "{}", report.text())?;

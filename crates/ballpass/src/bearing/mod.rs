@@ -149,6 +149,45 @@ pub struct Prediction {
     pub harmonics_hz: Vec<f64>,
 }
 
+/// Predictions of one bearing over several velocities: what
+/// `ballpass predict --json` prints (schema `ballpass.predict/1`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PredictionTable {
+    /// `ballpass.predict/1`.
+    pub schema: &'static str,
+    /// ballpass version.
+    pub version: &'static str,
+    /// Bearing name (catalog name, `(custom geometry)` when overridden).
+    pub bearing: String,
+    /// The geometry predicted from.
+    pub geometry: Geometry,
+    /// One prediction per velocity, in the order given.
+    pub predictions: Vec<Prediction>,
+}
+
+/// Predicts `bearing`'s ball-pass frequencies at each velocity (mm/s), with
+/// `harmonics` multiples `k f_c` each.
+///
+/// # Errors
+/// As [`Geometry::predict`], for the first bad velocity.
+pub fn prediction_table(
+    bearing: impl Into<String>,
+    geometry: Geometry,
+    velocities_mm_s: &[f64],
+    harmonics: usize,
+) -> Result<PredictionTable> {
+    Ok(PredictionTable {
+        schema: "ballpass.predict/1",
+        version: crate::VERSION,
+        bearing: bearing.into(),
+        geometry,
+        predictions: velocities_mm_s
+            .iter()
+            .map(|&v| geometry.predict(v, harmonics))
+            .collect::<Result<_>>()?,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

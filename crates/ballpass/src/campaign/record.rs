@@ -1,12 +1,17 @@
 //! What a campaign keeps of one record: every scalar the analyses produced
 //! (one row of `records.csv`), plus the friction spectrum for diagnosis.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::sticking::PassageHeights;
 
 /// One record's results.
-#[derive(Debug, Clone, Serialize)]
+///
+/// Reads back from its JSON (`Deserialize`) except the friction spectrum,
+/// which the JSON leaves out and which comes back empty: a record's result
+/// can travel between processes (the Python package's pickling, Spark
+/// executors) with the spectrum sent beside it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RecordResult {
     /// Recording file.
     pub path: String,

@@ -54,7 +54,7 @@ impl Default for StickingSettings {
 }
 
 /// The friction of each ball-pass period of one record.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PassageHeights {
     /// Ball-pass period used, s.
     pub period_s: f64,

@@ -1,0 +1,434 @@
+"""ballpass: ball-pass disturbances of linear ball bearings, from Python.
+
+The same computations as the ``ballpass`` command-line tool, on numpy arrays
+and in one process:
+
+* :class:`Recording` (from arrays, :func:`load` or :func:`simulate`) is the
+  one way data enters an analysis;
+* :func:`predict`, :func:`analyze`, :func:`passages`, :func:`sweep`,
+  :func:`diagnose` and the models in :mod:`ballpass.model` return result
+  objects whose ``to_dict()`` equals the command line's JSON for the same
+  input, with numpy arrays for series and tables;
+* :func:`process_record` and :func:`diagnose_records` split a diagnosis into
+  per-record work and a batch step, for fleets on many machines
+  (``examples/spark_fleet.py``);
+* :mod:`ballpass.signal` is a drop-in for the SciPy functions ballpass
+  matches.
+
+Units are in the names (``fs_hz``, ``velocity_mm_s``, ``friction_n``). The
+computation runs with the GIL released; parallel work (repeats, campaigns)
+runs in the pool of :func:`threads` or ``threads=``, else in one thread per
+core (``RAYON_NUM_THREADS`` sets that).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import json
+import os
+import warnings
+from typing import Iterable, Iterator, Sequence
+
+import numpy as np
+
+from . import _native
+from ._native import Recording, ThreadPool
+from ._results import RecordResult, Result, Table
+
+__version__: str = _native.__version__
+
+__all__ = [
+    "Recording",
+    "ThreadPool",
+    "Result",
+    "RecordResult",
+    "Table",
+    "BallpassWarning",
+    "threads",
+    "load",
+    "simulate",
+    "predict",
+    "analyze",
+    "passages",
+    "read_manifest",
+    "select",
+    "sweep",
+    "diagnose",
+    "process_record",
+    "diagnose_records",
+    "model",
+    "signal",
+]
+
+
+class BallpassWarning(UserWarning):
+    """What an analysis wants its user to know about the numbers (the
+    command line prints these as ``warning: ...``)."""
+
+
+# ---------------------------------------------------------------- threads
+
+_POOL: contextvars.ContextVar[ThreadPool | None] = contextvars.ContextVar(
+    "ballpass_pool", default=None
+)
+
+
+@contextlib.contextmanager
+def threads(n: int | ThreadPool) -> Iterator[ThreadPool]:
+    """Runs ballpass' parallel work inside the block in ``n`` worker threads
+    (or the given pool), e.g. ``with ballpass.threads(1): ...`` in each of
+    many worker processes so that they do not oversubscribe the machine.
+    Context-local (threads and asyncio tasks each see their own setting);
+    nothing global changes."""
+    pool = n if isinstance(n, ThreadPool) else ThreadPool(int(n))
+    token = _POOL.set(pool)
+    try:
+        yield pool
+    finally:
+        _POOL.reset(token)
+
+
+def _pool(n):
+    if n is None:
+        return _POOL.get()
+    if isinstance(n, ThreadPool):
+        return n
+    return ThreadPool(int(n))
+
+
+# ---------------------------------------------------------------- helpers
+
+_LOAD_KEYS = (
+    "profile", "format", "delimiter", "fs_hz", "time_col", "ignore_time",
+    "friction_col", "position_col", "optical_col", "friction_scale",
+    "friction_offset", "position_scale", "position_offset", "optical_scale",
+    "optical_offset", "velocity_mm_s", "test_id", "min_periods", "bearing",
+    "ball_diameter_mm", "free_space_mm", "balls_in_race",
+)
+
+
+def _load_json(options: dict) -> str | None:
+    unknown = sorted(set(options) - set(_LOAD_KEYS))
+    if unknown:
+        raise TypeError(
+            f"unexpected load option(s) {', '.join(unknown)}; expected any of {', '.join(_LOAD_KEYS)}"
+        )
+    given = {k: (os.fspath(v) if k == "profile" else v) for k, v in options.items() if v is not None}
+    return json.dumps(given) if given else None
+
+
+def _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race) -> str | None:
+    given = {
+        k: v
+        for k, v in (
+            ("bearing", bearing),
+            ("ball_diameter_mm", ball_diameter_mm),
+            ("free_space_mm", free_space_mm),
+            ("balls_in_race", balls_in_race),
+        )
+        if v is not None
+    }
+    return json.dumps(given) if given else None
+
+
+def _settings_json(settings: dict | None, overrides: dict) -> str | None:
+    merged = dict(settings or {})
+    merged.update({k: v for k, v in overrides.items() if v is not None})
+    return json.dumps(merged) if merged else None
+
+
+def _warn(data: dict) -> None:
+    for w in data.get("warnings", ()):
+        warnings.warn(w, BallpassWarning, stacklevel=3)
+
+
+def _records_table(items: list) -> Table:
+    """The scalar numeric fields of a list of dicts as a table."""
+    if not items:
+        return Table({})
+    keys = [
+        k for k, v in items[0].items()
+        if (isinstance(v, (int, float)) and not isinstance(v, bool)) or v is None
+    ]
+    cols = {}
+    for k in keys:
+        vals = [it.get(k) for it in items]
+        if all(isinstance(v, (int, float)) and not isinstance(v, bool) or v is None for v in vals):
+            cols[k] = np.asarray([np.nan if v is None else v for v in vals], dtype=np.float64)
+    return Table(cols)
+
+
+def _as_recordings(recordings, load_options: dict) -> list[Recording]:
+    if isinstance(recordings, (Recording, str, os.PathLike)):
+        recordings = [recordings]
+    out = []
+    for r in recordings:
+        out.append(r if isinstance(r, Recording) else load(r, **load_options))
+    if not out:
+        raise ValueError("no recordings given")
+    return out
+
+
+# ---------------------------------------------------------------- recordings
+
+
+def load(path: str | os.PathLike, *, profile=None, format=None, delimiter=None,
+         fs_hz=None, time_col=None, ignore_time=False, friction_col=None,
+         position_col=None, optical_col=None, friction_scale=None,
+         friction_offset=None, position_scale=None, position_offset=None,
+         optical_scale=None, optical_offset=None, velocity_mm_s=None, test_id=None,
+         min_periods=None, bearing=None, ball_diameter_mm=None, free_space_mm=None,
+         balls_in_race=None) -> Recording:
+    """Reads one recording file (CSV/TSV or MATLAB .mat v5/v7) with the
+    command line's mapping options: a bench ``profile`` (TOML) first, then
+    these arguments. Columns ``time_s, friction_N, position_mm, optical_V``
+    by default; ``*_col`` names others, ``*_scale``/``*_offset`` convert
+    raw numbers (value = raw * scale + offset, in N, mm, V); ``fs_hz`` is
+    needed without a time column. Raises FileNotFoundError/OSError for a
+    file that cannot be read, ValueError naming the line or channel for bad
+    content."""
+    opts = dict(
+        profile=profile, format=format, delimiter=delimiter, fs_hz=fs_hz,
+        time_col=time_col, ignore_time=ignore_time or None, friction_col=friction_col,
+        position_col=position_col, optical_col=optical_col,
+        friction_scale=friction_scale, friction_offset=friction_offset,
+        position_scale=position_scale, position_offset=position_offset,
+        optical_scale=optical_scale, optical_offset=optical_offset,
+        velocity_mm_s=velocity_mm_s, test_id=test_id, min_periods=min_periods,
+        bearing=bearing, ball_diameter_mm=ball_diameter_mm,
+        free_space_mm=free_space_mm, balls_in_race=balls_in_race,
+    )
+    return _native.load(os.fspath(path), _load_json(opts))
+
+
+def simulate(velocity_mm_s: float | None = None, *, bearing: str | None = None,
+             condition: str | None = None, seed: int | None = None,
+             settings: dict | None = None, **setting_overrides) -> tuple[Recording, Result]:
+    """A bench recording from the built-in testbed simulator, with its
+    ground truth: ``(recording, truth)``. ``truth.to_dict()`` equals the
+    ``NAME.truth.json`` of ``ballpass simulate``. ``settings`` (and keyword
+    arguments) set simulator fields by name, e.g. ``duration_s=10``,
+    ``fs_hz=2000``, ``friction={"coulomb_n": 2.0}``; ``condition`` is
+    ``'good'`` or ``'sticking'``; the same seed gives the same samples."""
+    rec, truth = _native.simulate(
+        _settings_json(settings, setting_overrides), velocity_mm_s, bearing, condition, seed
+    )
+    return rec, Result(truth, kind="Truth")
+
+
+# ---------------------------------------------------------------- analyses
+
+
+def predict(velocity_mm_s: float | Sequence[float], *, bearing: str | None = None,
+            ball_diameter_mm: float | None = None, free_space_mm: float | None = None,
+            balls_in_race: int | None = None, harmonics: int = 5) -> Result:
+    """Ball-pass frequency ``f_c = v / (2 d_avg)`` (Hz), period ``tau_c_s``
+    and band at one or more velocities (mm/s), for a catalog bearing
+    (default ``sr25w``) or a custom geometry. ``to_dict()`` equals
+    ``ballpass predict --json``; ``.table`` holds the predictions as
+    columns."""
+    vs = np.atleast_1d(np.asarray(velocity_mm_s, dtype=np.float64)).tolist()
+    data = _native.predict(vs, int(harmonics),
+                           _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race))
+    return Result(data, {"table": _records_table(data["predictions"])}, "Prediction")
+
+
+def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
+            ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
+            force_velocity: bool = False, settings: dict | None = None, threads=None,
+            **setting_overrides) -> Result:
+    """Correlations, spectra, measured period, phases and harmonics of one
+    recording, or of several repeats at one velocity (averaged), as
+    ``ballpass analyze``. ``recordings``: Recording objects or file paths.
+    ``velocity_mm_s`` defaults to the recordings' own, else the encoder's.
+    The command line's checks run first: dead channels are left out (with
+    a warning), and a stated velocity that the encoder contradicts is an
+    error unless ``force_velocity``. Settings are
+    ``AnalyzeSettings`` fields by name (``lowpass_hz``, ``order``,
+    ``detrend``, ``nperseg``, ``corr_norm``, ``harmonics``, ...), in
+    ``settings`` or as keyword arguments.
+
+    The setting ``window`` is the Welch window (the command line's
+    ``--welch-window``); to analyse part of a record, slice it first.
+
+    ``to_dict()`` equals ``analysis.json`` (schema ``ballpass.analysis/2``);
+    the tables ``correlations`` (``lag_s`` then one column per series:
+    ``r_friction__optical`` under ``corr_norm='coeff'``, else with the
+    product's unit, ``r_friction__optical_n_v``), ``spectra``,
+    ``spectra_hires`` and ``spectra_unfiltered`` (``freq_hz`` then PSDs
+    such as ``psd_friction_n2_per_hz``, cross spectra ``csd_<pair>_re_<unit>``
+    and ``csd_<pair>_im_<unit>``, coherence ``coh_<pair>``) equal the CSV
+    files. The analysis' warnings are also issued as
+    :class:`BallpassWarning`."""
+    load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
+    recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
+    data, corr, spectra, hires, unfiltered = _native.analyze(
+        recs, velocity_mm_s,
+        _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
+        _settings_json(settings, setting_overrides), _pool(threads), bool(force_velocity),
+    )
+    _warn(data)
+    return Result(
+        data,
+        {"correlations": Table(corr), "spectra": Table(spectra), "spectra_hires": Table(hires),
+         "spectra_unfiltered": Table(unfiltered)},
+        "Analysis",
+    )
+
+
+def passages(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
+             ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
+             settings: dict | None = None, threads=None, **setting_overrides) -> Result:
+    """Ball passages seen by the optical sensor, per recording, as
+    ``ballpass passage``: periods ``tau_c_s``, widths at half prominence
+    ``tau_p_s``, artefacts and pulse-train fits. Settings are
+    ``PassageSettings`` fields (``min_snr``, ``fit_pulses``,
+    ``rectangular_order``, ...). ``to_dict()`` equals ``passage.json``;
+    ``.table`` equals ``passages.csv`` and each ``.records[i].table`` holds
+    that record's rows. A recording that fails is listed in ``failed``;
+    when all fail, the first failure is raised."""
+    load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing}
+    recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
+    over = dict(setting_overrides)
+    if velocity_mm_s is not None:
+        over["velocity_mm_s"] = velocity_mm_s
+    data, tables = _native.passages(
+        recs, _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
+        _settings_json(settings, over), _pool(threads),
+    )
+    per = [Table(t) for t in tables]
+    whole = {}
+    if per and per[0].columns:
+        for c in per[0].columns:
+            parts = [t[c] for t in per if c in t]
+            whole[c] = (np.concatenate(parts) if isinstance(parts[0], np.ndarray)
+                        else [v for p in parts for v in p])
+    result = Result(data, {"table": Table(whole)}, "Passages")
+    object.__getattribute__(result, "_cache")["records"] = [
+        Result(r, {"table": t}, "PassageAnalysis") for r, t in zip(data["records"], per)
+    ]
+    return result
+
+
+# ---------------------------------------------------------------- campaigns
+
+
+def read_manifest(source: str | os.PathLike, *, pattern: str | None = None,
+                  bearing: str | None = None, velocity_mm_s: float | None = None) -> Result:
+    """A campaign's recordings: a manifest CSV (``path, bearing,
+    velocity_mm_s, repeat[, condition, notes]``), or a folder with a
+    file-name ``pattern`` (``'v{velocity}_r{repeat}.csv'``). ``.entries``
+    lists them."""
+    return Result(
+        _native.manifest(os.fspath(source), pattern,
+                         _load_json({"bearing": bearing, "velocity_mm_s": velocity_mm_s})),
+        kind="Manifest",
+    )
+
+
+def select(source: str | os.PathLike, kind: str = "diagnose", *, pattern: str | None = None,
+           only_bearings: Iterable[str] = (), only_velocities: Iterable[float] = (),
+           bearing: str | None = None, velocity_mm_s: float | None = None) -> Result:
+    """The records ``ballpass sweep`` (``kind='sweep'``) or ``ballpass
+    diagnose`` (``'diagnose'``) would use from a manifest or folder:
+    ``.entries`` and, in words, ``.notes`` (the outputs' ``selection``). By
+    default the bearing recorded at the most velocities (sweep) or the
+    velocity with the most bearings (diagnose); naming bearings or
+    velocities replaces the default."""
+    return Result(
+        _native.selection(kind, os.fspath(source), pattern, list(only_bearings),
+                          [float(v) for v in only_velocities],
+                          _load_json({"bearing": bearing, "velocity_mm_s": velocity_mm_s})),
+        kind="Selection",
+    )
+
+
+def _diagnosis_json(settings, low_band_hz, bad_ratio, suspect_ratio, spike_factor, bad_spikes):
+    d = dict(settings or {})
+    d.setdefault("low_band_hz", low_band_hz)
+    d.setdefault("bad_low_band_ratio", bad_ratio)
+    d.setdefault("suspect_low_band_ratio", suspect_ratio)
+    d.setdefault("bad_events_per_record", bad_spikes)
+    sticking = dict(d.get("sticking") or {})
+    sticking.setdefault("spike_factor", spike_factor)
+    d["sticking"] = sticking
+    return json.dumps(d)
+
+
+def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
+          only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
+          harmonics: int = 5, threads=None, **load_options) -> Result:
+    """A velocity sweep over a campaign, as ``ballpass sweep``: velocity-error
+    trend, tau_c and tau_p against velocity, d_avg. ``source`` is a manifest
+    CSV or a folder with ``pattern``; by default the bearing recorded at the
+    most velocities. ``to_dict()`` equals ``sweep.json``."""
+    data, _ = _native.campaign(
+        "sweep", os.fspath(source), pattern, list(only_bearings),
+        [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics), None,
+        _load_json(load_options), _pool(threads),
+    )
+    return Result(data, kind="Sweep")
+
+
+def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
+             only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
+             harmonics: int = 5, low_band_hz: float = 25.0, bad_ratio: float = 10.0,
+             suspect_ratio: float = 3.0, spike_factor: float = 8.0, bad_spikes: float = 3.0,
+             settings: dict | None = None, threads=None, **load_options) -> Result:
+    """A batch of bearings, as ``ballpass diagnose``: friction spectra,
+    harmonics, sticking events and a verdict per bearing (worst first in
+    ``.result.bearings``). ``source`` is a manifest CSV or a folder with
+    ``pattern``; by default the velocity with the most bearings. The keyword
+    thresholds are the command line's flags; ``settings`` sets any
+    ``DiagnoseSettings`` field. ``to_dict()`` equals ``diagnosis.json``;
+    ``.friction_spectra`` is ``friction_spectra.csv`` (columns
+    ``psd_friction_<bearing>_n2_per_hz``)."""
+    data, spectra = _native.campaign(
+        "diagnose", os.fspath(source), pattern, list(only_bearings),
+        [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics),
+        _diagnosis_json(settings, low_band_hz, bad_ratio, suspect_ratio, spike_factor, bad_spikes),
+        _load_json(load_options), _pool(threads),
+    )
+    return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
+
+
+def process_record(path, *, bearing: str, velocity_mm_s: float, repeat: int = 1,
+                   condition: str | None = None, lowpass_hz: float = 20.0, harmonics: int = 5,
+                   low_band_hz: float = 25.0, spike_factor: float = 8.0,
+                   settings: dict | None = None, **load_options) -> RecordResult:
+    """One record of a campaign, loaded and processed exactly as
+    ``ballpass diagnose`` processes each record (analysis, passages,
+    sticking events, friction spectrum): the per-record half of
+    :func:`diagnose`, for executors of a distributed engine. The result
+    pickles."""
+    data, freq, psd = _native.process_record(
+        os.fspath(path), bearing, float(velocity_mm_s), int(repeat), condition,
+        float(lowpass_hz), int(harmonics),
+        _diagnosis_json(settings, low_band_hz, 10.0, 3.0, spike_factor, 3.0),
+        _load_json(load_options),
+    )
+    return RecordResult(data, freq, psd)
+
+
+def diagnose_records(records: Iterable[RecordResult], *, failures: Iterable[tuple] = (),
+                     source: str = "records", selection: Iterable[str] = (),
+                     lowpass_hz: float = 20.0, harmonics: int = 5, low_band_hz: float = 25.0,
+                     bad_ratio: float = 10.0, suspect_ratio: float = 3.0,
+                     spike_factor: float = 8.0, bad_spikes: float = 3.0,
+                     settings: dict | None = None) -> Result:
+    """The batch half of :func:`diagnose`: verdicts from records processed
+    by :func:`process_record` (anywhere), with the same thresholds.
+    ``failures`` are ``(path, bearing, velocity_mm_s, repeat, reason)`` of
+    records that could not be processed. Returns what :func:`diagnose`
+    returns."""
+    states = [r._state() for r in records]
+    data, spectra = _native.diagnose_records(
+        states, [tuple(f) for f in failures], str(source), list(selection),
+        float(lowpass_hz), int(harmonics),
+        _diagnosis_json(settings, low_band_hz, bad_ratio, suspect_ratio, spike_factor, bad_spikes),
+    )
+    return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
+
+
+from . import model, signal  # noqa: E402  (they import from this package)

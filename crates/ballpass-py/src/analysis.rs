@@ -1,0 +1,182 @@
+//! `predict`, `analyze` and `passages`: what the command line's `predict`,
+//! `analyze` and `passage` compute, on recordings already in memory.
+
+use ballpass::analysis::passage_table::{passage_rows, PassageFailure, PassageOutput};
+use ballpass::analysis::preflight::{self, PreflightSettings};
+use ballpass::analysis::{self, export, AnalyzeSettings, PassageSettings};
+use ballpass::bearing;
+use ballpass::recording::Recording;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::convert;
+use crate::errors;
+use crate::pool::{self, ThreadPool};
+use crate::recording::{BearingArgs, PyRecording};
+
+fn bearing_args(json: Option<&str>) -> PyResult<BearingArgs> {
+    match json {
+        None => Ok(BearingArgs::default()),
+        Some(t) => serde_json::from_str(t).map_err(|e| errors::value(format!("bearing: {e}"))),
+    }
+}
+
+/// `ballpass.predict`: the ball-pass frequency, period and band at each
+/// velocity, as `ballpass predict --json` prints them.
+#[pyfunction]
+#[pyo3(signature = (velocities_mm_s, harmonics, bearing=None))]
+fn predict<'py>(
+    py: Python<'py>,
+    velocities_mm_s: Vec<f64>,
+    harmonics: usize,
+    bearing: Option<&str>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (name, g) = bearing_args(bearing)?.resolve(None)?;
+    let t =
+        bearing::prediction_table(name, g, &velocities_mm_s, harmonics).map_err(errors::domain)?;
+    convert::serialize(py, &t)
+}
+
+/// The velocity stated for an analysis, as `ballpass analyze` takes it: the
+/// argument, else the one all recordings' metadata agree on, else none (the
+/// checks then measure it from the encoder).
+fn stated_velocity(recs: &[Recording], given: Option<f64>) -> PyResult<Option<f64>> {
+    if given.is_some() {
+        return Ok(given);
+    }
+    let vs: Vec<f64> = recs.iter().filter_map(|r| r.meta.velocity_mm_s).collect();
+    match vs.first() {
+        None => Ok(None),
+        Some(&v) if vs.len() == recs.len() && vs.iter().all(|&w| w == v) => Ok(Some(v)),
+        Some(_) => Err(errors::value(
+            "the recordings' metadata disagree on the velocity or lack it; give velocity_mm_s",
+        )),
+    }
+}
+
+/// Columns of a spectra table: `freq_hz`, then the library's columns.
+fn spectra_columns<'py>(py: Python<'py>, s: &analysis::Spectra) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("freq_hz", convert::array(py, s.freq_hz.clone()))?;
+    for (name, v) in export::spectrum_columns(s) {
+        d.set_item(name, convert::array(py, v))?;
+    }
+    Ok(d)
+}
+
+/// `ballpass.analyze`: the analysis of one recording or several repeats at
+/// one velocity. Returns `(analysis.json as a dict, correlations,
+/// spectra, spectra_hires, spectra_unfiltered)`, the tables as
+/// `{column: array}` with the CSV files' columns (units in their names).
+/// The checks before the analysis are the command line's (dead channels
+/// left out, the velocity checked against the encoder or measured from it
+/// when none is stated, Nyquist); their warnings and notes join the
+/// analysis' as there.
+#[pyfunction]
+#[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, settings=None, pool=None, force_velocity=false))]
+#[allow(clippy::type_complexity)]
+fn analyze<'py>(
+    py: Python<'py>,
+    recordings: Vec<PyRef<'py, PyRecording>>,
+    velocity_mm_s: Option<f64>,
+    bearing: Option<&str>,
+    settings: Option<&str>,
+    pool: Option<Bound<'py, ThreadPool>>,
+    force_velocity: bool,
+) -> PyResult<(
+    Bound<'py, PyAny>,
+    Bound<'py, PyDict>,
+    Bound<'py, PyDict>,
+    Bound<'py, PyDict>,
+    Bound<'py, PyDict>,
+)> {
+    let s: AnalyzeSettings =
+        convert::settings(&AnalyzeSettings::default(), settings, "analysis settings")?;
+    s.validate().map_err(errors::domain)?;
+    let (_, g) = bearing_args(bearing)?.resolve(None)?;
+    let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
+    let stated = stated_velocity(&recs, velocity_mm_s)?;
+    let pre = PreflightSettings {
+        force_velocity,
+        ..PreflightSettings::default()
+    };
+    let a = pool::run(py, pool.as_ref(), || {
+        let checked = preflight::check(recs, stated, &g, &pre)?;
+        let prediction = g.predict(checked.velocity_mm_s, s.harmonics)?;
+        let mut a = analysis::analyze(&checked.recordings, &prediction, &s)?;
+        a.warnings.splice(0..0, checked.warnings);
+        a.method_notes.extend(checked.notes);
+        Ok::<_, ballpass::Error>(a)
+    })
+    .map_err(errors::domain)?;
+    let corr = PyDict::new(py);
+    corr.set_item("lag_s", convert::array(py, a.correlations.lag_s.clone()))?;
+    for (name, v) in export::correlation_columns(&a.correlations, a.settings.corr_norm) {
+        corr.set_item(name, convert::array(py, v.to_vec()))?;
+    }
+    Ok((
+        convert::serialize(py, &a)?,
+        corr,
+        spectra_columns(py, &a.spectra)?,
+        spectra_columns(py, &a.spectra_hires)?,
+        spectra_columns(py, &a.spectra_unfiltered)?,
+    ))
+}
+
+/// `ballpass.passages`: the optical ball passages of each recording, as
+/// `ballpass passage` measures them. Returns `(passage.json as a dict,
+/// [passages.csv columns of each measured record])`; a record that fails is
+/// listed in `failed`, and when all fail the first failure is raised.
+#[pyfunction]
+#[pyo3(signature = (recordings, bearing=None, settings=None, pool=None))]
+fn passages<'py>(
+    py: Python<'py>,
+    recordings: Vec<PyRef<'py, PyRecording>>,
+    bearing: Option<&str>,
+    settings: Option<&str>,
+    pool: Option<Bound<'py, ThreadPool>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyList>)> {
+    let (name, g) = bearing_args(bearing)?.resolve(None)?;
+    let mut s: PassageSettings =
+        convert::settings(&PassageSettings::default(), settings, "passage settings")?;
+    s.geometry = Some(g);
+    let recs: Vec<&Recording> = recordings.iter().map(|r| &r.rec).collect();
+    let results = pool::run(py, pool.as_ref(), || {
+        recs.iter()
+            .map(|r| analysis::detect_passages(r, &s).map_err(|e| (r.source_name(), e)))
+            .collect::<Vec<_>>()
+    });
+    let (mut done, mut failed) = (Vec::new(), Vec::new());
+    let mut first_error = None;
+    for r in results {
+        match r {
+            Ok(p) => done.push(p),
+            Err((record, e)) => {
+                failed.push(PassageFailure {
+                    record,
+                    error: e.to_string(),
+                });
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    if done.is_empty() {
+        return Err(match first_error {
+            Some(e) => errors::domain(e),
+            None => errors::value("no recordings given"),
+        });
+    }
+    let tables = PyList::empty(py);
+    for r in &done {
+        tables.append(convert::columns(py, &passage_rows(r))?)?;
+    }
+    let out = PassageOutput::new(name, done, failed);
+    Ok((convert::serialize(py, &out)?, tables))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(predict, m)?)?;
+    m.add_function(wrap_pyfunction!(analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(passages, m)?)?;
+    Ok(())
+}

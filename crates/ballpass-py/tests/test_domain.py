@@ -1,0 +1,314 @@
+"""The domain API against the command line: the same input gives identical
+numbers (the JSON files equal ``to_dict()``, the CSV tables equal the
+result's tables, exactly), plus the Python-only behaviour: recordings from
+arrays, errors, threads and the GIL."""
+
+from __future__ import annotations
+
+import csv
+import json
+import pickle
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import ballpass
+from ballpass import signal as bs
+
+
+def read_json(path):
+    return json.loads(path.read_text())
+
+
+def read_csv(path):
+    """{column: list of cells} with numbers as floats (NumPy's nan/inf)."""
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    head, body = rows[0], rows[1:]
+    cols = {}
+    for i, name in enumerate(head):
+        cells = [r[i] for r in body]
+        try:
+            cols[name] = np.array([float(c) if c != "" else np.nan for c in cells])
+        except ValueError:
+            cols[name] = cells
+    return cols
+
+
+def assert_table_equals_csv(table, path):
+    want = read_csv(path)
+    assert table.columns == list(want), f"{path.name}: columns"
+    for k, v in want.items():
+        got = table[k]
+        if isinstance(v, list):
+            assert [str(x) for x in got] == v, k
+        else:
+            got = np.asarray(got, dtype=np.float64)
+            # Exact: both sides print/keep the shortest round-trip text of
+            # the same f64 (NaN where the CSV has nan or an empty cell).
+            assert np.array_equal(got, v, equal_nan=True), f"{path.name}:{k}"
+
+
+@pytest.fixture(scope="module")
+def recs(tmp_path_factory, cli):
+    """Two simulated recordings written by the CLI, 9 mm/s, 20 s."""
+    d = tmp_path_factory.mktemp("recs")
+    for seed in (3, 4):
+        cli("simulate", "-v", "9", "--seed", seed, "--duration", "20", "-o", d / f"r{seed}.csv")
+    return d
+
+
+def test_simulate_equals_the_cli(recs):
+    rec, truth = ballpass.simulate(9.0, seed=3, duration_s=20)
+    assert truth.to_dict() == read_json(recs / "r3.truth.json")
+    loaded = ballpass.load(recs / "r3.csv")
+    for ch in ("friction_n", "position_mm", "optical_v"):
+        # The CSV holds shortest round-trip text: exact.
+        assert np.array_equal(getattr(rec, ch), getattr(loaded, ch)), ch
+    assert rec.fs_hz == loaded.fs_hz == 1000.0 and len(rec) == 20000
+
+
+def test_analyze_equals_the_cli(recs, cli, tmp):
+    for files, flags, kw in (
+        (["r3.csv"], [], {}),
+        (["r3.csv", "r4.csv"], [], {}),
+        (["r3.csv"], ["--lowpass", "15", "--nperseg", "2048", "--zoom", "8", "--detrend",
+                      "constant", "--corr-norm", "biased"],
+         {"lowpass_hz": 15.0, "nperseg": 2048, "hires": {"method": "polyphase_zoom", "m": 8},
+          "detrend": "constant", "corr_norm": "biased"}),
+    ):
+        out = tmp / f"a{len(files)}{len(flags)}"
+        cli("analyze", *[recs / f for f in files], "--velocity", "9", "--no-report", "--out", out,
+            *flags)
+        loaded = [ballpass.load(recs / f) for f in files]
+        a = ballpass.analyze(loaded, velocity_mm_s=9.0, **kw)
+        assert a.to_dict() == read_json(out / "analysis.json")
+        assert_table_equals_csv(a.correlations, out / "correlations.csv")
+        assert_table_equals_csv(a.spectra, out / "spectra.csv")
+        assert_table_equals_csv(a.spectra_hires, out / "spectra_hires.csv")
+        assert_table_equals_csv(a.spectra_unfiltered, out / "spectra_unfiltered.csv")
+        assert a.schema == "ballpass.analysis/2"
+    # paths work too, and the attributes are the JSON's fields
+    b = ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0)
+    assert b.prediction.f_c_hz == pytest.approx(9.0 / (2 * (4 + 2 / 36)), rel=1e-12)
+    assert isinstance(b.prediction.harmonics_hz, np.ndarray)
+    assert b.verdict.text and b.correlations.lag_s.shape == (39999,)
+
+
+def test_analyze_runs_the_command_lines_checks(recs, cli, tmp):
+    """As `ballpass analyze`: a stated velocity that the encoder contradicts
+    is an error unless forced (then a warning, and analysis.json equals the
+    command line's), and without a stated velocity the encoder's is used."""
+    rec = ballpass.load(recs / "r3.csv")
+    with pytest.raises(ValueError, match="encoder"):
+        ballpass.analyze(rec, velocity_mm_s=12.0)
+    with pytest.warns(ballpass.BallpassWarning, match="as forced"):
+        forced = ballpass.analyze(rec, velocity_mm_s=12.0, force_velocity=True)
+    out = tmp / "forced"
+    cli("analyze", recs / "r3.csv", "--velocity", "12", "--force-velocity", "--no-report",
+        "--out", out)
+    assert forced.to_dict() == read_json(out / "analysis.json")
+    bare = ballpass.Recording(rec.fs_hz, friction_n=rec.friction_n, position_mm=rec.position_mm,
+                              optical_v=rec.optical_v)
+    measured = ballpass.analyze(bare)
+    assert any("measured from the encoder" in n for n in measured.method_notes)
+    # The simulated stage tracks 9 mm/s to far better than 1 %.
+    assert measured.prediction.f_c_hz == pytest.approx(9.0 / (2 * (4 + 2 / 36)), rel=1e-2)
+
+
+def test_passages_equal_the_cli(recs, cli, tmp):
+    cli("passage", recs / "r3.csv", recs / "r4.csv", "--velocity", "9", "--no-report",
+        "--out", tmp)
+    p = ballpass.passages([recs / "r3.csv", recs / "r4.csv"], velocity_mm_s=9.0)
+    assert p.to_dict() == read_json(tmp / "passage.json")
+    assert_table_equals_csv(p.table, tmp / "passages.csv")
+    r = p.records[1]
+    assert r.count == len(r.table.tau_p_s) and r.tau_c_s.mean > 0
+
+
+def test_predict_equals_the_cli(cli):
+    out = json.loads(cli("predict", "-v", "1:3:0.5", "--harmonics", "3", "--json"))
+    p = ballpass.predict([1.0, 1.5, 2.0, 2.5, 3.0], harmonics=3)
+    assert p.to_dict() == out
+    assert np.array_equal(p.table.f_c_hz, [q["f_c_hz"] for q in out["predictions"]])
+    custom = json.loads(cli("predict", "-v", "9", "--balls", "30", "--json"))
+    assert ballpass.predict(9, balls_in_race=30).to_dict() == custom
+
+
+def test_models_equal_the_cli(cli, tmp):
+    cases = [
+        (["signals", "--f-c", "1.2", "--convention", "eq612", "--points", "51"],
+         lambda: ballpass.model.signals(1.2, convention="eq612", points=51), "signals.json"),
+        (["signals", "--velocity", "9"], lambda: ballpass.model.signals(velocity_mm_s=9),
+         "signals.json"),
+        (["pulses", "--velocity", "9", "--ratio", "0.3", "--ratio-kind", "fwhm", "--order", "7"],
+         lambda: ballpass.model.pulses(0.3, ratio_kind="fwhm", velocity_mm_s=9, order=7),
+         "pulses.json"),
+        (["stage", "--mass", "5", "--kp", "2000", "--kd", "50"],
+         lambda: ballpass.model.stage(5, kp=2000, kd=50), "stage.json"),
+        (["stage", "--mass", "5", "--natural-frequency", "1.1", "--damping", "0.35",
+          "--velocity", "9", "--period-points", "100"],
+         lambda: ballpass.model.stage(5, natural_frequency_hz=1.1, damping=0.35,
+                                      velocity_mm_s=9, period_points=100), "stage.json"),
+    ]
+    for i, (args, fn, json_name) in enumerate(cases):
+        d = tmp / f"m{i}"
+        cli("model", *args, "--no-report", "--out", d)
+        m = fn()
+        assert m.to_dict() == read_json(d / json_name), args
+        for name, table in m.tables.items():
+            assert_table_equals_csv(table, d / f"{name}.csv")
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory):
+    """A small campaign: a sweep of sr25w (5, 10, 20 mm/s) and a batch of
+    four bearings at 20 mm/s, bearing3 sticking; 10 s records, 2 repeats."""
+    d = tmp_path_factory.mktemp("fleet")
+    rows = ["path,bearing,velocity_mm_s,repeat,condition"]
+    seed = 100
+    for v in (5, 10, 20):
+        for r in (1, 2):
+            seed += 1
+            rec, _ = ballpass.simulate(v, seed=seed, duration_s=10)
+            rec.to_csv(d / f"sweep_v{v}_r{r}.csv")
+            rows.append(f"sweep_v{v}_r{r}.csv,sr25w,{v},{r},good")
+    for b in (1, 2, 3, 4):
+        cond = "sticking" if b == 3 else "good"
+        for r in (1, 2):
+            seed += 1
+            rec, _ = ballpass.simulate(20, seed=seed, duration_s=10, condition=cond)
+            rec.to_csv(d / f"b{b}_r{r}.csv")
+            rows.append(f"b{b}_r{r}.csv,bearing{b},20,{r},{cond}")
+    (d / "manifest.csv").write_text("\n".join(rows) + "\n")
+    return d
+
+
+def test_sweep_and_diagnose_equal_the_cli(fleet, cli, tmp):
+    m = fleet / "manifest.csv"
+    cli("sweep", m, "--no-report", "--out", tmp / "s")
+    s = ballpass.sweep(m)
+    assert s.to_dict() == read_json(tmp / "s" / "sweep.json")
+    cli("diagnose", m, "--no-report", "--out", tmp / "d", "--spike-factor", "7")
+    d = ballpass.diagnose(m, spike_factor=7.0, threads=2)
+    want = read_json(tmp / "d" / "diagnosis.json")
+    assert d.to_dict() == want
+    assert_table_equals_csv(d.friction_spectra, tmp / "d" / "friction_spectra.csv")
+    verdicts = {b.bearing: b.verdict for b in d.result.bearings}
+    assert verdicts["bearing3"] == "bad", verdicts
+
+
+def test_diagnosis_split_into_records_and_batch_equals_the_whole(fleet):
+    """process_record on each record (anywhere, pickled in between) and
+    diagnose_records on the lot give the diagnose verdicts."""
+    whole = ballpass.diagnose(fleet / "manifest.csv")
+    entries = ballpass.read_manifest(fleet / "manifest.csv").entries
+    chosen = [e for e in entries if e.velocity_mm_s == 20 and e.bearing != "sr25w"]
+    parts = [pickle.loads(pickle.dumps(
+        ballpass.process_record(e.path, bearing=e.bearing, velocity_mm_s=e.velocity_mm_s,
+                                repeat=e.repeat, condition=e.condition)))
+        for e in chosen]
+    split = ballpass.diagnose_records(parts, source=whole.source, selection=whole.selection)
+    assert split.to_dict()["result"] == whole.to_dict()["result"]
+    assert split.to_dict()["record_results"] == whole.to_dict()["record_results"]
+
+
+# ---------------------------------------------------------------- Python-only
+
+
+def test_recording_from_arrays_and_pickle():
+    t = np.arange(5000) / 1000.0
+    rec = ballpass.Recording(1000.0, friction_n=np.sin(t).astype(np.float32),
+                             position_mm=(9.0 * t).tolist(), velocity_mm_s=9.0,
+                             test_id="x")
+    assert rec.channels == ["friction_N", "position_mm"] and rec.optical_v is None
+    assert rec.friction_n.dtype == np.float64 and np.array_equal(rec.time_s, t)
+    back = pickle.loads(pickle.dumps(rec))
+    assert np.array_equal(back.position_mm, rec.position_mm) and back.test_id == "x"
+    rec.velocity_mm_s = 8.0
+    assert rec.velocity_mm_s == 8.0
+
+
+def test_bad_input_is_a_clear_value_error(tmp):
+    with pytest.raises(ValueError, match="friction_N.*sample 3"):
+        ballpass.Recording(1000.0, friction_n=[0, 1, 2, np.nan] + [0] * 20)
+    with pytest.raises(ValueError, match="position_mm.*has 10 samples"):
+        ballpass.Recording(1000.0, friction_n=np.zeros(20), position_mm=np.zeros(10))
+    with pytest.raises(ValueError, match="fs"):
+        ballpass.Recording(-1.0, friction_n=np.zeros(20))
+    with pytest.raises(FileNotFoundError, match="nope.csv"):
+        ballpass.load(tmp / "nope.csv")
+    (tmp / "bad.csv").write_text("time_s,friction_N\n0,1\n0.001,x\n")
+    with pytest.raises(ValueError, match=r"bad.csv:3"):
+        ballpass.load(tmp / "bad.csv")
+    rec, _ = ballpass.simulate(9.0, duration_s=10)
+    with pytest.raises(ValueError, match="lowpas"):
+        ballpass.analyze(rec, lowpas_hz=20)
+    with pytest.raises(ValueError, match="nperseg"):
+        ballpass.analyze(rec, nperseg=1)
+    with pytest.raises(ValueError, match="unknown bearing"):
+        ballpass.predict(9, bearing="nosuch")
+    with pytest.raises(ValueError, match="velocity"):
+        ballpass.predict(-1)
+    with pytest.raises(TypeError):
+        ballpass.load(tmp / "x.csv", colour="red")
+    with pytest.raises(ValueError, match="threads"):
+        ballpass.ThreadPool(0)
+
+
+def test_threads_setting_gives_the_same_numbers():
+    recs = [ballpass.simulate(9.0, seed=s, duration_s=10)[0] for s in (1, 2, 3)]
+    base = ballpass.analyze(recs)
+    with ballpass.threads(1) as pool:
+        assert pool.threads == 1
+        one = ballpass.analyze(recs)
+    two = ballpass.analyze(recs, threads=2)
+    assert base.to_dict() == one.to_dict() == two.to_dict()
+    assert np.array_equal(base.spectra.psd_friction_n2_per_hz, two.spectra.psd_friction_n2_per_hz)
+
+
+def test_the_gil_is_released_while_computing():
+    """A Python thread keeps running while another is inside ballpass: the
+    longest pause between its loop iterations stays far below the length of
+    the native call (with the GIL held it would be the whole call)."""
+    x = np.random.default_rng(0).standard_normal(4_000_000)
+    t0 = time.perf_counter()
+    bs.welch(x, nperseg=4096)
+    call = time.perf_counter() - t0
+    done = threading.Event()
+
+    def work():
+        bs.welch(x, nperseg=4096)
+        done.set()
+
+    th = threading.Thread(target=work)
+    stamps = []
+    th.start()
+    while not done.is_set():
+        stamps.append(time.perf_counter())
+    th.join()
+    gaps = np.diff(stamps) if len(stamps) > 1 else np.array([call])
+    assert len(stamps) > 100 and gaps.max() < 0.5 * call, (len(stamps), gaps.max(), call)
+
+
+def test_results_are_read_only_json_with_arrays():
+    rec, _ = ballpass.simulate(9.0, duration_s=10)
+    a = ballpass.analyze(rec)
+    with pytest.raises(AttributeError):
+        a.fs_hz = 1.0
+    d = a.to_dict()
+    d["fs_hz"] = 0
+    assert a.fs_hz == 1000.0
+    assert set(a.keys()) == set(d)
+    assert json.loads(a.to_json()) == a.to_dict()
+    assert a.correlations.to_pandas().shape[0] == 19999 if _has_pandas() else True
+
+
+def _has_pandas():
+    try:
+        import pandas  # noqa: F401
+    except ImportError:
+        return False
+    return True
