@@ -179,15 +179,38 @@ pub fn passage_heights(
     let block = ((per / 2.0).round() as usize).max(8);
     let residual = detrend_by_block_medians(&smooth, block);
     let n = residual.len();
-    // Whole periods after the first half period, ending half a period early.
-    let start = (0.5 * per).round() as usize;
+    // Whole periods centred on the passages: the windows' edges half a
+    // period from where the residual folded on the period peaks (else a
+    // passage on an edge is seen by both neighbouring windows), starting at
+    // least half a period in and ending half a period early.
+    let start = {
+        let bins = (per.round() as usize).max(1);
+        let mut sum = vec![0.0; bins];
+        let mut count = vec![0usize; bins];
+        for (i, &v) in residual.iter().enumerate() {
+            let b = ((i as f64 % per) / per * bins as f64) as usize % bins;
+            sum[b] += v;
+            count[b] += 1;
+        }
+        let peak = (0..bins)
+            .filter(|&b| count[b] > 0)
+            .max_by(|&a, &b| (sum[a] / count[a] as f64).total_cmp(&(sum[b] / count[b] as f64)))
+            .unwrap_or(0) as f64
+            * per
+            / bins as f64;
+        let mut edge = (peak + 0.5 * per) % per;
+        if edge < 0.5 * per {
+            edge += per;
+        }
+        edge.round() as usize
+    };
     let mut heights_n = Vec::new();
     let mut times_s = Vec::new();
     let mut j = 0usize;
     loop {
         let a = start + (j as f64 * per).round() as usize;
         let b = start + ((j + 1) as f64 * per).round() as usize;
-        if b + start > n || b <= a {
+        if (b as f64 + 0.5 * per) > n as f64 || b <= a {
             break;
         }
         let (i, h) =
