@@ -42,8 +42,8 @@ enum WindowArg {
 /// Arguments of `ballpass analyze`.
 #[derive(Debug, Args)]
 pub struct AnalyzeArgs {
-    /// Recording files (CSV/TSV); several files are repeats at one velocity
-    /// and are averaged.
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF .mf4; several files (or the pieces of
+    /// --split-gaps) are repeats at one velocity and are averaged.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
     #[command(flatten)]
@@ -201,10 +201,13 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     let recs = a
         .recs
         .par_iter()
-        .map(|p| recording::load(p, &opts).with_context(|| format!("loading {}", p.display())))
+        .map(|p| recording::load_all(p, &opts).with_context(|| format!("loading {}", p.display())))
         .collect::<Vec<_>>()
         .into_iter()
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>();
     let velocity = match a.load.velocity {
         Some(v) => v,
         None => {

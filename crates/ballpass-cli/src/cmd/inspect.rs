@@ -5,8 +5,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Result};
-use ballpass::recording::inspect::{inspect, InspectSettings, Inspection, Severity};
-use ballpass::recording::load;
+use ballpass::recording::inspect::{inspect_file, InspectSettings, Inspection, Severity};
+use ballpass::recording::io::contents;
 use clap::Args;
 use serde::Serialize;
 
@@ -15,7 +15,10 @@ use crate::args::LoadArgs;
 /// Arguments of `ballpass inspect`.
 #[derive(Debug, Args)]
 pub struct InspectArgs {
-    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7).
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF
+    /// .mf4. Each is listed (columns, variables and struct fields, groups and
+    /// channels: the names to give as --*-col) and, when its channels are
+    /// found, inspected; gaps are reported, not refused.
     #[arg(required = true, value_name = "FILE")]
     files: Vec<PathBuf>,
     #[command(flatten)]
@@ -25,9 +28,22 @@ pub struct InspectArgs {
     json: bool,
 }
 
+/// Most items of a file listed.
+const CONTENTS_LIMIT: usize = 500;
+
+/// One thing a file holds.
+#[derive(Serialize)]
+struct Item {
+    name: String,
+    what: String,
+}
+
 #[derive(Serialize)]
 struct FileReport {
     path: PathBuf,
+    /// What the file holds (its listing), when it can be read at all.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    contents: Vec<Item>,
     #[serde(skip_serializing_if = "Option::is_none")]
     inspection: Option<Inspection>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -49,10 +65,16 @@ pub fn run(a: &InspectArgs) -> Result<()> {
     let mut reports = Vec::new();
     let mut first_error = None;
     for path in &a.files {
-        match load(path, &opts) {
-            Ok(rec) => reports.push(FileReport {
+        let listing: Vec<Item> = contents(path, &opts, CONTENTS_LIMIT)
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(name, what)| Item { name, what })
+            .collect();
+        match inspect_file(path, &opts, &settings) {
+            Ok(inspection) => reports.push(FileReport {
                 path: path.clone(),
-                inspection: Some(inspect(&rec, opts.geometry.as_ref(), &settings)),
+                contents: listing,
+                inspection: Some(inspection),
                 error: None,
             }),
             Err(e) => {
@@ -63,6 +85,7 @@ pub fn run(a: &InspectArgs) -> Result<()> {
                 first_error.get_or_insert_with(|| msg.clone());
                 reports.push(FileReport {
                     path: path.clone(),
+                    contents: listing,
                     inspection: None,
                     error: Some(msg),
                 });
@@ -81,11 +104,21 @@ pub fn run(a: &InspectArgs) -> Result<()> {
         writeln!(out)?;
     } else {
         for (k, r) in reports.iter().enumerate() {
-            if let Some(i) = &r.inspection {
-                if k > 0 {
-                    writeln!(out)?;
+            if k > 0 && (r.inspection.is_some() || !r.contents.is_empty()) {
+                writeln!(out)?;
+            }
+            match &r.inspection {
+                Some(i) => print_text(&mut out, i)?,
+                None if !r.contents.is_empty() => {
+                    writeln!(out, "{}", ballpass::error::shown_path(&r.path))?
                 }
-                print_text(&mut out, i)?;
+                None => {}
+            }
+            if !r.contents.is_empty() {
+                writeln!(out, "  holds:")?;
+                for it in &r.contents {
+                    writeln!(out, "    {:<40} {}", it.name, it.what)?;
+                }
             }
         }
     }
@@ -132,6 +165,31 @@ fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
     }
     if !i.missing.is_empty() {
         writeln!(out, "  missing: {}", i.missing.join(", "))?;
+    }
+    for n in &i.notes {
+        writeln!(out, "  read: {n}")?;
+    }
+    if i.gap_count > 0 {
+        writeln!(out, "  gaps: {} ({} samples)", i.gap_count, i.gap_samples)?;
+        for g in i.gaps.iter().take(20) {
+            writeln!(
+                out,
+                "    t = {:.6} s: {} sample(s) ({:.6} s) at {}: {}",
+                g.start_time_s,
+                g.len,
+                g.duration_s,
+                g.place,
+                g.channels.join(", ")
+            )?;
+        }
+        if i.gap_count > 20 {
+            writeln!(
+                out,
+                "    ... and {} more (--json lists {})",
+                i.gap_count - 20,
+                i.gaps.len()
+            )?;
+        }
     }
     for f in &i.findings {
         let sev = match f.severity {

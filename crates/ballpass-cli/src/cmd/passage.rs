@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
-use ballpass::recording::io::load;
+use ballpass::recording::io::load_all;
 use ballpass::recording::Recording;
 use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
@@ -17,7 +17,7 @@ use crate::output::{ensure_dir, write_csv, write_json};
 /// Arguments of `ballpass passage`.
 #[derive(Debug, Args)]
 pub struct PassageArgs {
-    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7).
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF .mf4.
     /// The velocity is --velocity, else the profile's or the file's; without
     /// one the period is found from the pulses and nothing is predicted.
     #[arg(required = true, value_name = "REC")]
@@ -89,21 +89,26 @@ pub fn run(a: &PassageArgs) -> Result<()> {
     let mut recs: Vec<Recording> = Vec::new();
     let mut failed = Vec::new();
     for path in &a.records {
-        let result = load(path, &opts)
-            .map_err(anyhow::Error::from)
-            .and_then(|rec| {
+        // One recording per file, or its pieces with --split-gaps.
+        let pieces = match load_all(path, &opts) {
+            Ok(p) => p.into_iter().map(Ok).collect(),
+            Err(e) => vec![Err(anyhow::Error::from(e))],
+        };
+        for piece in pieces {
+            let result = piece.and_then(|rec| {
                 let r = detect_passages(&rec, &settings)?;
                 Ok((rec, r))
             });
-        match result {
-            Ok((rec, r)) => {
-                done.push(r);
-                recs.push(rec);
+            match result {
+                Ok((rec, r)) => {
+                    done.push(r);
+                    recs.push(rec);
+                }
+                Err(e) => failed.push(Failure {
+                    record: path.display().to_string(),
+                    error: e.to_string(),
+                }),
             }
-            Err(e) => failed.push(Failure {
-                record: path.display().to_string(),
-                error: e.to_string(),
-            }),
         }
     }
     let mut err = std::io::stderr().lock();
