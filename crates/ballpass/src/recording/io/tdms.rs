@@ -1,7 +1,7 @@
 //! NI TDMS files (LabVIEW, DAQmx, npTDMS): our own reader, bounded by the file.
 //!
 //! A TDMS file is a chain of segments: a 28-byte lead-in (`TDSm`, table of
-//! contents, offsets), metadata (objects `/'Group'/'Channel'` with their
+//! contents, version, offsets), metadata (objects `/'Group'/'Channel'` with their
 //! raw data index and properties) and raw data, written in chunks. Objects
 //! and their raw data indexes carry over from segment to segment unless a
 //! segment replaces them.
@@ -325,12 +325,20 @@ fn read(b: &[u8]) -> R<Tdms> {
                 if k == 1 { " (not a TDMS file)" } else { "" }
             ));
         }
-        let le32 =
-            |at: usize| u32::from_le_bytes([lead[at], lead[at + 1], lead[at + 2], lead[at + 3]]);
-        let le64 = |at: usize| u64::from_le_bytes(lead[at..at + 8].try_into().unwrap_or([0; 8]));
-        let toc = le32(4);
-        let next = le64(12);
-        let raw_off = le64(20);
+        // The table of contents is little-endian; the version and offsets
+        // follow the segment's byte order (as npTDMS reads them).
+        let toc = u32::from_le_bytes([lead[4], lead[5], lead[6], lead[7]]);
+        let big = toc & TOC_BIG_ENDIAN != 0;
+        let w64 = |at: usize| {
+            let a: [u8; 8] = lead[at..at + 8].try_into().unwrap_or([0; 8]);
+            if big {
+                u64::from_be_bytes(a)
+            } else {
+                u64::from_le_bytes(a)
+            }
+        };
+        let next = w64(12);
+        let raw_off = w64(20);
         let start = pos + LEAD_IN;
         let avail = (b.len() - start) as u64;
         let unfinished = next == u64::MAX;
@@ -351,7 +359,6 @@ fn read(b: &[u8]) -> R<Tdms> {
         }
         let meta_end = start + raw_off as usize;
         let seg_end = start + seg_len as usize;
-        let big = toc & TOC_BIG_ENDIAN != 0;
         if toc & TOC_META != 0 {
             let mut c = Cur {
                 b,

@@ -233,21 +233,23 @@ fn reader(bytes: &[u8], delimiter: u8) -> ::csv::Reader<&[u8]> {
         .from_reader(without_trailing_comment(bytes))
 }
 
-/// `bytes` without a last `#` line that has no line end: the CSV reader
-/// would take it for a row, where a `#` line anywhere else is a comment.
-fn without_trailing_comment(bytes: &[u8]) -> &[u8] {
-    if bytes.last() == Some(&b'\n') {
-        return bytes;
+/// `bytes` without the `#` lines at its end that have no `\n` after them:
+/// the CSV reader would take such a line for a row, where a `#` line
+/// anywhere else is a comment. (A comment runs to `\n`; a last line ended
+/// by a lone `\r` counts as unended.)
+fn without_trailing_comment(mut bytes: &[u8]) -> &[u8] {
+    while bytes.last().is_some_and(|&b| b != b'\n') {
+        let end = bytes.len() - bytes.iter().rev().take_while(|&&b| b == b'\r').count();
+        let start = bytes[..end]
+            .iter()
+            .rposition(|&b| b == b'\n' || b == b'\r')
+            .map_or(0, |p| p + 1);
+        if bytes.get(start) != Some(&b'#') {
+            break;
+        }
+        bytes = &bytes[..start];
     }
-    let start = bytes
-        .iter()
-        .rposition(|&b| b == b'\n' || b == b'\r')
-        .map_or(0, |p| p + 1);
-    if bytes.get(start) == Some(&b'#') {
-        &bytes[..start]
-    } else {
-        bytes
-    }
+    bytes
 }
 
 /// The rows read by the general CSV reader (quotes, lone `\r` line ends),

@@ -150,10 +150,12 @@ fn not_a_mat_file(bytes: &[u8]) -> String {
     }
 }
 
-/// Where a channel's numbers are: a value and its path for messages.
+/// Where a channel's numbers are: a value, its path for messages, and the
+/// unit the file states for it.
 struct Found<'v> {
     label: String,
     value: &'v Value,
+    unit: Option<String>,
 }
 
 /// Parses a MAT-file held in memory into raw columns.
@@ -214,6 +216,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
                     Some(k) => Ok(Some(Found {
                         label: signals[k].label.clone(),
                         value: signals[k].data,
+                        unit: signals[k].unit.clone(),
                     })),
                     None => plain(&file, want).map_err(err),
                 }
@@ -280,7 +283,16 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
                     .and_then(Value::as_struct)
                     .and_then(|x| x.field(0, "Data"));
                 let name = excerpt(names[*i]);
+                let unit = rec
+                    .as_struct()
+                    .and_then(|s| s.field(0, "X"))
+                    .and_then(Value::as_struct)
+                    .and_then(|x| match x.field(0, "Unit") {
+                        Some(Value::Text(t)) if !t.trim().is_empty() => Some(t.trim().to_string()),
+                        _ => None,
+                    });
                 Some(Found {
+                    unit,
                     label: format!("{name}.X.Data"),
                     value: x.ok_or_else(|| {
                         err(format!(
@@ -291,7 +303,21 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
             }
         }
     };
-    let time = time.map(|f| column(&file, &f)).transpose().map_err(err)?;
+    // The time's unit: from its name (`time_ms`) or ControlDesk's X.Unit.
+    let time_unit = time.as_ref().and_then(|f| {
+        let (unit, from) = match &f.unit {
+            Some(u) => (super::TimeUnit::parse(u), format!("Unit of '{}'", f.label)),
+            None => (
+                super::TimeUnit::of_name(&f.label),
+                format!("the name '{}'", f.label),
+            ),
+        };
+        unit.map(|u| (u, from))
+    });
+    let time = time
+        .map(|f| column(&file, &Found { unit: None, ..f }))
+        .transpose()
+        .map_err(err)?;
     let stated_rate = match &opts.fs_from {
         None => None,
         Some(name) => {
@@ -317,6 +343,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
     };
     Ok(RawTable {
         time,
+        time_unit,
         channels,
         locator: Locator::Samples,
         stated_rate,
@@ -330,11 +357,12 @@ enum Layout<'v> {
     ControlDesk(usize, Vec<Signal<'v>>),
 }
 
-/// A ControlDesk signal: `Y(k).Name` and `Y(k).Data`.
+/// A ControlDesk signal: `Y(k).Name`, `Y(k).Data` and `Y(k).Unit`.
 struct Signal<'v> {
     name: String,
     label: String,
     data: &'v Value,
+    unit: Option<String>,
 }
 
 fn controldesk_signals<'v>(
@@ -359,10 +387,15 @@ fn controldesk_signals<'v>(
             Some(Value::Text(t)) => t.clone(),
             _ => String::new(),
         };
+        let unit = match y.field(k, "Unit") {
+            Some(Value::Text(t)) if !t.trim().is_empty() => Some(t.trim().to_string()),
+            _ => None,
+        };
         out.push(Signal {
             label: format!("{name}.Y({}).Data '{}'", k + 1, excerpt(&full)),
             name: full,
             data,
+            unit,
         });
     }
     Ok(out)
@@ -376,6 +409,7 @@ fn plain<'v>(file: &'v File<'_>, want: &str) -> std::result::Result<Option<Found
         return Ok(Some(Found {
             label: excerpt(names[i]),
             value: file.value(i)?,
+            unit: None,
         }));
     }
     let Some((head, steps)) = parse_path(want) else {
@@ -391,6 +425,7 @@ fn plain<'v>(file: &'v File<'_>, want: &str) -> std::result::Result<Option<Found
     Ok(Some(Found {
         label: excerpt(want),
         value: v,
+        unit: None,
     }))
 }
 
@@ -458,7 +493,10 @@ fn column(file: &File<'_>, f: &Found<'_>) -> std::result::Result<RawColumn, Stri
         name: f.label.clone(),
         values,
         resolution: 0.0,
-        unit: None,
+        unit: f
+            .unit
+            .as_ref()
+            .map(|u| (u.clone(), format!("Unit of '{}'", f.label))),
     })
 }
 
