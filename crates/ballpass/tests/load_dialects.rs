@@ -400,7 +400,7 @@ fn short_gaps_are_filled_and_long_ones_split_on_request() {
 fn edge_gaps_are_cut_when_repairs_are_asked_for() {
     let dir = scratch("edges");
     let text = table("time_s,friction_N", 50, |i| {
-        let v = if i < 3 || i >= 47 {
+        let v = if !(3..47).contains(&i) {
             "nan".to_string()
         } else {
             i.to_string()
