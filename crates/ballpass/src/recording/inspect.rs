@@ -209,7 +209,21 @@ pub fn inspect_file(path: &Path, opts: &LoadOptions, s: &InspectSettings) -> Res
         path: path.to_path_buf(),
         source,
     })?;
-    let p = super::io::prepare_for_inspection(path, &bytes, opts)?;
+    inspect_bytes(path, &bytes, opts, s)
+}
+
+/// [`inspect_file`] of a file in memory; `path` names it and gives the
+/// format when none is set.
+///
+/// # Errors
+/// As [`inspect_file`].
+pub fn inspect_bytes(
+    path: &Path,
+    bytes: &[u8],
+    opts: &LoadOptions,
+    s: &InspectSettings,
+) -> Result<Inspection> {
+    let p = super::io::prepare_for_inspection(path, bytes, opts)?;
     Ok(inspect_prepared(path, &p, opts, s))
 }
 

@@ -424,10 +424,11 @@ fn find_header(bytes: &[u8], opts: &LoadOptions, given: Option<u8>) -> (usize, u
             wanted.iter().any(|w| w.trim().eq_ignore_ascii_case(cell)) || is_time_name(cell)
         })
     };
-    let mut first = None;
-    let mut preamble = Vec::new();
+    // Start and number of each line looked at that is not blank or a comment.
+    let mut candidates: Vec<(usize, u64)> = Vec::new();
     let mut pos = 0;
     let mut line_no = 0u64;
+    let mut found = None;
     while pos < bytes.len() && (line_no as usize) <= MAX_PREAMBLE_LINES && pos <= MAX_PREAMBLE_BYTES
     {
         let end = bytes[pos..]
@@ -435,27 +436,36 @@ fn find_header(bytes: &[u8], opts: &LoadOptions, given: Option<u8>) -> (usize, u
             .position(|&b| b == b'\n')
             .map_or(bytes.len(), |e| pos + e + 1);
         let line = bytes[pos..end].trim_ascii();
-        let skipped = opts.skip_lines.is_some_and(|k| (line_no as usize) < k);
-        if !skipped && !line.is_empty() && !line.starts_with(b"#") {
-            if opts.skip_lines.is_some() {
-                return (pos, line_no, preamble);
-            }
-            let here = (pos, line_no, preamble.clone());
-            if names_wanted(line) {
-                return here;
-            }
-            first.get_or_insert(here);
-        }
         if !line.is_empty() && !line.starts_with(b"#") {
-            preamble.push(excerpt_bytes(line));
+            let skipped = opts.skip_lines.is_some_and(|k| (line_no as usize) < k);
+            if !skipped && (opts.skip_lines.is_some() || names_wanted(line)) {
+                found = Some((pos, line_no));
+                break;
+            }
+            candidates.push((pos, line_no));
         }
         pos = end;
         line_no += 1;
     }
-    match (opts.skip_lines, first) {
-        (None, Some(f)) => f,
-        _ => (pos.min(bytes.len()), line_no, preamble),
-    }
+    let (start, line) = match (found, opts.skip_lines) {
+        (Some(f), _) => f,
+        // Nothing names a wanted column: the first line is the header (its
+        // error then lists what it has).
+        (None, None) => candidates.first().copied().unwrap_or((pos, line_no)),
+        (None, Some(_)) => (pos.min(bytes.len()), line_no),
+    };
+    let preamble = candidates
+        .iter()
+        .filter(|&&(p, _)| p < start)
+        .map(|&(p, _)| {
+            let end = bytes[p..]
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(bytes.len(), |e| p + e);
+            excerpt_bytes(bytes[p..end].trim_ascii())
+        })
+        .collect();
+    (start, line, preamble)
 }
 
 /// `time`, `t`, `zeit` or `timestamp` with a time unit (`time_ms`, `t [s]`).

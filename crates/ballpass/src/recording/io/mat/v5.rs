@@ -389,7 +389,7 @@ impl<'a> V5File<'a> {
                 var: i,
             }
             .contents(head, end, 0)
-            .map_err(|r| format!("variable '{name}': {r}"))?
+            .map_err(|e| e.message(&self.vars[i].name))?
         };
         let _ = self.values[i].set(value);
         self.values[i]
@@ -557,6 +557,37 @@ fn inflate(z: &[u8], want: usize) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
+/// Why a variable cannot be read, and where in it (innermost step first).
+struct PErr {
+    reason: String,
+    path: Vec<String>,
+}
+
+impl From<String> for PErr {
+    fn from(reason: String) -> Self {
+        Self {
+            reason,
+            path: Vec::new(),
+        }
+    }
+}
+
+impl PErr {
+    /// `variable 'x' at x.f{2}: reason`, the path bounded.
+    fn message(&self, name: &str) -> String {
+        let at = if self.path.is_empty() {
+            String::new()
+        } else {
+            let p: String = self.path.iter().rev().map(String::as_str).collect();
+            format!(
+                " at {}",
+                crate::error::excerpt_within(&format!("{name}{p}"), 100)
+            )
+        };
+        format!("variable '{}'{at}: {}", excerpt(name), self.reason)
+    }
+}
+
 /// Walks the contents of one variable.
 struct Parser<'b> {
     e: Endian,
@@ -566,7 +597,7 @@ struct Parser<'b> {
 
 impl Parser<'_> {
     /// The value of a `miMATRIX` whose header is `h` and whose data ends at `end`.
-    fn contents(&self, h: MatrixHead, end: usize, depth: usize) -> Result<Value, String> {
+    fn contents(&self, h: MatrixHead, end: usize, depth: usize) -> Result<Value, PErr> {
         let n =
             count(&h.dims).ok_or_else(|| format!("dimensions {} overflow", dims_text(&h.dims)))?;
         let room = end.saturating_sub(h.rest);
@@ -579,13 +610,13 @@ impl Parser<'_> {
                         "cell {} claims {n} cells; its {room} bytes hold at most {}",
                         dims_text(&h.dims),
                         room / 8
-                    ));
+                    )
+                    .into());
                 }
                 let mut items = Vec::with_capacity(n);
                 let mut pos = h.rest;
                 for k in 0..n {
-                    let (v, next) =
-                        self.child(pos, end, depth + 1, || format!("cell {}", k + 1))?;
+                    let (v, next) = self.child(pos, end, depth + 1, || format!("{{{}}}", k + 1))?;
                     items.push(v);
                     pos = next;
                 }
@@ -605,7 +636,9 @@ impl Parser<'_> {
                 }
                 let len_tag = tag(self.e, self.b, pos, end, "field name length")?;
                 if len_tag.ty != MI_INT32 || len_tag.data.len() != 4 {
-                    return Err("field name length is not one miINT32".into());
+                    return Err(PErr::from(
+                        "field name length is not one miINT32".to_string(),
+                    ));
                 }
                 let len = self.e.u32(self.b, len_tag.data.start) as usize;
                 let names_tag = tag(self.e, self.b, len_tag.next, end, "field names")?;
@@ -613,7 +646,8 @@ impl Parser<'_> {
                 if len == 0 && names_len > 0 || len > 0 && names_len % len != 0 {
                     return Err(format!(
                         "field names of {names_len} bytes are not a multiple of their length {len}"
-                    ));
+                    )
+                    .into());
                 }
                 let nfields = names_len.checked_div(len).unwrap_or(0);
                 let fields: Vec<String> = (0..nfields)
@@ -631,7 +665,8 @@ impl Parser<'_> {
                          hold at most {}",
                         dims_text(&h.dims),
                         room / 8
-                    ));
+                    )
+                    .into());
                 }
                 let mut elems = Vec::with_capacity(n);
                 let mut pos = names_tag.next;
@@ -639,7 +674,11 @@ impl Parser<'_> {
                     let mut elem = Vec::with_capacity(nfields);
                     for name in &fields {
                         let (v, next) = self.child(pos, end, depth + 1, || {
-                            format!("field '{}' of element {}", excerpt(name), k + 1)
+                            if n == 1 {
+                                format!(".{name}")
+                            } else {
+                                format!("({}).{name}", k + 1)
+                            }
                         })?;
                         elem.push(v);
                         pos = next;
@@ -685,7 +724,7 @@ impl Parser<'_> {
                         .chunks_exact(4)
                         .map(|w| char::from_u32(self.e.u32(w, 0)).unwrap_or('\u{fffd}'))
                         .collect(),
-                    other => return Err(format!("characters stored as type {other}")),
+                    other => return Err(format!("characters stored as type {other}").into()),
                 };
                 Ok(Value::Text(text_rows(&chars, &h.dims)))
             }
@@ -700,7 +739,7 @@ impl Parser<'_> {
                     format!("numbers stored as type {}, which is not numeric", t.ty)
                 })?;
                 if t.ty == MI_UTF8 || t.ty == MI_UTF16 || t.ty == MI_UTF32 {
-                    return Err(format!("numbers stored as text type {}", t.ty));
+                    return Err(format!("numbers stored as text type {}", t.ty).into());
                 }
                 if n.checked_mul(size) != Some(t.data.len()) {
                     return Err(format!(
@@ -708,7 +747,8 @@ impl Parser<'_> {
                         class_name(h.class),
                         dims_text(&h.dims),
                         t.data.len()
-                    ));
+                    )
+                    .into());
                 }
                 if h.complex {
                     return Ok(Value::Other {
@@ -746,7 +786,7 @@ impl Parser<'_> {
                 dims: Vec::new(),
                 why: "a MATLAB object (string, table, ...); save plain arrays",
             }),
-            other => Err(format!("unknown array class {other}")),
+            other => Err(format!("unknown array class {other}").into()),
         }
     }
 
@@ -765,30 +805,36 @@ impl Parser<'_> {
         pos: usize,
         end: usize,
         depth: usize,
-        what: impl Fn() -> String,
-    ) -> Result<(Value, usize), String> {
-        let t = tag(self.e, self.b, pos, end, &what())?;
+        step: impl Fn() -> String,
+    ) -> Result<(Value, usize), PErr> {
+        let at = |e: PErr| PErr {
+            path: {
+                let mut p = e.path;
+                p.push(step());
+                p
+            },
+            reason: e.reason,
+        };
+        let t = tag(self.e, self.b, pos, end, "element").map_err(|r| at(r.into()))?;
         if t.ty == MI_COMPRESSED {
-            return Err(format!(
-                "{}: compressed data inside a variable; MAT-files compress whole variables only",
-                what()
+            return Err(at(
+                "compressed data inside a variable; MAT-files compress whole variables only"
+                    .to_string()
+                    .into(),
             ));
         }
         if t.ty != MI_MATRIX {
-            return Err(format!(
-                "{}: element of type {}; expected an array (14)",
-                what(),
+            return Err(at(format!(
+                "element of type {}; expected an array (14)",
                 t.ty
-            ));
+            )
+            .into()));
         }
         if t.data.is_empty() {
             return Ok((empty(), t.next));
         }
-        let h = matrix_head(self.e, self.b, t.data.start, t.data.end)
-            .map_err(|r| format!("{}: {r}", what()))?;
-        let v = self
-            .contents(h, t.data.end, depth)
-            .map_err(|r| format!("{}: {r}", what()))?;
+        let h = matrix_head(self.e, self.b, t.data.start, t.data.end).map_err(|r| at(r.into()))?;
+        let v = self.contents(h, t.data.end, depth).map_err(at)?;
         Ok((v, t.next))
     }
 }
