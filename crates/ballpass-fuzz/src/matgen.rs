@@ -177,6 +177,12 @@ pub fn lying_dims(rows: i32, cols: i32, class: u8) -> Vec<u8> {
     file(&[matrix(class, 0, &[rows, cols], "x", &contents)])
 }
 
+/// A struct array of `rows x cols` elements and no fields (it holds
+/// nothing, whatever its size).
+pub fn fieldless_struct(rows: i32, cols: i32) -> Vec<u8> {
+    file(&[matrix(2, 0, &[rows, cols], "s", &field_names(&[]))])
+}
+
 fn rename_top(v: &mut Vec<u8>, name: &str) {
     // The outermost matrix's name is empty: rebuild its name element.
     let name_at = 8 + 16 + 16;
@@ -223,6 +229,9 @@ pub fn stress_corpus() -> Vec<Vec<u8>> {
         for class in [1u8, 2, 4, 5, 6, 9, 15, 17, 99] {
             out.push(lying_dims(rows, cols, class));
         }
+    }
+    for (rows, cols) in [(0, 0), (1, 1), (i32::MAX, 2), (1 << 20, 1 << 10)] {
+        out.push(fieldless_struct(rows, cols));
     }
     for n in [1usize, 100, 5000] {
         let names: Vec<String> = (0..n).map(|i| format!("f{i:06}")).collect();

@@ -185,6 +185,25 @@ fn nested_zlib_streams_and_lying_lengths_do_not_blow_memory() {
     );
 }
 
+/// Found by the long fuzz run (seed 1, before exec 200 000): a struct array
+/// without fields whose dimensions claim 2^32 elements made the parser
+/// reserve 103 GB for elements that hold nothing.
+#[test]
+fn a_struct_without_fields_claiming_billions_of_elements_allocates_nothing() {
+    let _one = ONE_AT_A_TIME.lock();
+    for (rows, cols) in [(i32::MAX, 2), (1 << 20, 1 << 10)] {
+        let f = matgen::fieldless_struct(rows, cols);
+        let (msgs, _, peak) = all_calls(&f);
+        assert!(msgs[0].contains("no channel found"), "{}", msgs[0]);
+        assert!(
+            msgs[1].contains(&format!("s: struct {rows}x{cols}")),
+            "{}",
+            msgs[1]
+        );
+        assert!(peak < 1 << 20, "{rows}x{cols}: peak {peak}");
+    }
+}
+
 /// Issue 18, item 11: the third-party readers' failures (HDF5, MDF) and
 /// our MAT parser's are one-line errors in our words: no "binrw error", no
 /// panic text, nothing that spans lines.

@@ -282,16 +282,18 @@ fn prepare(path: &Path, table: RawTable, opts: &LoadOptions, strict: bool) -> Re
         names.push(col.name);
         channels.push((c, v));
     }
-    let missing: usize = time_gaps.iter().map(|g| g.missing).sum();
+    let missing = time_gaps
+        .iter()
+        .fold(0usize, |a, g| a.saturating_add(g.missing));
     let grid = (!time_gaps.is_empty()).then(|| {
         let mut g = Vec::with_capacity(n);
-        let mut shift = 0;
+        let mut shift = 0usize;
         let mut next = time_gaps.iter().peekable();
         for r in 0..n {
             while let Some(tg) = next.next_if(|tg| tg.index == r) {
-                shift += tg.missing;
+                shift = shift.saturating_add(tg.missing);
             }
-            g.push(r + shift);
+            g.push(r.saturating_add(shift));
         }
         g
     });
@@ -303,7 +305,7 @@ fn prepare(path: &Path, table: RawTable, opts: &LoadOptions, strict: bool) -> Re
         start_time_s,
         channels,
         grid,
-        grid_len: n + missing,
+        grid_len: n.saturating_add(missing),
         gaps: Vec::new(),
         out_of_range,
         notes,
@@ -339,7 +341,7 @@ fn find_gaps(p: &Prepared, time_gaps: &[TimeGap]) -> Vec<Gap> {
     let mut runs: Vec<(usize, usize, usize, bool, bool)> = Vec::new();
     for tg in time_gaps {
         let end = p.g(tg.index);
-        runs.push((end - tg.missing, end, tg.index, true, false));
+        runs.push((end.saturating_sub(tg.missing), end, tg.index, true, false));
     }
     let n = p.channels.first().map_or(0, |(_, v)| v.len());
     let bad = |r: usize| p.channels.iter().any(|(_, v)| !v[r].is_finite());
@@ -425,7 +427,9 @@ pub(crate) fn finish(path: &Path, table: RawTable, opts: &LoadOptions) -> Result
             return Err(refusal(path, &p, k));
         }
     }
-    let invented: usize = fill.iter().map(|&k| p.gaps[k].len).sum();
+    let invented = fill
+        .iter()
+        .fold(0usize, |a, &k| a.saturating_add(p.gaps[k].len));
     let real = p.channels.first().map_or(0, |(_, v)| v.len());
     if invented > real {
         return Err(Error::InvalidRecording {

@@ -668,9 +668,12 @@ impl Parser<'_> {
                     )
                     .into());
                 }
-                let mut elems = Vec::with_capacity(n);
+                // A struct without fields holds nothing whatever its size:
+                // no elements are made for it (its dimensions are kept).
+                let n_elems = if nfields == 0 { 0 } else { n };
+                let mut elems = Vec::with_capacity(n_elems);
                 let mut pos = names_tag.next;
-                for k in 0..n {
+                for k in 0..n_elems {
                     let mut elem = Vec::with_capacity(nfields);
                     for name in &fields {
                         let (v, next) = self.child(pos, end, depth + 1, || {
