@@ -707,55 +707,79 @@ fn layout_raw(
 
 /// Decodes the values of one run (`ty` a numeric TDMS type).
 fn decode(b: &[u8], run: &Run, out: &mut Vec<f64>, t0: &mut Option<(i64, u64)>) -> R<()> {
-    let size = item_size(run.ty).unwrap_or(0);
+    if run.count == 0 || run.reps == 0 {
+        return Ok(());
+    }
+    let size =
+        item_size(run.ty).ok_or_else(|| format!("{} data is not numeric", type_name(run.ty)))?;
+    // The last byte the run reads must be in the file: checked once, so the
+    // loops below index within bounds.
+    (run.reps - 1)
+        .checked_mul(run.rep_stride)
+        .and_then(|x| x.checked_add((run.count - 1).checked_mul(run.stride)?))
+        .and_then(|x| x.checked_add(run.offset)?.checked_add(size))
+        .filter(|&end| end <= b.len())
+        .ok_or_else(|| format!("data beyond the end of the file (from byte {})", run.offset))?;
     let big = run.big;
-    macro_rules! num {
-        ($t:ty, $n:expr, $at:expr) => {{
-            let a: [u8; $n] = b[$at..$at + $n].try_into().map_err(|_| "short read")?;
-            (if big {
-                <$t>::from_be_bytes(a)
-            } else {
-                <$t>::from_le_bytes(a)
-            }) as f64
+    macro_rules! each {
+        ($n:expr, $f:expr) => {{
+            // FnMut for time stamps (they keep the first one).
+            #[allow(unused_mut)]
+            let mut f = $f;
+            for r in 0..run.reps {
+                let base = run.offset + r * run.rep_stride;
+                if run.stride == $n {
+                    // Contiguous: whole values back to back.
+                    out.extend(
+                        b[base..base + run.count * $n]
+                            .chunks_exact($n)
+                            .map(|w| f(<[u8; $n]>::try_from(w).unwrap_or([0; $n]))),
+                    );
+                } else {
+                    out.extend((0..run.count).map(|i| {
+                        let at = base + i * run.stride;
+                        f(<[u8; $n]>::try_from(&b[at..at + $n]).unwrap_or([0; $n]))
+                    }));
+                }
+            }
         }};
     }
-    for r in 0..run.reps {
-        let base = run.offset + r * run.rep_stride;
-        for i in 0..run.count {
-            let at = base + i * run.stride;
-            if at + size > b.len() {
-                return Err(format!("data beyond the end of the file (byte {at})"));
-            }
-            let x = match run.ty {
-                1 => num!(i8, 1, at),
-                2 => num!(i16, 2, at),
-                3 => num!(i32, 4, at),
-                4 => num!(i64, 8, at),
-                5 => num!(u8, 1, at),
-                6 => num!(u16, 2, at),
-                7 => num!(u32, 4, at),
-                8 => num!(u64, 8, at),
-                9 | 0x19 => num!(f32, 4, at),
-                10 | 0x1A => num!(f64, 8, at),
-                0x21 => f64::from(b[at] != 0),
-                0x44 => {
-                    let w = |k: usize| -> [u8; 8] {
-                        b[at + k..at + k + 8].try_into().unwrap_or([0; 8])
-                    };
-                    let (frac, secs) = if big {
-                        (u64::from_be_bytes(w(8)), i64::from_be_bytes(w(0)))
-                    } else {
-                        (u64::from_le_bytes(w(0)), i64::from_le_bytes(w(8)))
-                    };
-                    // Seconds from the first time stamp, exactly where f64 allows.
-                    let (s0, f0) = *t0.get_or_insert((secs, frac));
-                    (secs.wrapping_sub(s0)) as f64
-                        + (frac as f64 - f0 as f64) / 18_446_744_073_709_551_616.0
-                }
-                other => return Err(format!("{} data is not numeric", type_name(other))),
+    macro_rules! num {
+        ($t:ty, $n:expr) => {
+            each!($n, |a: [u8; $n]| {
+                (if big {
+                    <$t>::from_be_bytes(a)
+                } else {
+                    <$t>::from_le_bytes(a)
+                }) as f64
+            })
+        };
+    }
+    match run.ty {
+        1 => num!(i8, 1),
+        2 => num!(i16, 2),
+        3 => num!(i32, 4),
+        4 => num!(i64, 8),
+        5 => num!(u8, 1),
+        6 => num!(u16, 2),
+        7 => num!(u32, 4),
+        8 => num!(u64, 8),
+        9 | 0x19 => num!(f32, 4),
+        10 | 0x1A => num!(f64, 8),
+        0x21 => each!(1, |a: [u8; 1]| f64::from(a[0] != 0)),
+        0x44 => each!(16, |a: [u8; 16]| {
+            let w = |k: usize| -> [u8; 8] { a[k..k + 8].try_into().unwrap_or([0; 8]) };
+            let (frac, secs) = if big {
+                (u64::from_be_bytes(w(8)), i64::from_be_bytes(w(0)))
+            } else {
+                (u64::from_le_bytes(w(0)), i64::from_le_bytes(w(8)))
             };
-            out.push(x);
-        }
+            // Seconds from the first time stamp, exactly where f64 allows.
+            let (s0, f0) = *t0.get_or_insert((secs, frac));
+            (secs.wrapping_sub(s0)) as f64
+                + (frac as f64 - f0 as f64) / 18_446_744_073_709_551_616.0
+        }),
+        other => return Err(format!("{} data is not numeric", type_name(other))),
     }
     Ok(())
 }
