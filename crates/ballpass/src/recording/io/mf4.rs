@@ -107,13 +107,11 @@ fn items(file: &Mf4File) -> (Vec<Item>, Vec<Candidate>) {
     (items, cands)
 }
 
-/// The values of one channel, invalid samples as NaN.
-fn values(file: &Mf4File, it: &Item) -> R<Vec<f64>> {
-    let g = &file.data_groups()[it.dg].channel_groups[it.cg];
-    let c = &g.channels[it.ch];
-    let signal = mdf("reading", || file.signal(c))?;
+/// The values of a decoded channel, invalid samples as NaN; `want` is the
+/// sample count its group declares.
+fn values(signal: &falcon_mdf::Signal, want: u64) -> R<Vec<f64>> {
     let vals = mdf("decoding", || signal.values())?;
-    let mut v = match &vals {
+    let mut v = match vals {
         SignalValues::U8(_)
         | SignalValues::U16(_)
         | SignalValues::U32(_)
@@ -122,8 +120,9 @@ fn values(file: &Mf4File, it: &Item) -> R<Vec<f64>> {
         | SignalValues::I16(_)
         | SignalValues::I32(_)
         | SignalValues::I64(_)
-        | SignalValues::F32(_)
-        | SignalValues::F64(_) => vals.to_f64(),
+        | SignalValues::F32(_) => vals.to_f64(),
+        // Already f64: moved, not copied.
+        SignalValues::F64(v) => v,
         other => {
             return Err(format!(
                 "holds {} values; expected numbers",
@@ -131,7 +130,6 @@ fn values(file: &Mf4File, it: &Item) -> R<Vec<f64>> {
             ))
         }
     };
-    let want = g.sample_count;
     if v.len() as u64 != want {
         return Err(format!(
             "{} values decoded of the {want} its group declares (truncated or damaged data)",
@@ -155,21 +153,12 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
     let err = |r: String| format_err(path, r);
     let has = || names::list(&cands.iter().map(|c| c.full.clone()).collect::<Vec<_>>());
     let label = |k: usize| excerpt(&cands[k].full);
-    let column = |k: usize| -> Result<RawColumn> {
+    let channel_of = |k: usize| {
         let it = &items[k];
-        let c = &file.data_groups()[it.dg].channel_groups[it.cg].channels[it.ch];
-        let values = values(&file, it).map_err(|r| err(format!("channel '{}': {r}", label(k))))?;
-        let unit = (!c.unit.trim().is_empty())
-            .then(|| (c.unit.trim().to_string(), format!("unit of '{}'", label(k))));
-        Ok(RawColumn {
-            name: label(k),
-            values,
-            resolution: 0.0,
-            unit,
-        })
+        &file.data_groups()[it.dg].channel_groups[it.cg].channels[it.ch]
     };
-    let mut channels = Vec::new();
-    let mut groups = Vec::new();
+    // Which items feed which channel.
+    let mut used: Vec<(Channel, usize)> = Vec::new();
     for c in Channel::ALL {
         let want = opts
             .source(c)
@@ -177,10 +166,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
             .clone()
             .unwrap_or_else(|| c.column_name().to_string());
         match names::find(&cands, &want).map_err(err)? {
-            Some(k) => {
-                groups.push(k);
-                channels.push((c, column(k)?));
-            }
+            Some(k) => used.push((c, k)),
             None if opts.source(c).name.is_some() => {
                 return Err(err(format!(
                     "no channel '{}' for {}; the file has: {}",
@@ -192,13 +178,14 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
             None => {}
         }
     }
-    if channels.is_empty() {
+    if used.is_empty() {
         return Err(err(format!(
             "no channel found; expected friction_N, position_mm or optical_V (or mapped \
              names); the file has: {}",
             has()
         )));
     }
+    let groups: Vec<usize> = used.iter().map(|&(_, k)| k).collect();
     // Channels of different groups must share their time axis.
     let first = &items[groups[0]];
     for &k in &groups[1..] {
@@ -225,18 +212,16 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
             }
         }
     }
-    let mut time_unit = None;
-    let time = if opts.ignore_time {
+    let time_k = if opts.ignore_time {
         None
     } else if let Some(name) = &opts.time {
-        let k = names::find(&cands, name).map_err(err)?.ok_or_else(|| {
+        Some(names::find(&cands, name).map_err(err)?.ok_or_else(|| {
             err(format!(
                 "no channel '{}' for time; the file has: {}",
                 excerpt(name),
                 has()
             ))
-        })?;
-        Some(column(k)?)
+        })?)
     } else {
         match file.master_channel(first.dg, first.cg) {
             None => None,
@@ -249,15 +234,60 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
                         m.sync_type
                     )));
                 }
-                let k = items
-                    .iter()
-                    .position(|it| {
-                        (it.dg, it.cg) == (first.dg, first.cg)
-                            && file.data_groups()[it.dg].channel_groups[it.cg].channels[it.ch].id
-                                == m.id
-                    })
-                    .ok_or_else(|| err("the master channel is not in its group".into()))?;
-                let mut col = column(k)?;
+                Some(
+                    items
+                        .iter()
+                        .position(|it| {
+                            (it.dg, it.cg) == (first.dg, first.cg)
+                                && file.data_groups()[it.dg].channel_groups[it.cg].channels[it.ch]
+                                    .id
+                                    == m.id
+                        })
+                        .ok_or_else(|| err("the master channel is not in its group".into()))?,
+                )
+            }
+        }
+    };
+    // Everything needed, decoded in one batch (each group's records are
+    // assembled once).
+    let mut needed: Vec<usize> = used.iter().map(|&(_, k)| k).chain(time_k).collect();
+    needed.sort_unstable();
+    needed.dedup();
+    let chans: Vec<&falcon_mdf::Channel> = needed.iter().map(|&k| channel_of(k)).collect();
+    let signals = mdf("reading", || file.signals(&chans)).map_err(err)?;
+    let mut decoded: Vec<(usize, Vec<f64>)> = Vec::with_capacity(needed.len());
+    for (&k, sig) in needed.iter().zip(&signals) {
+        let it = &items[k];
+        let want = file.data_groups()[it.dg].channel_groups[it.cg].sample_count;
+        let v = values(sig, want).map_err(|r| err(format!("channel '{}': {r}", label(k))))?;
+        decoded.push((k, v));
+    }
+    let uses =
+        |k: usize| used.iter().filter(|&&(_, j)| j == k).count() + usize::from(time_k == Some(k));
+    let mut take = |k: usize| -> RawColumn {
+        // Moved out unless another channel reads the same item too.
+        let shared = uses(k) > 1;
+        let values = decoded
+            .iter_mut()
+            .find(|(j, _)| *j == k)
+            .map(|(_, v)| if shared { v.clone() } else { std::mem::take(v) })
+            .unwrap_or_default();
+        let c = channel_of(k);
+        RawColumn {
+            name: label(k),
+            values,
+            resolution: 0.0,
+            unit: (!c.unit.trim().is_empty())
+                .then(|| (c.unit.trim().to_string(), format!("unit of '{}'", label(k)))),
+        }
+    };
+    let channels: Vec<(Channel, RawColumn)> = used.iter().map(|&(c, k)| (c, take(k))).collect();
+    let mut time_unit = None;
+    let time = match time_k {
+        None => None,
+        Some(k) => {
+            let mut col = take(k);
+            if opts.time.is_none() {
                 if let Some((u, from)) = col.unit.take() {
                     let unit = TimeUnit::parse(&u).ok_or_else(|| {
                         err(format!(
@@ -267,8 +297,8 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
                     })?;
                     time_unit = Some((unit, from));
                 }
-                Some(col)
             }
+            Some(col)
         }
     };
     Ok(RawTable {
