@@ -419,7 +419,22 @@ impl H5Data {
             };
         }
         Ok(match ds.dtype() {
-            Datatype::FloatingPoint { size: 8, .. } => read!(f64),
+            Datatype::FloatingPoint { size: 8, .. } => {
+                let a = h5("reading data", || ds.read_array::<f64>())?;
+                if a.is_standard_layout() {
+                    // A vector in memory order: the array's buffer as it is.
+                    let n = a.len();
+                    let (mut v, offset) = a.into_raw_vec_and_offset();
+                    let k = offset.unwrap_or(0);
+                    if k > 0 {
+                        v.drain(..k.min(v.len()));
+                    }
+                    v.truncate(n);
+                    v
+                } else {
+                    a.iter().copied().collect()
+                }
+            }
             Datatype::FloatingPoint { size: 4, .. } => read!(f32),
             Datatype::FixedPoint {
                 size: 1,
