@@ -37,7 +37,9 @@ pub struct Timebase {
     pub fs_hz: f64,
     /// Time of the first sample, s.
     pub start_time_s: f64,
-    /// Median step, s.
+    /// Median step, s; the mean step when every step is within the tolerance
+    /// of the smallest (it then differs from the median by less than the
+    /// tolerance, and finding the median is skipped).
     pub median_step_s: f64,
     /// Missing samples (only when gaps are allowed), in time order.
     pub gaps: Vec<TimeGap>,
@@ -108,32 +110,53 @@ pub fn derive(
     if let Some(i) = times.iter().position(|t| !t.is_finite()) {
         return Err(err(i, format!("time {} is not a finite number", times[i])));
     }
-    let r = rounding(times, resolution);
-    let mut steps = Vec::with_capacity(n - 1);
+    // One pass: every step positive, and the smallest and largest step.
+    let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 1..n {
         let d = times[i] - times[i - 1];
-        if d == 0.0 {
-            return Err(err(
-                i,
-                format!(
-                    "duplicate time stamp {} (same as the row before); expected increasing time{}",
-                    times[i],
-                    coarse_hint(r, times)
-                ),
-            ));
+        if d <= 0.0 {
+            let r = rounding(times, resolution);
+            return Err(if d == 0.0 {
+                err(
+                    i,
+                    format!(
+                        "duplicate time stamp {} (same as the row before); expected increasing time{}",
+                        times[i],
+                        coarse_hint(r, times)
+                    ),
+                )
+            } else {
+                err(
+                    i,
+                    format!(
+                        "time goes backwards from {} to {}; expected increasing time",
+                        times[i - 1],
+                        times[i]
+                    ),
+                )
+            });
         }
-        if d < 0.0 {
-            return Err(err(
-                i,
-                format!(
-                    "time goes backwards from {} to {}; expected increasing time",
-                    times[i - 1],
-                    times[i]
-                ),
-            ));
-        }
-        steps.push(d);
+        dmin = dmin.min(d);
+        dmax = dmax.max(d);
     }
+    // Increasing: the largest magnitude is at an end.
+    let r = resolution.max(0.0) + 4.0 * f64::EPSILON * times[0].abs().max(times[n - 1].abs());
+    let span = times[n - 1] - times[0];
+    // Every step within the tolerance of the smallest: every step is within
+    // the tolerance of the median too (it lies between them, and the
+    // tolerance grows with the step), so the grid is uniform and the median
+    // need not be found.
+    if dmax - dmin <= step_tolerance * dmin + (2.0 * r).min(0.5 * dmin) {
+        let steps_n = (n - 1) as f64;
+        let fs_hz = snap(steps_n / span, |fs| (steps_n / fs - span).abs() <= 2.0 * r);
+        return Ok(Timebase {
+            fs_hz,
+            start_time_s: times[0],
+            median_step_s: span / steps_n,
+            gaps: Vec::new(),
+        });
+    }
+    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     let mid = steps.len() / 2;
     let h = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
     let slack = (2.0 * r).min(0.5 * h);
@@ -167,7 +190,6 @@ pub fn derive(
             ));
         }
     }
-    let span = times[n - 1] - times[0];
     let steps_n = gaps.iter().fold(n - 1, |a, g| a.saturating_add(g.missing)) as f64;
     let fs_raw = steps_n / span;
     let fs_hz = snap(fs_raw, |fs| (steps_n / fs - span).abs() <= 2.0 * r);
@@ -310,6 +332,34 @@ mod tests {
         let mut t = grid(100, 0.0, 1000.0);
         t[70] += 0.5e-6;
         assert!(derive(&t, 0.0, DEFAULT_STEP_TOLERANCE, false).is_ok());
+    }
+
+    #[test]
+    fn steps_spread_beyond_the_fast_check_are_still_judged_against_the_median() {
+        // Sample 30 late by 0.9e-3 of a step: steps 30 and 31 differ by
+        // 1.8e-3 (beyond the shortcut that skips the median), yet each is
+        // within the 1e-3 tolerance of the median step: accepted.
+        let mut t = grid(1000, 0.0, 1000.0);
+        t[30] += 0.9e-6;
+        let b = derive(&t, 0.0, DEFAULT_STEP_TOLERANCE, false).unwrap();
+        assert_eq!(b.fs_hz, 1000.0);
+        assert!(
+            (b.median_step_s - 1e-3).abs() < 1e-15,
+            "{}",
+            b.median_step_s
+        );
+        // (1e-15: a step is a difference of times below 1 s, exact to ~1e-16.)
+        // 0.3e-3: the shortcut; the same rate, the mean step.
+        let mut t = grid(1000, 0.0, 1000.0);
+        t[30] += 0.3e-6;
+        let b = derive(&t, 0.0, DEFAULT_STEP_TOLERANCE, false).unwrap();
+        assert_eq!(b.fs_hz, 1000.0);
+        // Mean step 0.999/999 s: equal to 1e-3 within float rounding.
+        assert!(
+            (b.median_step_s - 1e-3).abs() < 1e-15,
+            "{}",
+            b.median_step_s
+        );
     }
 
     #[test]
