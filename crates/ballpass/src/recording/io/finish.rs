@@ -209,6 +209,7 @@ fn prepare(path: &Path, table: RawTable, opts: &LoadOptions, strict: bool) -> Re
     let mut channels = Vec::with_capacity(table.channels.len());
     let mut names = Vec::with_capacity(table.channels.len());
     let mut out_of_range = (0usize, None);
+    let mut all_in_range = true;
     for (c, col) in table.channels {
         let src = opts.source(c);
         let mut factor = 1.0;
@@ -255,8 +256,13 @@ fn prepare(path: &Path, table: RawTable, opts: &LoadOptions, strict: bool) -> Re
                 *x = *x * scale + src.offset;
             }
         }
+        // One pass in the common case (every value finite and in range).
+        let in_range = v
+            .iter()
+            .fold(true, |ok, x| ok & (x.abs() <= Recording::MAX_ABS));
+        all_in_range &= in_range;
         for (i, &x) in v.iter().enumerate() {
-            if x.is_finite() && x.abs() > Recording::MAX_ABS {
+            if !in_range && x.is_finite() && x.abs() > Recording::MAX_ABS {
                 if strict {
                     let scaled = if scale != 1.0 || src.offset != 0.0 {
                         " after scaling"
@@ -312,7 +318,9 @@ fn prepare(path: &Path, table: RawTable, opts: &LoadOptions, strict: bool) -> Re
         locator: table.locator,
         names,
     };
-    p.gaps = find_gaps(&p, &time_gaps);
+    if !(all_in_range && time_gaps.is_empty()) {
+        p.gaps = find_gaps(&p, &time_gaps);
+    }
     Ok(p)
 }
 
@@ -345,7 +353,11 @@ fn find_gaps(p: &Prepared, time_gaps: &[TimeGap]) -> Vec<Gap> {
     }
     let n = p.channels.first().map_or(0, |(_, v)| v.len());
     let bad = |r: usize| p.channels.iter().any(|(_, v)| !v[r].is_finite());
-    let mut r = 0;
+    let all_finite = p
+        .channels
+        .iter()
+        .all(|(_, v)| v.iter().fold(true, |ok, x| ok & x.is_finite()));
+    let mut r = if all_finite { n } else { 0 };
     while r < n {
         if bad(r) {
             let r0 = r;
@@ -407,7 +419,7 @@ fn find_gaps(p: &Prepared, time_gaps: &[TimeGap]) -> Vec<Gap> {
 /// Validates a raw table and builds the recordings (several when the gap
 /// policy splits it).
 pub(crate) fn finish(path: &Path, table: RawTable, opts: &LoadOptions) -> Result<Vec<Recording>> {
-    let p = prepare(path, table, opts, true)?;
+    let mut p = prepare(path, table, opts, true)?;
     let policy = opts.gaps;
     // What happens to each gap.
     let mut fill = Vec::new();
@@ -480,8 +492,27 @@ pub(crate) fn finish(path: &Path, table: RawTable, opts: &LoadOptions) -> Result
     let several = pieces.len() > 1;
     let mut out = Vec::new();
     let mut dropped = Vec::new();
+    // The common file (no gap): its columns become the recording as they are.
+    let whole = pieces.len() == 1 && fill.is_empty() && p.grid.is_none() && p.gaps.is_empty();
+    let mut columns = if whole {
+        std::mem::take(&mut p.channels)
+    } else {
+        Vec::new()
+    };
     for (k, &(a, b)) in pieces.iter().enumerate() {
-        let channels = materialise(&p, a, b, &fill);
+        let channels = if whole {
+            let mut out = Channels::default();
+            for (c, v) in columns.drain(..) {
+                match c {
+                    Channel::Friction => out.friction_n = Some(v),
+                    Channel::Position => out.position_mm = Some(v),
+                    Channel::Optical => out.optical_v = Some(v),
+                }
+            }
+            out
+        } else {
+            materialise(&p, a, b, &fill)
+        };
         let mut meta = Metadata {
             velocity_mm_s: opts.velocity_mm_s,
             bearing: opts.bearing.clone(),
