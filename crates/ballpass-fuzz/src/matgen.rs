@@ -5,6 +5,7 @@
 use std::io::Write;
 
 const MI_INT8: u32 = 1;
+const MI_UINT16: u32 = 4;
 const MI_INT32: u32 = 5;
 const MI_UINT32: u32 = 6;
 const MI_DOUBLE: u32 = 9;
@@ -183,6 +184,11 @@ pub fn fieldless_struct(rows: i32, cols: i32) -> Vec<u8> {
     file(&[matrix(2, 0, &[rows, cols], "s", &field_names(&[]))])
 }
 
+/// A char array with no characters whose dimensions claim `rows x 0`.
+pub fn empty_text(rows: i32) -> Vec<u8> {
+    file(&[matrix(4, 0, &[rows, 0], "c", &element(MI_UINT16, &[]))])
+}
+
 fn rename_top(v: &mut Vec<u8>, name: &str) {
     // The outermost matrix's name is empty: rebuild its name element.
     let name_at = 8 + 16 + 16;
@@ -232,6 +238,9 @@ pub fn stress_corpus() -> Vec<Vec<u8>> {
     }
     for (rows, cols) in [(0, 0), (1, 1), (i32::MAX, 2), (1 << 20, 1 << 10)] {
         out.push(fieldless_struct(rows, cols));
+    }
+    for rows in [0, 2, 1 << 20, i32::MAX] {
+        out.push(empty_text(rows));
     }
     for n in [1usize, 100, 5000] {
         let names: Vec<String> = (0..n).map(|i| format!("f{i:06}")).collect();

@@ -204,6 +204,23 @@ fn a_struct_without_fields_claiming_billions_of_elements_allocates_nothing() {
     }
 }
 
+/// Issue 18, item 3 (memory), found by the long fuzz run (seed 7, between
+/// execs 800 000 and 900 000): a char array with no characters whose
+/// dimensions claim 2^31 - 1 rows made `contents` reserve 51 GB of empty
+/// rows and abort.
+#[test]
+fn an_empty_char_array_claiming_billions_of_rows_allocates_nothing() {
+    let _one = ONE_AT_A_TIME.lock();
+    for rows in [i32::MAX, 1 << 20] {
+        let f = matgen::empty_text(rows);
+        let (msgs, _, peak) = all_calls(&f);
+        assert!(msgs[0].contains("no channel found"), "{}", msgs[0]);
+        assert!(msgs[1].contains("c:"), "{}", msgs[1]);
+        // 1 MB: the parser's own bookkeeping for a 200-byte file is far less.
+        assert!(peak < 1 << 20, "{rows} rows: peak {peak}");
+    }
+}
+
 /// Issue 18, item 11: the third-party readers' failures (HDF5, MDF) and
 /// our MAT parser's are one-line errors in our words: no "binrw error", no
 /// panic text, nothing that spans lines.

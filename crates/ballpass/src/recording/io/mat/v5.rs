@@ -845,14 +845,21 @@ impl Parser<'_> {
 /// A char array (column-major) as rows of text joined by newlines.
 fn text_rows(chars: &[char], dims: &[usize]) -> String {
     let rows = dims.first().copied().unwrap_or(1).max(1);
-    if rows == 1 || chars.len() % rows != 0 {
+    // An empty array makes no rows whatever its dimensions claim (2^31 rows
+    // of nothing once reserved 51 GB); otherwise rows <= chars, and the text
+    // is built in one string of about the characters' size.
+    if rows == 1 || chars.is_empty() || chars.len() % rows != 0 {
         return chars.iter().collect();
     }
     let cols = chars.len() / rows;
-    (0..rows)
-        .map(|r| (0..cols).map(|c| chars[c * rows + r]).collect::<String>())
-        .collect::<Vec<_>>()
-        .join("\n")
+    let mut out = String::with_capacity(chars.len() + rows);
+    for r in 0..rows {
+        if r > 0 {
+            out.push('\n');
+        }
+        out.extend((0..cols).map(|c| chars[c * rows + r]));
+    }
+    out
 }
 
 /// Converts stored numbers to `f64`.
@@ -897,6 +904,8 @@ mod tests {
         // ['ab'; 'cd'] is stored a, c, b, d.
         assert_eq!(text_rows(&['a', 'c', 'b', 'd'], &[2, 2]), "ab\ncd");
         assert_eq!(text_rows(&['x', 'y'], &[1, 2]), "xy");
+        // No characters: no rows, whatever the dimensions say.
+        assert_eq!(text_rows(&[], &[i32::MAX as usize, 0]), "");
     }
 
     #[test]
