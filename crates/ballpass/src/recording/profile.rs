@@ -324,7 +324,11 @@ fn lookup(key: &str) -> Result<&'static bearing::CatalogEntry> {
         let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
         Error::setting(
             "bearing",
-            format!("unknown bearing '{key}' (catalog: {})", keys.join(", ")),
+            format!(
+                "unknown bearing '{}' (catalog: {})",
+                crate::error::excerpt(key),
+                keys.join(", ")
+            ),
         )
     })
 }
@@ -425,6 +429,14 @@ detrend = "linear"
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown bearing 'nope'"), "{e}");
+        // Found by the fuzz run (seed 7): the name is escaped, not echoed raw.
+        let e = Profile::parse(Path::new("b.toml"), "bearing = \"sr25\\tw\"\n")
+            .unwrap()
+            .load_options()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown bearing 'sr25\\tw'"), "{e}");
+        assert!(!e.chars().any(char::is_control), "{e}");
         let e = Profile::parse(Path::new("b.toml"), "[geometry]\nball_diameter_mm = -4\n")
             .unwrap()
             .load_options()
