@@ -3,7 +3,7 @@
 
 Times (best of N, wall clock):
   * the SciPy reference `tools/reference_analyze.py` in-process (CSV read to
-    the three CSV files written), as its `--time` flag does;
+    the four CSV files written), as its `--time` flag does;
   * the whole `ballpass analyze` process (start to exit, no report), N runs,
     interleaved with the reference runs so that both see the same machine load;
   * `ballpass analyze` with five copies of the record (repeats).
@@ -40,10 +40,11 @@ def main():
 
     def scipy_once():
         fs, fr, pos, opt = ref.load_csv(a.rec)
-        _, corr, full, hires = ref.analyze(fs, fr, pos, opt, ref_args)
-        ref.write_csv(tmp / "ref" / "correlations.csv", corr)
-        ref.write_csv(tmp / "ref" / "spectra.csv", full)
-        ref.write_csv(tmp / "ref" / "spectra_hires.csv", hires)
+        _, corr, full, hires, unfiltered = ref.analyze(fs, fr, pos, opt, ref_args)
+        ref.write_csv(tmp / "ref" / "correlations.csv", ref.correlation_table(corr, ref_args.corr_norm))
+        ref.write_csv(tmp / "ref" / "spectra.csv", ref.spectrum_table(full))
+        ref.write_csv(tmp / "ref" / "spectra_hires.csv", ref.spectrum_table(hires))
+        ref.write_csv(tmp / "ref" / "spectra_unfiltered.csv", ref.spectrum_table(unfiltered))
 
     def proc(recs):
         cmd = [a.bin, "analyze", *recs, "--velocity", str(a.velocity), "--no-report", "--out", str(tmp / "bp")]

@@ -174,7 +174,7 @@ def one(path, velocity):
     a = Args()
     a.velocity = velocity
     f_c = velocity / (2 * a.d_avg)
-    sig, corr, _, hires = ra.analyze(fs, fr, pos, opt, a)
+    sig, corr, _, hires, _ = ra.analyze(fs, fr, pos, opt, a)
     nd = -(-len(sig["friction"]) // a.q)
     nperseg_hr = min(ra.next_pow2(4.0 * (fs / a.q) / f_c), nd)
     ve_raw = np.gradient(pos, 1.0 / fs) - velocity

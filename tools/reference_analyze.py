@@ -20,6 +20,9 @@ Steps (the defaults of ballpass' AnalyzeSettings; each is a flag here too):
      lags = correlation_lags(N, N) / fs; normalisation biased / unbiased / coeff / none
   4. full-range spectra on the step-2 signals: welch/csd(nperseg, noverlap,
      window='hann', detrend='constant', scaling='density'), coherence
+  4b. the same full-range spectra of the unfiltered signals (after step 1:
+     trimmed, velocity error, no low-pass, no detrend; Welch still removes
+     each segment's mean), as the thesis' Figs. 62 and 64
   5. high-resolution spectra: decimate(step-2 signal, q) (IIR, zero phase),
      then welch/csd/coherence at fs/q with nperseg_hr, where by default
      q = floor(fs / (2.5 lowpass)) and
@@ -27,6 +30,13 @@ Steps (the defaults of ballpass' AnalyzeSettings; each is a flag here too):
      f_c = V / (2 d_avg); or, with --zoom M, the thesis' polyphase average:
      mean over i < M of welch/csd(x[i::M][:N//M], fs/M), coherence
      |mean Pxy|^2 / (mean Pxx mean Pyy).
+
+Column names carry their units, as ballpass writes them (lowercase unit
+tokens: n = N, mm_s = mm/s, v = V, a digit for a power, per_ before a
+divisor; no token = dimensionless): correlations.csv has lag_s and
+r_<series>[_<unit>] (no unit when coeff-normalised), the spectra files
+freq_hz, psd_<signal>_<unit2>_per_hz, csd_<pair>_re/_im_<unit>_per_hz and
+coh_<pair>.
 
 Usage:
   python3 tools/reference_analyze.py REC.csv --velocity 9 --out DIR [--time]
@@ -52,6 +62,40 @@ PAIRS = [
 
 def series_name(a, b):
     return a if a == b else f"{a}__{b}"
+
+
+UNIT = {"friction": "n", "velocity_error": "mm_s", "optical": "v"}
+SQUARED = {"friction": "n2", "velocity_error": "mm2_s2", "optical": "v2"}
+
+
+def product_unit(a, b):
+    return SQUARED[a] if a == b else f"{UNIT[a]}_{UNIT[b]}"
+
+
+def correlation_table(corr, norm):
+    """correlations.csv columns: lag_s, r_<series>[_<unit of the product>]."""
+    out = {"lag_s": corr["lag_s"]}
+    for p, q in PAIRS:
+        name = "r_" + series_name(p, q)
+        if norm != "coeff":
+            name += "_" + product_unit(p, q)
+        out[name] = corr[series_name(p, q)]
+    return out
+
+
+def spectrum_table(spec):
+    """spectra*.csv columns: freq_hz, psd_*, then csd_*_re/_im and coh_* per pair."""
+    out = {"freq_hz": spec["freq_hz"]}
+    for p, q in PAIRS:
+        if p == q:
+            out[f"psd_{p}_{SQUARED[p]}_per_hz"] = spec[p]
+    for p, q in PAIRS:
+        if p != q:
+            name, unit = series_name(p, q), product_unit(p, q)
+            out[f"csd_{name}_re_{unit}_per_hz"] = spec[name + "_re"]
+            out[f"csd_{name}_im_{unit}_per_hz"] = spec[name + "_im"]
+            out[f"coh_{name}"] = spec[name + "_coh"]
+    return out
 
 
 def load_csv(path):
@@ -88,6 +132,7 @@ def analyze(fs, friction, position, optical, a):
     ve = v - a.velocity
     friction = friction[trim:]
     optical = optical[trim:]
+    raw = {"friction": friction, "velocity_error": ve, "optical": optical}
     sos = signal.butter(a.order, a.lowpass, "low", fs=fs, output="sos")
     sig = {}
     for name, x in (("friction", friction), ("velocity_error", ve), ("optical", optical)):
@@ -120,6 +165,7 @@ def analyze(fs, friction, position, optical, a):
     nperseg = min(a.nperseg, n)
     noverlap = a.noverlap if a.noverlap is not None else nperseg // 2
     full = spectra(sig, fs, nperseg, noverlap)
+    unfiltered = spectra(raw, fs, nperseg, noverlap)
     f_c = a.velocity / (2.0 * a.d_avg)
     if a.zoom:
         m = a.zoom
@@ -136,7 +182,7 @@ def analyze(fs, friction, position, optical, a):
         nhr = min(a.nperseg_hr or next_pow2(4.0 * (fs / q) / f_c), nd)
         nov = a.noverlap_hr if a.noverlap_hr is not None else nhr // 2
         hires = spectra(dec, fs / q, nhr, nov)
-    return sig, corr, full, hires
+    return sig, corr, full, hires, unfiltered
 
 
 def next_pow2(x):
@@ -199,10 +245,11 @@ def main():
 
     def once():
         fs, fr, pos, opt = load_csv(a.rec)
-        _, corr, full, hires = analyze(fs, fr, pos, opt, a)
-        write_csv(out / "correlations.csv", corr)
-        write_csv(out / "spectra.csv", full)
-        write_csv(out / "spectra_hires.csv", hires)
+        _, corr, full, hires, unfiltered = analyze(fs, fr, pos, opt, a)
+        write_csv(out / "correlations.csv", correlation_table(corr, a.corr_norm))
+        write_csv(out / "spectra.csv", spectrum_table(full))
+        write_csv(out / "spectra_hires.csv", spectrum_table(hires))
+        write_csv(out / "spectra_unfiltered.csv", spectrum_table(unfiltered))
 
     if a.time:
         best = min(_timed(once) for _ in range(5))

@@ -211,6 +211,9 @@ pub struct LoadArgs {
     pub bearing: BearingArgs,
     #[command(flatten)]
     pub dialect: Box<DialectArgs>,
+    /// `--window` (records.rs).
+    #[command(flatten)]
+    pub window: crate::records::WindowArgs,
 }
 
 /// File dialects and gaps: the flags of `LoadArgs` for recordings as labs
@@ -403,15 +406,16 @@ impl ReportArgs {
         )
         .with_context(|| format!("writing the report in {}", dir.display()))?;
         for w in &files.warnings {
-            eprintln!("note: {w}");
+            eprintln!("note: {}", crate::text::line(w));
         }
         Ok(Some(files))
     }
 }
 
-/// The command line as typed, for a report's header.
+/// The command line as typed, for a report's header: any argument bytes,
+/// escaped losslessly ([`crate::text::command_line`]).
 pub fn command_line() -> String {
-    std::env::args().collect::<Vec<_>>().join(" ")
+    crate::text::command_line()
 }
 
 /// Parses `V` or `START:STOP:STEP` (inclusive) into a list of velocities, mm/s.

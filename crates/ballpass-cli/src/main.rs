@@ -3,12 +3,15 @@
 use std::io::Write;
 use std::process::ExitCode;
 
+use anyhow::Context;
 use clap::{Parser, Subcommand};
 
 mod args;
 mod cmd;
 mod malloc;
 mod output;
+mod records;
+mod text;
 
 /// Finds and characterises the periodic disturbances that balls cause in
 /// linear ball bearings.
@@ -34,18 +37,50 @@ enum Command {
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
-    /// Signal and stage models of thesis chapter 6 (ERRATA-corrected) as tables.
+    /// Signal and stage models of thesis chapter 6, with its formulas corrected (docs/methods.md), as tables.
     Model(cmd::model::ModelArgs),
     /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
-    Passage(cmd::passage::PassageArgs),
+    Passage(Box<cmd::passage::PassageArgs>),
     /// Simulate a bench recording with the built-in testbed simulator (writes NAME.truth.json beside it).
     Simulate(cmd::simulate::SimulateArgs),
     /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.
     SimulateCampaign(cmd::simulate::CampaignArgs),
 }
 
+/// Exit code after SIGINT/SIGTERM/SIGHUP (128 + SIGINT, as shells report
+/// an interrupted command).
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// On SIGINT, SIGTERM or SIGHUP: stop writing, remove this run's temporary
+/// files and staging folders (a commit in progress is let finish), say so,
+/// and exit.
+fn install_interrupt_handler() {
+    let result = ctrlc::set_handler(|| {
+        let n = ballpass::fsutil::interrupt();
+        let _ = writeln!(
+            std::io::stderr(),
+            "interrupted: nothing written{}",
+            if n > 0 {
+                format!(" ({n} temporary file(s) and folder(s) removed)")
+            } else {
+                String::new()
+            }
+        );
+        std::process::exit(i32::from(EXIT_INTERRUPTED));
+    });
+    if let Err(e) = result {
+        // Without the handler an interrupt leaves temporary files, which
+        // the next run into the same folder removes.
+        let _ = writeln!(
+            std::io::stderr(),
+            "note: cannot catch interrupts ({e}); an interrupted run leaves temporary files"
+        );
+    }
+}
+
 fn main() -> ExitCode {
     malloc::keep_freed_memory();
+    install_interrupt_handler();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => cmd::demo::run(&a),
@@ -59,6 +94,11 @@ fn main() -> ExitCode {
         Command::Simulate(a) => cmd::simulate::run(&a),
         Command::SimulateCampaign(a) => cmd::simulate::run_campaign(&a),
     };
+    let result = result.and_then(|()| {
+        std::io::stdout()
+            .flush()
+            .context("writing to standard output")
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
@@ -73,7 +113,7 @@ fn main() -> ExitCode {
                     msg.push_str(&c);
                 }
             }
-            let _ = writeln!(std::io::stderr(), "{msg}");
+            let _ = writeln!(std::io::stderr(), "{}", text::line(&msg));
             ExitCode::from(1)
         }
     }

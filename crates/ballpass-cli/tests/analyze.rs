@@ -29,7 +29,7 @@ fn writes_the_four_outputs_and_a_summary() {
     assert!(stdout.contains("verdict:"), "{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("analysis.json")).unwrap()).unwrap();
-    assert_eq!(json["schema"], "ballpass.analysis/1");
+    assert_eq!(json["schema"], "ballpass.analysis/2");
     assert_eq!(json["settings"]["lowpass_hz"], 20.0);
     assert_eq!(json["spectrum_hires"]["decimation"], 4);
     // The fixture's pulses repeat every tau_c: 0.1 % covers interpolation.
@@ -45,10 +45,16 @@ fn writes_the_four_outputs_and_a_summary() {
     };
     assert_eq!(
         head("correlations.csv"),
-        "lag_s,friction,velocity_error,optical,friction__velocity_error,friction__optical,velocity_error__optical"
+        "lag_s,r_friction,r_velocity_error,r_optical,r_friction__velocity_error,r_friction__optical,r_velocity_error__optical"
     );
-    assert!(head("spectra.csv").starts_with("freq_hz,friction,velocity_error,optical,friction__velocity_error_re,friction__velocity_error_im,friction__velocity_error_coh"));
+    // Units in every header: the auto- and cross-spectra carry theirs.
+    assert!(head("spectra.csv").starts_with(
+        "freq_hz,psd_friction_n2_per_hz,psd_velocity_error_mm2_s2_per_hz,psd_optical_v2_per_hz,\
+         csd_friction__velocity_error_re_n_mm_s_per_hz,csd_friction__velocity_error_im_n_mm_s_per_hz,\
+         coh_friction__velocity_error"
+    ));
     assert_eq!(head("spectra_hires.csv"), head("spectra.csv"));
+    assert_eq!(head("spectra_unfiltered.csv"), head("spectra.csv"));
     // The report: the page and one figure per correlation, spectra, coherence.
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("ball-pass frequency found"), "report summary");
@@ -85,9 +91,11 @@ fn writes_the_four_outputs_and_a_summary() {
         names,
         [
             "analysis.json",
+            "ballpass-run.json",
             "correlations.csv",
             "spectra.csv",
-            "spectra_hires.csv"
+            "spectra_hires.csv",
+            "spectra_unfiltered.csv"
         ]
     );
     std::fs::remove_dir_all(&out).unwrap();
@@ -109,7 +117,17 @@ fn bad_input_is_a_one_line_error() {
         ),
         // 8 s at 0.5 mm/s is far less than two 16 s periods.
         (vec!["--velocity", "0.5"], "ball-pass periods"),
-        (vec![], "velocity"),
+        // Issue 18 item 5: the fixture's encoder runs at 18 mm/s.
+        (
+            vec!["--velocity", "200"],
+            "the encoder (position_mm) says the stage moves at 18.0000 mm/s, but the stated velocity is 200 mm/s",
+        ),
+        (
+            vec!["--velocity", "5000", "--force-velocity"],
+            "616.4 Hz, is at or above the Nyquist frequency 100 Hz",
+        ),
+        (vec!["--window", "hann"], "--welch-window"),
+        (vec!["--window", "20:30"], "the window 20–30 s holds 0 samples"),
     ] {
         let mut a = vec!["analyze", r, "--out", o];
         a.extend(args.iter());
@@ -146,6 +164,6 @@ fn a_missing_channel_is_a_warning_on_stderr() {
     assert!(ok, "{stderr}");
     assert!(stderr.contains("warning: optical not analysed"), "{stderr}");
     let head = std::fs::read_to_string(dir.join("correlations.csv")).unwrap();
-    assert!(head.starts_with("lag_s,friction,velocity_error,friction__velocity_error\n"));
+    assert!(head.starts_with("lag_s,r_friction,r_velocity_error,r_friction__velocity_error\n"));
     std::fs::remove_dir_all(&out).unwrap();
 }

@@ -84,6 +84,21 @@ fn sweep_and_diagnose_run_a_campaign_and_report_a_broken_record() {
     }
     let sweep_csv = std::fs::read_to_string(d.join("sw/sweep.csv")).unwrap();
     assert_eq!(sweep_csv.lines().count(), 1 + 5, "{sweep_csv}");
+    // Regression: the report's header said "ballpass sweep" without the
+    // arguments; it carries the command line and names the source.
+    let html = std::fs::read_to_string(d.join("sw/report.html")).unwrap();
+    assert!(
+        html.contains("<title>ballpass sweep: manifest.csv</title>"),
+        "report title"
+    );
+    let code = html
+        .split("<code>")
+        .nth(1)
+        .unwrap()
+        .split("</code>")
+        .next()
+        .unwrap();
+    assert!(code.contains("sweep manifest.csv --out sw"), "{code}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("sw/sweep.json")).unwrap()).unwrap();
     // tau_c ∝ 1/v on the simulator: the fitted exponent is −1 within 1 %.
@@ -168,5 +183,128 @@ fn a_folder_with_a_pattern_works_without_a_manifest_and_bad_sources_are_one_line
             r.stderr
         );
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Every file of a run folder with its bytes, sorted by path.
+fn run_files(d: &Path) -> Vec<(String, Vec<u8>)> {
+    let m = ballpass::outdir::RunManifest::read(d).expect("ballpass-run.json");
+    let mut v: Vec<(String, Vec<u8>)> = m
+        .files
+        .iter()
+        .map(|f| (f.path.clone(), std::fs::read(d.join(&f.path)).unwrap()))
+        .collect();
+    v.push((
+        "ballpass-run.json".into(),
+        std::fs::read(d.join("ballpass-run.json")).unwrap(),
+    ));
+    v.sort();
+    v
+}
+
+/// Issue 18 item 13: two identical runs write the same bytes: no
+/// `elapsed_s` (or other timing) in sweep.json or diagnosis.json.
+#[test]
+fn item13_identical_runs_write_identical_outputs() {
+    let d = scratch("item13");
+    let mut entries = Vec::new();
+    for (k, v) in [6.0, 12.0].into_iter().enumerate() {
+        entries.push(record(
+            &d,
+            &format!("v{v}.csv"),
+            "sr25w",
+            v,
+            1,
+            false,
+            k as u64,
+        ));
+        entries.push(record(
+            &d,
+            &format!("b{v}.csv"),
+            "b2",
+            v,
+            1,
+            false,
+            10 + k as u64,
+        ));
+    }
+    std::fs::write(d.join("m.csv"), manifest_csv(&entries)).unwrap();
+    for cmd in ["sweep", "diagnose"] {
+        let mut runs = Vec::new();
+        for out in ["a", "b"] {
+            let r = run_in(&d, &[cmd, "m.csv", "--out", out, "--jobs", "2"]);
+            assert!(r.ok(), "{}", r.stderr);
+            runs.push(run_files(&d.join(out)));
+        }
+        assert_eq!(runs[0].len(), runs[1].len());
+        for (a, b) in runs[0].iter().zip(&runs[1]) {
+            assert_eq!(a.0, b.0);
+            // The report quotes its command line, which names its own
+            // output folder: that one difference is expected.
+            let a_bytes = String::from_utf8_lossy(&a.1).replace("--out a ", "--out b ");
+            let b_bytes = String::from_utf8_lossy(&b.1).into_owned();
+            assert!(
+                a_bytes == b_bytes,
+                "{cmd}: {} differs between identical runs",
+                a.0
+            );
+        }
+        let json = if cmd == "sweep" {
+            "sweep.json"
+        } else {
+            "diagnosis.json"
+        };
+        let text = std::fs::read_to_string(d.join("a").join(json)).unwrap();
+        assert!(!text.contains("elapsed"), "{json}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 18 item 9: in folder mode a linked recording and a file whose
+/// name is not UTF-8 are records like the others, and what was left out
+/// is said with the reason.
+#[cfg(unix)]
+#[test]
+fn item9_folder_mode_reads_links_and_odd_names_and_says_what_it_skipped() {
+    use std::os::unix::ffi::OsStrExt;
+    let d = scratch("item9");
+    let elsewhere = d.join("store");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let src = d.join("recs");
+    std::fs::create_dir_all(&src).unwrap();
+    record(&src, "v6_r1.csv", "sr25w", 6.0, 1, false, 1);
+    record(&elsewhere, "kept.csv", "sr25w", 6.0, 2, false, 2);
+    std::os::unix::fs::symlink(elsewhere.join("kept.csv"), src.join("v6_r2.csv")).unwrap();
+    record(&elsewhere, "odd.csv", "sr25w", 6.0, 3, false, 3);
+    std::fs::rename(
+        elsewhere.join("odd.csv"),
+        src.join(std::ffi::OsStr::from_bytes(b"v6_r3\xe9.csv")),
+    )
+    .unwrap();
+    std::os::unix::fs::symlink(src.join("gone.csv"), src.join("v6_r4.csv")).unwrap();
+    let r = run_in(
+        &src,
+        &[
+            "sweep",
+            ".",
+            "--pattern",
+            "v{velocity}_r{repeat}*.csv",
+            "--out",
+            "../out",
+            "--no-report",
+        ],
+    );
+    assert!(r.ok(), "{} {}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("3 records (0 failed)"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("skipped v6_r4.csv: a broken link"),
+        "{}",
+        r.stdout
+    );
+    let json = std::fs::read_to_string(d.join("out/sweep.json")).unwrap();
+    assert!(
+        json.contains("skipped v6_r4.csv: a broken link"),
+        "selection notes"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }

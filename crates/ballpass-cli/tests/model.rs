@@ -34,12 +34,12 @@ fn pulses_writes_errata_coefficients() {
     assert!(ok, "{err}");
     assert!(out.contains("10.05%"), "{out}");
     let c = column(&d.join("gaussian_coefficients.csv"), "c_over_p");
-    // ERRATA §6 values, 5 significant digits printed.
+    // docs/methods.md §6 values, 5 significant digits printed.
     for (got, want) in c.iter().zip([0.38853, 0.24180, 0.058290, 0.0054426]) {
         assert!((got - want).abs() / want < 5e-5, "{got} vs {want}");
     }
     let a = column(&d.join("rectangular_coefficients.csv"), "a_n");
-    // ERRATA §11 a0 = 0.310, a1 = 0.26326 (truncated digits).
+    // docs/methods.md §5 a0 = 0.310, a1 = 0.26326 (truncated digits).
     assert!((a[0] - 0.310).abs() < 5e-4 && (a[1] - 0.26326).abs() < 1e-5);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("pulses.json")).unwrap()).unwrap();
@@ -86,7 +86,10 @@ fn stage_writes_bode_and_velocity_response() {
     ] {
         assert!(d.join(f).exists(), "{f}");
     }
-    let html = std::fs::read_to_string(d.join("report.html")).unwrap();
+    // (the report keeps a number and its unit together with a no-break space)
+    let html = std::fs::read_to_string(d.join("report.html"))
+        .unwrap()
+        .replace("&nbsp;", " ");
     // f_c = 1.1096 Hz, f_n = 16.6 Hz: the natural frequency is marked.
     assert!(
         html.contains("Natural frequency f_n = 16.60 Hz"),
@@ -147,7 +150,7 @@ fn signals_reports_phase_in_words() {
     ]);
     assert!(ok, "{err}");
     assert!(out.contains("ve leads F by 0.25000 s"), "{out}");
-    let r = column(&d.join("correlations.csv"), "r_fve");
+    let r = column(&d.join("correlations.csv"), "r_fve_n_mm_s");
     let tau = column(&d.join("correlations.csv"), "tau_s");
     // Eq. 7.1 default: R_Fve(τ) = +(a_f a_v/2) sin ω_c τ; rounding only.
     for (t, r) in tau.iter().zip(&r) {

@@ -2,7 +2,7 @@
 //! says what it computes: the average of the Welch spectra of the `M`
 //! polyphase components of a signal.
 //!
-//! **Offered only to reproduce the thesis' figures.** As ERRATA §10 shows,
+//! **Offered only to reproduce the thesis' figures.** As docs/methods.md §10 shows,
 //! taking every `M`-th sample without an anti-alias filter folds all power
 //! above `fs / (2M)` into the band (a 60 Hz hum at 1 kHz with `M = 20`
 //! lands at 10 Hz), and averaging over the `M` phases cancels the alias
@@ -54,7 +54,7 @@ fn check_decimation(decimation: usize, n: usize) -> Result<()> {
 ///
 /// Frequencies run to `fs / (2M)` with bin spacing `fs / (M nfft)`.
 /// `n_segments` is the per-branch segment count, which is the number of
-/// (roughly) independent averages: see ERRATA §10 and the module docs —
+/// (roughly) independent averages: see docs/methods.md §10 and the module docs —
 /// this estimate **aliases**, adds the folded power of everything above
 /// `fs / (2M)`, and does not gain `M`-fold averaging. It exists only to
 /// reproduce the thesis (Figs. 63, 65, 68).
@@ -107,7 +107,7 @@ pub fn polyphase_average_psd(
 /// branches of the Welch CSDs `conj(X_i) Y_i` of `x_i[k] = x[M k + i]` and
 /// `y_i[k] = y[M k + i]`, each at `fs_hz / M`.
 ///
-/// Same construction, caveats and ERRATA §10 warning as
+/// Same construction, caveats and docs/methods.md §10 warning as
 /// [`polyphase_average_psd`]; offered only to reproduce the thesis.
 ///
 /// # Errors

@@ -84,6 +84,14 @@ pub enum Error {
         /// What was found instead, with the threshold.
         reason: String,
     },
+    /// Another process is writing the output folder (it holds its lock).
+    #[error("{}: in use by {holder}; wait for it to finish or choose another output folder", path.display())]
+    OutputInUse {
+        /// The output folder.
+        path: PathBuf,
+        /// Who holds it (`another ballpass run (pid 1234)`).
+        holder: String,
+    },
     /// A kernel of `ballpass-dsp` rejected its input.
     #[error("{context}: {source}")]
     Dsp {

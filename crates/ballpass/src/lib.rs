@@ -13,6 +13,7 @@ pub mod demo;
 pub mod error;
 pub mod fsutil;
 pub mod model;
+pub mod outdir;
 pub mod recording;
 pub mod report;
 pub mod sim;

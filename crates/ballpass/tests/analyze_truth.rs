@@ -66,7 +66,7 @@ fn f_c_and_optical_lag_match_the_truth_from_1_to_20_mm_s() {
         );
         // f_c: within 1 % of the rate the balls really passed at in the
         // (first) record; the long-run rate can differ by more over a few
-        // passages because the ball gaps are random (ERRATA §1).
+        // passages because the ball gaps are random (docs/methods.md §1).
         let (f_err, lag_err) = errors(&a, &sims[0]);
         eprintln!(
             "v = {v} mm/s ({repeats} record(s)): f_c {:+.3} %, lag {lag_err:+.4} tau_c",
@@ -191,4 +191,37 @@ fn analysis_carries_the_passage_summary() {
     let a = ballpass::analysis::analyze(&[no_optical], &pred, &Default::default()).unwrap();
     assert_eq!(a.passages[0].count, None);
     assert_eq!(a.passages[0].note.as_deref(), Some("no optical channel"));
+}
+
+/// Regression: `analyze` of repeats printed the first record's
+/// velocity-error std as the result (91.1 µm/s where the five records' mean
+/// was 97.8). The result is the mean over the records of each record's
+/// statistics, as the sweep and the thesis' Fig. 29 average them.
+#[test]
+fn repeats_give_the_mean_velocity_error_over_the_records() {
+    let sims: Vec<Simulation> = (0..3).map(|k| sim(9.0, Condition::Good, 700 + k)).collect();
+    let each: Vec<_> = sims
+        .iter()
+        .map(|s| run(std::slice::from_ref(s)).velocity_error.unwrap())
+        .collect();
+    let all = run(&sims).velocity_error.unwrap();
+    let n = each.len() as f64;
+    let mean =
+        |f: fn(&ballpass::analysis::VelocityErrorStats) -> f64| each.iter().map(f).sum::<f64>() / n;
+    // The same per-record numbers summed in the same order: equal to a few ulp.
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    assert!(close(all.std_um_s, mean(|v| v.std_um_s)), "{all:?}");
+    assert!(close(
+        all.lowpassed_std_um_s,
+        mean(|v| v.lowpassed_std_um_s)
+    ));
+    assert!(close(all.rms_um_s, mean(|v| v.rms_um_s)));
+    assert_eq!(all.records, 3);
+    // The records differ, so the first one's value is not the mean.
+    assert!((all.std_um_s - each[0].std_um_s).abs() > 0.1, "{each:?}");
+    let stds: Vec<f64> = each.iter().map(|v| v.std_um_s).collect();
+    let spread = ballpass::stats::MeanStd::of(&stds).unwrap().std;
+    assert!(close(all.std_spread_um_s.unwrap(), spread));
+    assert_eq!(each[0].records, 1);
+    assert_eq!(each[0].std_spread_um_s, None);
 }

@@ -1,5 +1,5 @@
 //! The simulator held to the physics it must obey (issue "testbed
-//! simulator", thesis chs. 1, 4, 5, 6; ERRATA §1–3).
+//! simulator", thesis chs. 1, 4, 5, 6; docs/methods.md §1–3).
 
 use ballpass::bearing::lookup;
 use ballpass::recording::Channel;
@@ -114,7 +114,7 @@ fn passage_intervals_vary_with_the_spacings() {
     }
     let min = iv.iter().cloned().fold(f64::INFINITY, f64::min);
     let max = iv.iter().cloned().fold(0.0, f64::max);
-    // Spacings lie in d..d+d_ext = 4..6 mm (ERRATA §1).
+    // Spacings lie in d..d+d_ext = 4..6 mm (docs/methods.md §1).
     assert!(min >= 4.0 / v2 * 0.97 && max <= 6.0 / v2 * 1.03);
     assert!(
         max - min > 0.01 * t.tau_c_s,
@@ -173,7 +173,7 @@ fn stage_velocity_response_matches_g_vf() {
         let dphi = wrap_deg((phase - hphase).to_degrees());
         assert!(dphi.abs() < 0.01, "f {f}: phase off by {dphi}°");
     }
-    // |G_vf| peaks at omega_n with 1/(K K_D) (ERRATA §3).
+    // |G_vf| peaks at omega_n with 1/(K K_D) (docs/methods.md §3).
     let (re, im) = st.g_vf(st.omega_n_rad_s());
     assert!((re * st.kkd_n_s_per_m - 1.0).abs() < 1e-12 && im.abs() < 1e-12);
 }
@@ -206,7 +206,7 @@ fn constant_friction_gives_steady_offset_and_no_velocity_error() {
     // offset the encoder-derived velocity has no error at all.
     assert!(sim.truth.velocity_error_std_mm_s < 1e-9);
     // At a speed that is not a whole number of steps a sample, the encoder
-    // alone gives about q/(T sqrt(24)) = 20.4 µm/s (ERRATA §2); the pattern
+    // alone gives about q/(T sqrt(24)) = 20.4 µm/s (docs/methods.md §2); the pattern
     // is deterministic, not random, so allow 15 %.
     let t = run(&quiet(9.0123)).truth;
     assert!(t.velocity_error_true_std_mm_s < 1e-9);

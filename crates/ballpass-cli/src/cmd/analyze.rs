@@ -2,17 +2,20 @@
 //! one recording or several repeats at one velocity (thesis ch. 4 and 7).
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use ballpass::analysis::preflight::{self, VelocitySource};
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
 };
-use ballpass::recording;
+use ballpass::recording::segment::Window;
+use ballpass::recording::Recording;
 use clap::{Args, ValueEnum};
-use rayon::prelude::*;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
+use crate::records::{self, CheckArgs, SegmentArgs};
+use crate::{output, text};
 
 /// Trend removal choices.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -42,15 +45,20 @@ enum WindowArg {
 /// Arguments of `ballpass analyze`.
 #[derive(Debug, Args)]
 pub struct AnalyzeArgs {
-    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF .mf4; several files (or the pieces of
-    /// --split-gaps) are repeats at one velocity and are averaged.
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF
+    /// .mf4; several files (or the pieces of --split-gaps) are repeats at one
+    /// velocity and are averaged. The velocity is --velocity, else the
+    /// files' (profile, metadata), else measured from the encoder; with
+    /// --segment, each speed's plateaus are analysed into DIR/v<speed>/.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
     #[command(flatten)]
     load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
-    /// spectra_hires.csv.
-    #[arg(long, value_name = "DIR")]
+    /// spectra_hires.csv, spectra_unfiltered.csv, the report and
+    /// ballpass-run.json (written last: the folder holds a complete run
+    /// exactly when it is there).
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Seconds dropped at the start of each record (start transient) [default: 0].
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -73,14 +81,14 @@ pub struct AnalyzeArgs {
     /// Full-range Welch overlap (default: half a segment).
     #[arg(long, value_name = "N")]
     noverlap: Option<usize>,
-    /// Welch window [default: hann].
-    #[arg(long, value_enum)]
-    window: Option<WindowArg>,
+    /// Welch window [default: hann] (`--window` is the time window).
+    #[arg(long = "welch-window", value_enum, value_name = "WINDOW")]
+    welch_window: Option<WindowArg>,
     /// Correlation normalisation [default: coeff].
     #[arg(long, value_enum)]
     corr_norm: Option<CorrNormArg>,
     /// High-resolution spectrum by the thesis' zoom processing with factor M
-    /// (polyphase average; aliases, see ERRATA §10) instead of decimation.
+    /// (polyphase average; it aliases, see docs/methods.md §10) instead of decimation.
     #[arg(long, value_name = "M")]
     zoom: Option<usize>,
     /// High-resolution decimation factor (default floor(fs / (2.5 lowpass))).
@@ -103,6 +111,10 @@ pub struct AnalyzeArgs {
     /// Print analysis.json to stdout instead of the summary.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    check: CheckArgs,
+    #[command(flatten)]
+    segment: SegmentArgs,
 }
 
 impl AnalyzeArgs {
@@ -154,7 +166,7 @@ impl AnalyzeArgs {
         if self.noverlap.is_some() {
             s.noverlap = self.noverlap;
         }
-        if let Some(v) = self.window {
+        if let Some(v) = self.welch_window {
             s.window = match v {
                 WindowArg::Hann => WindowKind::Hann,
                 WindowArg::Hamming => WindowKind::Hamming,
@@ -196,65 +208,203 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     }
     let bearing_name = opts.bearing.clone().unwrap_or_default();
     let geometry = opts.geometry.expect("options() resolves the bearing");
-    // Repeats are read in parallel; the first failure in argument order is
-    // the one reported.
-    let recs = a
-        .recs
-        .par_iter()
-        .map(|p| recording::load_all(p, &opts).with_context(|| format!("loading {}", p.display())))
-        .collect::<Vec<_>>()
-        .into_iter()
-        .collect::<Result<Vec<_>>>()?
-        .into_iter()
-        .flatten()
-        .collect::<Vec<_>>();
-    let velocity = match a.load.velocity {
-        Some(v) => v,
-        None => {
-            let vs: Vec<f64> = recs.iter().filter_map(|r| r.meta.velocity_mm_s).collect();
-            match vs.first() {
-                Some(&v) if vs.len() == recs.len() && vs.iter().all(|&w| w == v) => v,
-                Some(_) => bail!(
-                    "the recordings' metadata disagree on the velocity or lack it; give --velocity"
-                ),
-                None => bail!("no velocity: give --velocity V (mm/s)"),
+    let out = output::open_dir(&a.out, "analyze")?;
+    let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
+    let window = a.load.window.parsed()?;
+    let ctx = Ctx {
+        a,
+        settings: &settings,
+        geometry,
+        window,
+    };
+    let mut done = Vec::new();
+    if a.segment.segment {
+        let (found, parts) = records::segment_all(&recs)?;
+        drop(recs);
+        let tolerance = a.check.preflight().velocity_tolerance;
+        let mut groups = records::group_by_speed(parts, tolerance);
+        if let Some(v) = a.load.velocity {
+            let speeds: Vec<String> = groups.iter().map(|(s, _)| format!("{s:.2}")).collect();
+            groups.retain(|(s, _)| (s - v).abs() <= tolerance * v);
+            if groups.is_empty() {
+                bail!(
+                    "no plateau at {v} mm/s (within {:.0} %); the plateaus run at {} mm/s",
+                    100.0 * tolerance,
+                    speeds.join(", ")
+                );
             }
         }
-    };
-    let prediction = geometry.predict(velocity, settings.harmonics)?;
-    let analysis = analysis::analyze(&recs, &prediction, &settings)?;
-    {
-        let mut err = std::io::stderr().lock();
-        for w in &analysis.warnings {
-            writeln!(err, "warning: {w}")?;
+        output::write_json(
+            &out.path().join("segments.json"),
+            &serde_json::json!({
+                "schema": "ballpass.segments/1",
+                "version": ballpass::VERSION,
+                "settings": ballpass::recording::segment::SegmentSettings::default(),
+                "records": found,
+                "groups": groups.iter().map(|(s, r)| serde_json::json!({
+                    "speed_mm_s": s,
+                    "folder": group_dir(*s),
+                    "plateaus": r.iter().map(|x| x.source_name()).collect::<Vec<_>>(),
+                })).collect::<Vec<_>>(),
+            }),
+        )?;
+        for (speed, recs) in groups {
+            let dir = out.path().join(group_dir(speed));
+            let analysis = ctx.analyze(recs, None, &dir)?;
+            done.push((Some(group_dir(speed)), analysis));
         }
+    } else {
+        let stated = stated_velocity(a.load.velocity, &recs)?;
+        let analysis = ctx.analyze(recs, stated, out.path())?;
+        done.push((None, analysis));
     }
-    analysis::write_outputs(&analysis, &a.out)?;
-    if !a.report.no_report {
-        let report = ballpass::report::analysis::report(&analysis, recs.first())?
-            .with_command(command_line());
-        a.report.write(&report, &a.out)?;
-    }
-    let mut out = std::io::stdout().lock();
+    let dir = output::commit(out)?;
+    let mut out = output::stdout();
     if a.json {
-        serde_json::to_writer_pretty(&mut out, &analysis)?;
+        if let [(_, (one, _))] = done.as_slice() {
+            serde_json::to_writer_pretty(&mut out, one)?;
+        } else {
+            let all: Vec<&Analysis> = done.iter().map(|(_, (x, _))| x).collect();
+            serde_json::to_writer_pretty(&mut out, &all)?;
+        }
         writeln!(out)?;
     } else {
-        summary(&mut out, &analysis, &bearing_name)?;
-        writeln!(out, "wrote {}", a.out.display())?;
+        for (k, (sub, (analysis, source))) in done.iter().enumerate() {
+            if k > 0 {
+                writeln!(out)?;
+            }
+            if let Some(sub) = sub {
+                writeln!(out, "{sub}/:")?;
+            }
+            summary(&mut out, analysis, &bearing_name, *source)?;
+        }
+        writeln!(out, "wrote {}", text::path(&dir))?;
     }
+    out.flush()?;
     Ok(())
 }
 
-fn summary<W: Write>(w: &mut W, a: &Analysis, bearing: &str) -> std::io::Result<()> {
+/// What every analysis of one run shares.
+struct Ctx<'a> {
+    a: &'a AnalyzeArgs,
+    settings: &'a AnalyzeSettings,
+    geometry: ballpass::bearing::Geometry,
+    window: Option<Window>,
+}
+
+impl Ctx<'_> {
+    /// Checks, analyses and writes one set of repeats into `dir` (staged).
+    fn analyze(
+        &self,
+        recs: Vec<Recording>,
+        stated: Option<f64>,
+        dir: &Path,
+    ) -> Result<(Analysis, VelocitySource)> {
+        let a = self.a;
+        let checked = preflight::check(recs, stated, &self.geometry, &a.check.preflight())?;
+        records::check_memory(
+            &checked.recordings,
+            !a.report.no_report,
+            "analyse a part with --window T0:T1 (and --no-report saves about half)",
+        )?;
+        let prediction = self
+            .geometry
+            .predict(checked.velocity_mm_s, self.settings.harmonics)?;
+        let mut analysis = analysis::analyze(&checked.recordings, &prediction, self.settings)?;
+        analysis
+            .warnings
+            .splice(0..0, checked.warnings.iter().cloned());
+        let mut operations = Vec::new();
+        if let Some(w) = &self.window {
+            operations.push(("window".to_string(), w.describe()));
+            analysis.method_notes.push(format!(
+                "window {} of each record (its time axis); inputs are named with it",
+                w.describe()
+            ));
+        }
+        operations.push((
+            "velocity".to_string(),
+            format!(
+                "{:.4} mm/s, {}",
+                checked.velocity_mm_s,
+                checked.velocity_source.words()
+            ),
+        ));
+        analysis.method_notes.extend(checked.notes.iter().cloned());
+        {
+            let mut err = std::io::stderr().lock();
+            for n in &checked.notes {
+                writeln!(err, "note: {}", text::line(n))?;
+            }
+            for w in &analysis.warnings {
+                writeln!(err, "warning: {}", text::line(w))?;
+            }
+        }
+        analysis::write_outputs(&analysis, dir)?;
+        if !a.report.no_report {
+            let links = ballpass::report::analysis::AnalysisLinks {
+                tables_dir: String::new(),
+                recording: checked
+                    .recordings
+                    .first()
+                    .and_then(|r| r.meta.source.as_ref())
+                    .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone()))
+                    .map(|p| p.display().to_string()),
+                id_prefix: String::new(),
+            };
+            let report =
+                ballpass::report::analysis::report(&analysis, checked.recordings.first(), &links)?
+                    .with_command(command_line())
+                    .with_section(
+                        ballpass::report::Section::new("Record operations")
+                            .with(ballpass::report::Block::KeyValues(operations)),
+                    );
+            a.report.write(&report, dir)?;
+        }
+        Ok((analysis, checked.velocity_source))
+    }
+}
+
+/// The stated velocity: the flag, else the records' metadata when they
+/// all agree; `None` (measured from the encoder) when none has one.
+fn stated_velocity(flag: Option<f64>, recs: &[Recording]) -> Result<Option<f64>> {
+    if flag.is_some() {
+        return Ok(flag);
+    }
+    let vs: Vec<f64> = recs.iter().filter_map(|r| r.meta.velocity_mm_s).collect();
+    match vs.first() {
+        None => Ok(None),
+        Some(&v) if vs.len() == recs.len() && vs.iter().all(|&w| w == v) => Ok(Some(v)),
+        Some(_) => {
+            bail!("the recordings' metadata disagree on the velocity or lack it; give --velocity")
+        }
+    }
+}
+
+/// The folder of one speed's plateaus: `v` and the speed to three
+/// significant digits (`v42.0`, `v125`, `v0.106`).
+fn group_dir(speed: f64) -> String {
+    let digits = (2 - speed.abs().log10().floor() as i32).max(0) as usize;
+    format!("v{speed:.digits$}")
+}
+
+fn summary<W: Write>(
+    w: &mut W,
+    a: &Analysis,
+    bearing: &str,
+    source: VelocitySource,
+) -> std::io::Result<()> {
     let p = &a.prediction;
+    let velocity = match source {
+        VelocitySource::Stated => format!("{} mm/s", p.velocity_mm_s),
+        VelocitySource::Measured => format!("{:.4} mm/s (measured)", p.velocity_mm_s),
+    };
     writeln!(
         w,
-        "{} record(s), {:.2} s at {} Hz, {bearing} at {} mm/s ({:.1} periods)",
+        "{} record(s), {:.2} s at {} Hz, {bearing} at {velocity} ({:.1} periods)",
         a.inputs.len(),
         a.duration_analysed_s,
         a.fs_hz,
-        p.velocity_mm_s,
         a.periods_in_record
     )?;
     write!(
@@ -305,9 +455,13 @@ fn summary<W: Write>(w: &mut W, a: &Analysis, bearing: &str) -> std::io::Result<
         writeln!(w)?;
     }
     if let Some(v) = &a.velocity_error {
+        let of = match v.std_spread_um_s {
+            Some(sd) => format!(" ± {sd:.1} (mean of {} records ± their spread)", v.records),
+            None => String::new(),
+        };
         writeln!(
             w,
-            "velocity error std {:.1} µm/s (low-passed {:.1}, quantisation floor {:.1})",
+            "velocity error std {:.1}{of} µm/s (low-passed {:.1}, quantisation floor {:.1})",
             v.std_um_s, v.lowpassed_std_um_s, v.quantisation_floor_um_s
         )?;
     }

@@ -1,8 +1,10 @@
 //! `ballpass sweep` and `ballpass diagnose`: campaigns over many recordings.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
+
+use ballpass::outdir::OutputDir;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -21,20 +23,24 @@ use ballpass::report::{Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
-use crate::args::{LoadArgs, ReportArgs};
+use crate::args::{command_line, LoadArgs, ReportArgs};
+use crate::records::CheckArgs;
+use crate::{output, text};
 
 /// Arguments shared by `sweep` and `diagnose`.
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
     /// A manifest CSV (path, bearing, velocity_mm_s, repeat[, condition, notes]),
-    /// or a folder of recordings together with --pattern.
+    /// or a folder of recordings together with --pattern. Recordings may be
+    /// CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF .mf4.
     source: PathBuf,
     /// File-name pattern inside the folder: `*` matches anything, `{velocity}`,
     /// `{repeat}`, `{bearing}` capture fields (e.g. `v{velocity}_r{repeat}.csv`).
-    #[arg(long)]
+    #[arg(long, value_name = "PATTERN")]
     pattern: Option<String>,
-    /// Output folder.
-    #[arg(long)]
+    /// Output folder for records.csv, the command's tables and JSON, and the
+    /// report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Use only these bearings (repeatable).
     #[arg(long = "only-bearing", value_name = "NAME")]
@@ -43,18 +49,20 @@ pub struct CampaignArgs {
     #[arg(long = "only-velocity", value_name = "MM/S")]
     only_velocity: Vec<f64>,
     /// Butterworth low-pass of the analysis, Hz.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, value_name = "HZ")]
     lowpass: f64,
     /// Harmonics k·f_c examined.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_name = "K")]
     harmonics: usize,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     jobs: Option<usize>,
     #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
     load: LoadArgs,
+    #[command(flatten)]
+    check: CheckArgs,
 }
 
 /// Arguments of `ballpass diagnose`.
@@ -63,19 +71,19 @@ pub struct DiagnoseArgs {
     #[command(flatten)]
     common: CampaignArgs,
     /// Low-band edge, Hz.
-    #[arg(long, default_value_t = 25.0)]
+    #[arg(long, default_value_t = 25.0, value_name = "HZ")]
     low_band: f64,
     /// Low-band power over the batch median that makes a bearing bad.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_name = "X")]
     bad_ratio: f64,
     /// Low-band power over the batch median that makes a bearing suspect.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_name = "X")]
     suspect_ratio: f64,
     /// A sticking spike stands this many robust σ above the friction baseline.
-    #[arg(long, default_value_t = 8.0)]
+    #[arg(long, default_value_t = 8.0, value_name = "X")]
     spike_factor: f64,
     /// Spikes per record (at ball-pass multiples) that make a bearing bad.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_name = "N")]
     bad_spikes: f64,
 }
 
@@ -85,7 +93,10 @@ struct Batch {
     entries: Vec<ManifestEntry>,
     outcome: BatchOutcome<RecordResult>,
     notes: Vec<String>,
+    /// Wall time of the batch, s: printed, never written (outputs are the
+    /// same bytes for the same inputs).
     seconds: f64,
+    out: OutputDir,
 }
 
 fn read_source(a: &CampaignArgs) -> Result<Manifest> {
@@ -117,20 +128,43 @@ fn settings(
     a: &CampaignArgs,
     low_band_hz: f64,
     sticking: ballpass::campaign::sticking::StickingSettings,
-) -> CampaignSettings {
+) -> Result<CampaignSettings> {
     let mut s = CampaignSettings::default();
     s.analyze.lowpass_hz = Some(a.lowpass);
     s.analyze.harmonics = a.harmonics;
     s.low_band_hz = low_band_hz;
     s.sticking = sticking;
-    s
+    s.preflight = a.check.preflight();
+    s.window = a.load.window.parsed()?;
+    Ok(s)
+}
+
+/// What folder mode left out, as selection notes: each entry that matched
+/// but is no readable file by name, the names that do not match counted.
+fn skipped_notes(m: &Manifest) -> Vec<String> {
+    let mut notes: Vec<String> = m
+        .skipped
+        .iter()
+        .filter(|s| !s.reason.starts_with("does not match"))
+        .map(|s| format!("skipped {}: {}", s.name, s.reason))
+        .collect();
+    let unmatched = m.skipped.len() - notes.len();
+    if unmatched > 0 {
+        notes.push(format!(
+            "{unmatched} other entr{} of the folder do not match the pattern",
+            if unmatched == 1 { "y" } else { "ies" }
+        ));
+    }
+    notes
 }
 
 fn run(
     a: &CampaignArgs,
+    command: &str,
     pick: impl Fn(&Manifest) -> (Vec<ManifestEntry>, Vec<String>),
     settings: &CampaignSettings,
 ) -> Result<Batch> {
+    let out = output::open_dir(&a.out, command)?;
     let manifest = read_source(a)?;
     let (mut entries, mut notes) = if a.only_bearing.is_empty() && a.only_velocity.is_empty() {
         pick(&manifest)
@@ -145,6 +179,7 @@ fn run(
         entries.retain(|e| a.only_velocity.contains(&e.velocity_mm_s));
         notes.push(format!("only velocities {:?} mm/s", a.only_velocity));
     }
+    notes.extend(skipped_notes(&manifest));
     if entries.is_empty() {
         bail!(
             "{}: no recording left after the selection",
@@ -156,16 +191,7 @@ fn run(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs.unwrap_or(0))
         .build()?;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(entries.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} records  {elapsed}  eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = crate::output::progress(entries.len(), "records");
     let t0 = Instant::now();
     let outcome = pool.install(|| {
         run_batch(
@@ -187,6 +213,7 @@ fn run(
         outcome,
         notes,
         seconds: t0.elapsed().as_secs_f64(),
+        out,
     })
 }
 
@@ -269,7 +296,6 @@ struct CampaignJson<'a, T: Serialize> {
     failed: Vec<export::Failure>,
     selection: &'a [String],
     settings: &'a CampaignSettings,
-    elapsed_s: f64,
     result: &'a T,
     record_results: Vec<&'a RecordResult>,
 }
@@ -282,7 +308,8 @@ fn campaign_report(
     parts: ReportParts,
     settings: &CampaignSettings,
 ) -> Result<Report> {
-    let mut report = Report::new(title).with_command(title);
+    let mut report = Report::new(format!("{title}: {}", b.manifest.source.display()))
+        .with_command(command_line());
     let mut inputs = vec![
         (
             "source".to_string(),
@@ -341,19 +368,18 @@ fn finish<T: Serialize>(
     ok: &[&RecordResult],
     o: Outputs<'_, T>,
     parts: impl FnOnce() -> Result<ReportParts>,
-) -> Result<()> {
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
+) -> Result<(Option<PathBuf>, Vec<String>)> {
+    let staged = b.out.path();
     export::write_text(
-        &a.out,
+        staged,
         "records.csv",
         &export::records_csv(&b.outcome, a.harmonics),
     )?;
     for (name, text) in &o.tables {
-        export::write_text(&a.out, name, text)?;
+        export::write_text(staged, name, text)?;
     }
     export::write_json(
-        &a.out,
+        staged,
         o.json_name,
         &CampaignJson {
             schema: o.schema,
@@ -363,7 +389,6 @@ fn finish<T: Serialize>(
             failed: export::failures(&b.outcome),
             selection: &b.notes,
             settings,
-            elapsed_s: b.seconds,
             result: o.result,
             record_results: ok.to_vec(),
         },
@@ -372,47 +397,52 @@ fn finish<T: Serialize>(
         None
     } else {
         let report = campaign_report(o.title, b, parts()?, settings)?;
-        a.report.write(&report, &a.out)?
+        a.report.write(&report, staged)?
     };
-    let mut out = std::io::stdout().lock();
+    Ok((report.map(|r| b.out.final_path(&r.html)), o.summary))
+}
+
+/// Commits the outputs, prints the summary, and fails when a record failed.
+fn conclude(b: Batch, html: Option<PathBuf>, summary: Vec<String>) -> Result<()> {
+    let Batch {
+        manifest: _,
+        entries,
+        outcome,
+        notes,
+        seconds,
+        out,
+    } = b;
+    let dir = output::commit(out)?;
+    let mut out = output::stdout();
     writeln!(
         out,
-        "{} records ({} failed) in {:.2} s",
-        b.entries.len(),
-        b.outcome.n_failed(),
-        b.seconds
+        "{} records ({} failed) in {seconds:.2} s",
+        entries.len(),
+        outcome.n_failed(),
     )?;
-    for n in &b.notes {
-        writeln!(out, "  {n}")?;
+    for n in &notes {
+        writeln!(out, "  {}", text::line(n))?;
     }
-    for line in &o.summary {
-        writeln!(out, "{line}")?;
+    for line in &summary {
+        writeln!(out, "{}", text::line(line))?;
     }
-    summary_failures(b, &mut out)?;
+    for (e, why) in outcome.failed() {
+        let l = format!("{}: {why}", e.path.display());
+        writeln!(out, "  failed: {}", text::line(&l))?;
+    }
     writeln!(
         out,
         "wrote {}{}",
-        a.out.display(),
-        report
-            .map(|r| format!(" (open {})", r.html.display()))
+        text::path(&dir),
+        html.map(|h| format!(" (open {})", text::path(&h)))
             .unwrap_or_default()
     )?;
-    exit_status(b)
-}
-
-fn summary_failures(b: &Batch, out: &mut impl Write) -> Result<()> {
-    for (e, why) in b.outcome.failed() {
-        writeln!(out, "  failed: {}: {why}", e.path.display())?;
-    }
-    Ok(())
-}
-
-fn exit_status(b: &Batch) -> Result<()> {
-    let n = b.outcome.n_failed();
+    out.flush()?;
+    let n = outcome.n_failed();
     if n > 0 {
         bail!(
             "{n} of {} records failed (listed above and in the outputs)",
-            b.entries.len()
+            entries.len()
         );
     }
     Ok(())
@@ -420,8 +450,8 @@ fn exit_status(b: &Batch) -> Result<()> {
 
 /// Runs `ballpass sweep`.
 pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
-    let settings = settings(a, 25.0, Default::default());
-    let b = run(a, pick_sweep, &settings)?;
+    let settings = settings(a, 25.0, Default::default())?;
+    let b = run(a, "sweep", pick_sweep, &settings)?;
     let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
     let load = a.load.options()?;
     let geometry = geometry_for(
@@ -429,7 +459,7 @@ pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
         load.geometry.context("no geometry")?,
     );
     let s = sweep(&ok, Some(geometry.d_avg_mm()));
-    finish(
+    let (html, summary) = finish(
         a,
         &b,
         &settings,
@@ -442,8 +472,10 @@ pub fn run_sweep(a: &CampaignArgs) -> Result<()> {
             result: &s,
             summary: s.findings.clone(),
         },
-        || Ok(sweep_parts(&s, "")?),
-    )
+        || Ok(sweep_parts(&s, "", "")?),
+    )?;
+    drop(ok);
+    conclude(b, html, summary)
 }
 
 /// Runs `ballpass diagnose`.
@@ -460,8 +492,8 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         },
         ..Default::default()
     };
-    let settings = settings(c, ds.low_band_hz, ds.sticking.clone());
-    let b = run(c, pick_diagnose, &settings)?;
+    let settings = settings(c, ds.low_band_hz, ds.sticking.clone())?;
+    let b = run(c, "diagnose", pick_diagnose, &settings)?;
     let ok: Vec<&RecordResult> = b.outcome.ok().map(|(_, r)| r).collect();
     let d = diagnose(&ok, &ds);
     let summary = d
@@ -477,7 +509,7 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
             )
         })
         .collect();
-    finish(
+    let (html, summary) = finish(
         c,
         &b,
         &settings,
@@ -496,9 +528,11 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         || {
             let f_c = ok.first().map(|r| r.f_c_predicted_hz);
             let examples = examples(&d, &b.entries, c)?;
-            Ok(diagnosis_parts(&d, f_c, &examples, "")?)
+            Ok(diagnosis_parts(&d, f_c, &examples, "", "")?)
         },
-    )
+    )?;
+    drop(ok);
+    conclude(b, html, summary)
 }
 
 /// Re-reads, for the report only, the first record of the best and the
@@ -511,6 +545,7 @@ fn examples(
     let load = a.load.options()?;
     Ok(friction_examples(d, |bearing| {
         let e = entries.iter().find(|e| e.bearing == bearing)?;
-        ballpass::recording::load(&e.path, &load).ok()
+        let rec = ballpass::recording::load(&e.path, &load).ok()?;
+        a.load.window.apply(rec).ok()
     }))
 }

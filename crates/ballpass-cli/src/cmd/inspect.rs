@@ -5,12 +5,16 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Result};
-use ballpass::recording::inspect::{inspect_file, InspectSettings, Inspection, Severity};
+use ballpass::recording::inspect::{inspect, inspect_file, InspectSettings, Inspection, Severity};
 use ballpass::recording::io::contents;
+use ballpass::recording::load;
+use ballpass::recording::segment::{self, Plateau, SegmentSettings, Window};
 use clap::Args;
 use serde::Serialize;
 
 use crate::args::LoadArgs;
+use crate::records::SegmentArgs;
+use crate::{output, text};
 
 /// Arguments of `ballpass inspect`.
 #[derive(Debug, Args)]
@@ -26,6 +30,8 @@ pub struct InspectArgs {
     /// Print JSON for a program instead of text for a person.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    segment: SegmentArgs,
 }
 
 /// Most items of a file listed.
@@ -46,6 +52,9 @@ struct FileReport {
     contents: Vec<Item>,
     #[serde(skip_serializing_if = "Option::is_none")]
     inspection: Option<Inspection>,
+    /// With --segment: the constant-velocity plateaus from the encoder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    plateaus: Option<Vec<Plateau>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     error: Option<String>,
 }
@@ -55,6 +64,8 @@ struct Output<'a> {
     schema: &'static str,
     version: &'static str,
     settings: InspectSettings,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    window: Option<Window>,
     files: &'a [FileReport],
 }
 
@@ -64,40 +75,62 @@ pub fn run(a: &InspectArgs) -> Result<()> {
     let settings = InspectSettings::default();
     let mut reports = Vec::new();
     let mut first_error = None;
+    let window = a.load.window.parsed()?;
     for path in &a.files {
-        let listing: Vec<Item> = contents(path, &opts, CONTENTS_LIMIT)
-            .unwrap_or_default()
-            .into_iter()
-            .map(|(name, what)| Item { name, what })
-            .collect();
-        match inspect_file(path, &opts, &settings) {
-            Ok(inspection) => reports.push(FileReport {
+        let listing = || -> Vec<Item> {
+            contents(path, &opts, CONTENTS_LIMIT)
+                .unwrap_or_default()
+                .into_iter()
+                .map(|(name, what)| Item { name, what })
+                .collect()
+        };
+        let one = || -> Result<FileReport> {
+            // The file as it is, gaps reported rather than refused; with a
+            // window or plateaus, the record as the analyses load it.
+            let (inspection, plateaus) = if window.is_none() && !a.segment.segment {
+                (inspect_file(path, &opts, &settings)?, None)
+            } else {
+                let rec = a.load.window.apply(load(path, &opts)?)?;
+                let plateaus = if a.segment.segment {
+                    Some(segment::plateaus(&rec, &SegmentSettings::default())?)
+                } else {
+                    None
+                };
+                (inspect(&rec, opts.geometry.as_ref(), &settings), plateaus)
+            };
+            Ok(FileReport {
                 path: path.clone(),
-                contents: listing,
+                contents: listing(),
                 inspection: Some(inspection),
+                plateaus,
                 error: None,
-            }),
+            })
+        };
+        match one() {
+            Ok(r) => reports.push(r),
             Err(e) => {
                 let msg = e.to_string();
                 if a.files.len() > 1 {
-                    eprintln!("error: {msg}");
+                    eprintln!("error: {}", text::line(&msg));
                 }
                 first_error.get_or_insert_with(|| msg.clone());
                 reports.push(FileReport {
                     path: path.clone(),
-                    contents: listing,
+                    contents: listing(),
                     inspection: None,
+                    plateaus: None,
                     error: Some(msg),
                 });
             }
         }
     }
-    let mut out = std::io::stdout().lock();
+    let mut out = output::stdout();
     if a.json {
         let o = Output {
             schema: "ballpass.inspect/1",
             version: ballpass::VERSION,
             settings,
+            window,
             files: &reports,
         };
         serde_json::to_writer_pretty(&mut out, &o)?;
@@ -109,15 +142,21 @@ pub fn run(a: &InspectArgs) -> Result<()> {
             }
             match &r.inspection {
                 Some(i) => print_text(&mut out, i)?,
-                None if !r.contents.is_empty() => {
-                    writeln!(out, "{}", ballpass::error::shown_path(&r.path))?
-                }
+                None if !r.contents.is_empty() => writeln!(out, "{}", text::path(&r.path))?,
                 None => {}
+            }
+            if let Some(p) = &r.plateaus {
+                print_plateaus(&mut out, p)?;
             }
             if !r.contents.is_empty() {
                 writeln!(out, "  holds:")?;
                 for it in &r.contents {
-                    writeln!(out, "    {:<40} {}", it.name, it.what)?;
+                    writeln!(
+                        out,
+                        "    {:<40} {}",
+                        text::line(&it.name),
+                        text::line(&it.what)
+                    )?;
                 }
             }
         }
@@ -134,8 +173,30 @@ pub fn run(a: &InspectArgs) -> Result<()> {
     }
 }
 
+fn print_plateaus(out: &mut impl Write, p: &[Plateau]) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "  {} constant-velocity plateau(s) from the encoder:",
+        p.len()
+    )?;
+    for (k, p) in p.iter().enumerate() {
+        writeln!(
+            out,
+            "    {:>2}. t = {:.3}–{:.3} s ({:.2} s) at {:+.4} mm/s ({:?}), blocks within {:.2} %",
+            k + 1,
+            p.start_s,
+            p.end_s,
+            p.end_s - p.start_s,
+            p.velocity_mm_s,
+            p.direction,
+            100.0 * p.max_deviation
+        )?;
+    }
+    Ok(())
+}
+
 fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
-    writeln!(out, "{}", i.source)?;
+    writeln!(out, "{}", text::line(&i.source))?;
     writeln!(
         out,
         "  {} samples at {} Hz = {:.3} s, first sample at t = {} s",
@@ -197,8 +258,8 @@ fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
             Severity::Warning => "WARNING",
         };
         match &f.channel {
-            Some(c) => writeln!(out, "  {sev}: {c}: {}", f.message)?,
-            None => writeln!(out, "  {sev}: {}", f.message)?,
+            Some(c) => writeln!(out, "  {sev}: {c}: {}", text::line(&f.message))?,
+            None => writeln!(out, "  {sev}: {}", text::line(&f.message))?,
         }
     }
     Ok(())

@@ -1,5 +1,5 @@
 //! `ballpass model`: the signal and stage models of thesis chapter 6
-//! (corrected per ERRATA §2–7), written as CSV/JSON tables to plot from.
+//! (corrected per docs/methods.md §2–7), written as CSV/JSON tables to plot from.
 
 use std::f64::consts::PI;
 use std::io::Write;
@@ -17,7 +17,8 @@ use serde::Serialize;
 use ballpass::report::{self, Block, Level, Report, Section, Table, Verdict};
 
 use crate::args::{command_line, BearingArgs, ReportArgs};
-use crate::output::{ensure_dir, write_csv, write_json};
+use crate::output::{self, write_csv, write_json};
+use crate::text;
 
 /// Arguments of `ballpass model`.
 #[derive(Debug, Args)]
@@ -40,7 +41,7 @@ enum ModelCommand {
 #[derive(Debug, Clone, Args)]
 struct FrequencyArgs {
     /// Tracking velocity, mm/s (f_c from the bearing geometry).
-    #[arg(long, short = 'v', conflicts_with = "f_c")]
+    #[arg(long, short = 'v', conflicts_with = "f_c", value_name = "MM/S")]
     velocity: Option<f64>,
     /// Ball-pass frequency f_c, Hz, given directly.
     #[arg(long = "f-c", value_name = "HZ")]
@@ -72,7 +73,7 @@ impl FrequencyArgs {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
 #[serde(rename_all = "snake_case")]
 enum RatioKind {
-    /// Gaussian sigma over τ_c (the r of thesis Eq. 6.23 and ERRATA §6).
+    /// Gaussian sigma over τ_c (the r of thesis Eq. 6.23 and docs/methods.md §6).
     Sigma,
     /// Width at half maximum over τ_c (the τ_p that `ballpass passage` measures).
     Fwhm,
@@ -82,7 +83,7 @@ enum RatioKind {
 #[derive(Debug, Clone, Args)]
 struct RatioArgs {
     /// Pulse width ratio (see --ratio-kind). The thesis measured 0.155.
-    #[arg(long, default_value_t = 0.155)]
+    #[arg(long, default_value_t = 0.155, value_name = "R")]
     ratio: f64,
     /// Whether --ratio is sigma/τ_c or width-at-half-maximum/τ_c.
     #[arg(long, value_enum, default_value_t = RatioKind::Sigma)]
@@ -103,31 +104,57 @@ struct SignalsArgs {
     #[command(flatten)]
     freq: FrequencyArgs,
     /// Coulomb friction F_c, N.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "N"
+    )]
     friction_dc: f64,
     /// Friction sinusoid amplitude a_f, N.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "N"
+    )]
     friction_amp: f64,
     /// Velocity-error amplitude a_v, mm/s.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "MM/S"
+    )]
     velocity_amp: f64,
     /// Photodetector DC level S, V.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "V"
+    )]
     optical_dc: f64,
     /// Photodetector sinusoid amplitude a_s, V.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "V"
+    )]
     optical_amp: f64,
     /// Lag convention of the correlation table.
     #[arg(long, value_enum, default_value_t = Convention::Eq71)]
     convention: Convention,
     /// Lags from −P·τ_c to +P·τ_c.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_name = "N")]
     periods: f64,
     /// Number of lags in the correlation table.
-    #[arg(long, default_value_t = 401)]
+    #[arg(long, default_value_t = 401, value_name = "N")]
     points: usize,
-    /// Output directory.
-    #[arg(long)]
+    /// Output folder for correlations.csv, spectral_lines.csv, signals.json
+    /// and the report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
@@ -148,25 +175,36 @@ struct PulsesArgs {
     #[command(flatten)]
     freq: FrequencyArgs,
     /// Pulse height P (any unit; coefficients scale with it).
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "P"
+    )]
     amplitude: f64,
     /// Base level S.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        value_name = "S"
+    )]
     dc: f64,
-    /// Gaussian coefficients C_0..C_N listed.
-    #[arg(long, default_value_t = 10)]
+    /// Gaussian coefficients C_0..C_K listed.
+    #[arg(long, default_value_t = 10, value_name = "K")]
     harmonics: usize,
     /// Order N of the rectangular Fourier series (thesis Fig. 47 used 20).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_name = "N")]
     order: usize,
     /// Periods of the trains synthesised.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_name = "N")]
     periods: usize,
     /// Samples per period of the synthesised trains.
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = 500, value_name = "N")]
     points: usize,
-    /// Output directory.
-    #[arg(long)]
+    /// Output folder for gaussian_coefficients.csv,
+    /// rectangular_coefficients.csv, trains.csv, pulses.json and the report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
@@ -175,50 +213,61 @@ struct PulsesArgs {
 #[derive(Debug, Args)]
 struct StageArgs {
     /// Moving mass m, kg.
-    #[arg(long)]
+    #[arg(long, value_name = "KG")]
     mass: f64,
     /// Motor constant K, N/A (with --kp and --kd).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_name = "N/A")]
     motor_constant: f64,
     /// Proportional gain K_P, A/m.
-    #[arg(long, requires = "kd", conflicts_with_all = ["natural_frequency", "damping"])]
+    #[arg(
+        long,
+        requires = "kd",
+        conflicts_with_all = ["natural_frequency", "damping"],
+        value_name = "A/M"
+    )]
     kp: Option<f64>,
     /// Derivative gain K_D, A·s/m.
-    #[arg(long, requires = "kp")]
+    #[arg(long, requires = "kp", value_name = "A·S/M")]
     kd: Option<f64>,
     /// Natural frequency f_n, Hz (with --damping; instead of --kp/--kd).
     #[arg(long, requires = "damping", value_name = "HZ")]
     natural_frequency: Option<f64>,
     /// Damping ratio ζ (with --natural-frequency).
-    #[arg(long, requires = "natural_frequency")]
+    #[arg(long, requires = "natural_frequency", value_name = "ZETA")]
     damping: Option<f64>,
     /// Lowest frequency of the Bode table, Hz.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, value_name = "HZ")]
     f_min: f64,
     /// Highest frequency of the Bode table, Hz.
-    #[arg(long, default_value_t = 1000.0)]
+    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     f_max: f64,
     /// Points of the Bode table (log-spaced).
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = 500, value_name = "N")]
     points: usize,
     /// Sampling rate for the differentiator comparison (Fig. 28), Hz.
-    #[arg(long, default_value_t = 1000.0)]
+    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     fs: f64,
     #[command(flatten)]
     freq: FrequencyArgs,
     #[command(flatten)]
     ratio: RatioArgs,
     /// Height P of the friction pulses, N.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true,
+        value_name = "N"
+    )]
     friction_amplitude: f64,
     /// Harmonics kept in the velocity response (default: all above 1e-16 C_0).
-    #[arg(long)]
+    #[arg(long, value_name = "K")]
     harmonics: Option<usize>,
     /// Samples over the one period of velocity response.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_name = "N")]
     period_points: usize,
-    /// Output directory.
-    #[arg(long)]
+    /// Output folder for bode.csv, difference.csv, harmonics.csv,
+    /// velocity_response.csv, stage.json and the report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
@@ -239,14 +288,22 @@ fn need_f_c(freq: &FrequencyArgs, what: &str) -> Result<f64> {
     })
 }
 
+/// One lag of `correlations.csv`; each column carries the unit of its
+/// product (friction N, velocity error mm/s, optical V).
 #[derive(Serialize)]
 struct CorrelationRow {
     tau_s: f64,
+    #[serde(rename = "r_ff_n2")]
     r_ff: f64,
+    #[serde(rename = "r_veve_mm2_s2")]
     r_veve: f64,
+    #[serde(rename = "r_ss_v2")]
     r_ss: f64,
+    #[serde(rename = "r_fve_n_mm_s")]
     r_fve: f64,
+    #[serde(rename = "r_fs_n_v")]
     r_fs: f64,
+    #[serde(rename = "r_sve_v_mm_s")]
     r_sve: f64,
 }
 
@@ -340,9 +397,10 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
             });
         }
     }
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("correlations.csv"), &rows)?;
-    write_csv(&a.out.join("spectral_lines.csv"), &lines)?;
+    let out = output::open_dir(&a.out, "model signals")?;
+    let dir = out.path().to_path_buf();
+    write_csv(&dir.join("correlations.csv"), &rows)?;
+    write_csv(&dir.join("spectral_lines.csv"), &lines)?;
     let json = SignalsJson {
         schema: "ballpass.model.signals/1",
         version: ballpass::VERSION,
@@ -352,11 +410,11 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
             LagConvention::Eq71 => "R_xy(tau) = <x(t+tau) y(t)> (thesis Eq. 7.1, scipy correlate); a peak at -d means y lags x by d",
             LagConvention::Eq612 => "R_xy(tau) = <x(t) y(t+tau)> (thesis Eq. 6.12); a peak at +d means y lags x by d",
         },
-        spectra_note: "Dirac line weights of the unitary Fourier transform of the Eq. 6.12 correlation (conj(X)*Y, as scipy csd); ERRATA §4 signs",
+        spectra_note: "Dirac line weights of the unitary Fourier transform of the Eq. 6.12 correlation (conj(X)*Y, as scipy csd), with the signs of Eq. 6.17 corrected (docs/methods.md §4)",
         peaks,
         spectral_lines: lines,
     };
-    write_json(&a.out.join("signals.json"), &json)?;
+    write_json(&dir.join("signals.json"), &json)?;
     let tau: Vec<f64> = rows.iter().map(|r| r.tau_s).collect();
     let col = |g: fn(&CorrelationRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
     let cols = [
@@ -377,21 +435,24 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
             format!("{:+.5}", p.y_lags_x_s),
         ]);
     }
+    let fig = report::model::correlations_figure(&tau, &pairs, m.tau_c_s())
+        .with_data("correlations.csv", "tau_s and the six model correlations")
+        .interactive();
     let rep = Report::new(format!("ballpass model signals: f_c = {f_c:.5} Hz"))
         .with_command(command_line())
         .with_section(
             Section::new("Correlation peaks nearest zero lag")
-                .with(Block::Paragraph(json.convention_note.to_string()))
-                .with(Block::Table(peaks)),
+                .with(Block::Paragraph(format!(
+                    "{} The correlations over lag are in {{fig:{}}}.",
+                    json.convention_note, fig.id
+                )))
+                .with(Block::Table(peaks))
+                .with_figure(fig),
         )
-        .with_section(Section::new("Settings").with(Block::settings(&m)?))
-        .with_figure(report::model::correlations_figure(
-            &tau,
-            &pairs,
-            m.tau_c_s(),
-        ));
-    let written = a.report.write(&rep, &a.out)?;
-    let mut out = std::io::stdout().lock();
+        .with_section(Section::new("Settings").with(Block::settings(&m)?));
+    let written = a.report.write(&rep, &dir)?;
+    output::commit(out)?;
+    let mut out = output::stdout();
     writeln!(
         out,
         "sinusoid model signals at f_c = {f_c:.6} Hz (tau_c = {:.5} s)",
@@ -415,7 +476,7 @@ fn run_signals(a: &SignalsArgs) -> Result<()> {
     writeln!(
         out,
         "wrote {}/{{correlations.csv, spectral_lines.csv, signals.json{}}}",
-        a.out.display(),
+        text::path(&a.out),
         report_note(&written)
     )?;
     Ok(())
@@ -471,7 +532,7 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     let sigma_ratio = a.ratio.sigma_ratio();
     let g = GaussianTrain::new(tau_c, sigma_ratio, a.amplitude, a.dc, 0.0)?;
     // The rectangle's duty ratio is --ratio as given, whatever its kind: the
-    // thesis compares both trains at the same r = 0.155 (ERRATA §5–6).
+    // thesis compares both trains at the same r = 0.155 (docs/methods.md §5–6).
     let r = RectangularTrain::new(tau_c, a.ratio.ratio, a.amplitude, a.dc)?;
     if a.order == 0 || a.order > 100_000 {
         bail!("invalid --order: must be 1 to 100000, got {}", a.order);
@@ -546,11 +607,12 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
         fit_rms_gaussian_series: rms(&|x| x.gaussian_series - x.gaussian),
         fit_rms_rectangular_series: rms(&|x| x.rectangular_series - x.rectangular),
     };
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("gaussian_coefficients.csv"), &grows)?;
-    write_csv(&a.out.join("rectangular_coefficients.csv"), &rrows)?;
-    write_csv(&a.out.join("trains.csv"), &trows)?;
-    write_json(&a.out.join("pulses.json"), &json)?;
+    let out = output::open_dir(&a.out, "model pulses")?;
+    let dir = out.path().to_path_buf();
+    write_csv(&dir.join("gaussian_coefficients.csv"), &grows)?;
+    write_csv(&dir.join("rectangular_coefficients.csv"), &rrows)?;
+    write_csv(&dir.join("trains.csv"), &trows)?;
+    write_json(&dir.join("pulses.json"), &json)?;
     let ns: Vec<f64> = grows.iter().map(|r| r.n as f64).collect();
     let cn: Vec<f64> = grows.iter().map(|r| r.c_over_p).collect();
     let printed: Vec<f64> = grows.iter().map(|r| r.thesis_printed_c_over_p).collect();
@@ -564,18 +626,40 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     );
     let rs_name = format!("rectangular, order {}", a.order);
     let gs_name = format!("Gaussian series, order {gorder}");
+    let coef_fig =
+        report::model::gaussian_coefficients_figure(&ns, &cn, Some(&printed), sigma_ratio)
+            .with_data(
+                "gaussian_coefficients.csv",
+                "n, c_over_p, thesis_printed_c_over_p",
+            );
+    let trains_fig = report::model::trains_figure(
+        &tt,
+        &[
+            ("Gaussian", &gv, false),
+            (&gs_name, &gs, true),
+            ("rectangular", &rv, false),
+            (&rs_name, &rs, true),
+        ],
+    )
+    .with_data("trains.csv", "t_s and the four trains")
+    .interactive();
+    let refs = format!(
+        "The Gaussian train's Fourier coefficients are in {{fig:{}}}, the trains and their \
+         truncated series over time in {{fig:{}}}.",
+        coef_fig.id, trains_fig.id
+    );
     let rep = Report::new(format!(
-        "ballpass model pulses: tau_c = {tau_c:.5} s, sigma/tau_c = {sigma_ratio:.4}"
+        "ballpass model pulses: τc = {tau_c:.5} s, σ/τc = {sigma_ratio:.4}"
     ))
     .with_command(command_line())
     .with_section(Section::new("Pulse trains").with(Block::KeyValues(vec![
-        ("tau_c".into(), format!("{tau_c:.6} s")),
-        ("sigma / tau_c".into(), format!("{sigma_ratio:.5}")),
-        ("FWHM / tau_c".into(), format!("{:.5}", g.fwhm_s() / tau_c)),
+        ("τc".into(), format!("{tau_c:.6} s")),
+        ("σ / τc".into(), format!("{sigma_ratio:.5}")),
         (
-            "rectangular tau_p / tau_c".into(),
-            format!("{:.5}", r.ratio),
+            "width at half maximum / τc".into(),
+            format!("{:.5}", g.fwhm_s() / tau_c),
         ),
+        ("rectangular τp / τc".into(), format!("{:.5}", r.ratio)),
         (
             "Gibbs overshoot, order N".into(),
             format!("{:.2}% of the jump", 100.0 * gibbs),
@@ -588,33 +672,25 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
             ),
         ),
     ])))
+    .with_section(
+        Section::new("Figures")
+            .with(Block::Paragraph(refs))
+            .with_figure(coef_fig)
+            .with_figure(trains_fig),
+    )
     .with_section(Section::new("Settings").with(Block::KeyValues(vec![
         ("amplitude P".into(), a.amplitude.to_string()),
         ("dc S".into(), a.dc.to_string()),
         ("order N".into(), a.order.to_string()),
         ("harmonics listed".into(), a.harmonics.to_string()),
         (
-            "periods x points".into(),
-            format!("{} x {}", a.periods, a.points),
+            "periods × points".into(),
+            format!("{} × {}", a.periods, a.points),
         ),
-    ])))
-    .with_figure(report::model::gaussian_coefficients_figure(
-        &ns,
-        &cn,
-        Some(&printed),
-        sigma_ratio,
-    ))
-    .with_figure(report::model::trains_figure(
-        &tt,
-        &[
-            ("Gaussian", &gv, false),
-            (&gs_name, &gs, true),
-            ("rectangular", &rv, false),
-            (&rs_name, &rs, true),
-        ],
-    ));
-    let written = a.report.write(&rep, &a.out)?;
-    let mut out = std::io::stdout().lock();
+    ])));
+    let written = a.report.write(&rep, &dir)?;
+    output::commit(out)?;
+    let mut out = output::stdout();
     writeln!(
         out,
         "pulse trains, tau_c = {tau_c:.5} s, sigma/tau_c = {sigma_ratio:.5} (FWHM/tau_c = {:.5}), P = {}",
@@ -623,14 +699,14 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     )?;
     writeln!(
         out,
-        "Gaussian C_n = sqrt(2 pi) P r exp(-2 pi^2 n^2 r^2) (ERRATA §6):"
+        "Gaussian C_n = sqrt(2 pi) P r exp(-2 pi^2 n^2 r^2) (Eq. 6.28 corrected, docs/methods.md §6):"
     )?;
     for row in grows.iter().take(6) {
         writeln!(out, "  n = {:<2} C_n/P = {:.6e}", row.n, row.c_over_p)?;
     }
     writeln!(
         out,
-        "rectangular (tau_p/tau_c = {:.5}, ERRATA §5): a0 = {:.5}, a1 = {:.5}, b1 = {:.5}",
+        "rectangular (tau_p/tau_c = {:.5}, Eq. 6.22 corrected, docs/methods.md §5): a0 = {:.5}, a1 = {:.5}, b1 = {:.5}",
         r.ratio,
         coef.a0,
         coef.a.first().copied().unwrap_or(0.0),
@@ -647,7 +723,7 @@ fn run_pulses(a: &PulsesArgs) -> Result<()> {
     writeln!(
         out,
         "wrote {}/{{gaussian_coefficients.csv, rectangular_coefficients.csv, trains.csv, pulses.json{}}}",
-        a.out.display(),
+        text::path(&a.out),
         report_note(&written)
     )?;
     Ok(())
@@ -717,12 +793,13 @@ fn run_stage(a: &StageArgs) -> Result<()> {
         }
         None => None,
     };
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("bode.csv"), &bode)?;
-    write_csv(&a.out.join("difference.csv"), &diff)?;
+    let out = output::open_dir(&a.out, "model stage")?;
+    let dir = out.path().to_path_buf();
+    write_csv(&dir.join("bode.csv"), &bode)?;
+    write_csv(&dir.join("difference.csv"), &diff)?;
     let mut written = vec!["bode.csv", "difference.csv"];
     if let Some((_, r)) = &resp {
-        write_csv(&a.out.join("harmonics.csv"), &r.harmonics)?;
+        write_csv(&dir.join("harmonics.csv"), &r.harmonics)?;
         let rows: Vec<VelocityRow> = (0..r.time_s.len())
             .map(|i| VelocityRow {
                 t_s: r.time_s[i],
@@ -732,7 +809,7 @@ fn run_stage(a: &StageArgs) -> Result<()> {
                 velocity_magnitude_only_mm_s: r.velocity_magnitude_only_mm_s[i],
             })
             .collect();
-        write_csv(&a.out.join("velocity_response.csv"), &rows)?;
+        write_csv(&dir.join("velocity_response.csv"), &rows)?;
         written.extend(["harmonics.csv", "velocity_response.csv"]);
     }
     let json = StageJson {
@@ -749,7 +826,7 @@ fn run_stage(a: &StageArgs) -> Result<()> {
             magnitude_only_error_of_peak: r.magnitude_only_error_of_peak,
         }),
     };
-    write_json(&a.out.join("stage.json"), &json)?;
+    write_json(&dir.join("stage.json"), &json)?;
     written.push("stage.json");
     let rep = stage_report(
         &json,
@@ -759,9 +836,10 @@ fn run_stage(a: &StageArgs) -> Result<()> {
         &diff,
         resp.as_ref().map(|(_, r)| r),
     )?;
-    if a.report.write(&rep, &a.out)?.is_some() {
+    if a.report.write(&rep, &dir)?.is_some() {
         written.extend(["report.html", "figures/"]);
     }
+    output::commit(out)?;
     summarize_stage(&json, f_c, a.fs, &diff, &a.out, &written)
 }
 
@@ -799,7 +877,10 @@ fn stage_report(
         ),
         (
             "G_vf peak 1/(K K_D)".into(),
-            format!("{:.4e} (m/s)/N at omega_n", f.g_vf_peak_m_s_per_n),
+            format!(
+                "{} (m/s)/N at ω_n",
+                report::kinds::fmt_sig(f.g_vf_peak_m_s_per_n, 5)
+            ),
         ),
     ];
     if let Some(fc) = f_c {
@@ -820,43 +901,86 @@ fn stage_report(
             level,
             "f_c vs f_n",
             format!("f_c is {ratio:.2} f_n: {}", if level == Level::Warn {
-                "the ball passages excite the stage near its resonance, where G_vf peaks (thesis §6.1, Fig. 58)"
+                "the ball passages excite the stage near its resonance, where G_vf peaks (thesis §6.1, Fig. 42)"
             } else {
                 "away from the stage resonance"
             }),
         ));
     }
+    let bode_figs: Vec<report::Figure> = report::model::stage_bode_figures(bode, f.f_n_hz, f_c)
+        .into_iter()
+        .map(|fig| {
+            fig.with_data(
+                "bode.csv",
+                "f_hz and each response's gain (dB) and phase (deg)",
+            )
+        })
+        .collect();
+    let mut stage = Section::new("Stage")
+        .with(Block::KeyValues(kv))
+        .with(Block::Paragraph(format!(
+            "The responses to the reference and to friction: {} (thesis Figs. 41–42).",
+            bode_figs
+                .iter()
+                .map(|b| format!("{{fig:{}}}", b.id))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    for fig in bode_figs {
+        stage = stage.with_figure(fig);
+    }
     let mut rep = Report::new(format!(
-        "ballpass model stage: f_n = {:.4} Hz, zeta = {:.3}",
+        "ballpass model stage: f_n = {:.4} Hz, ζ = {:.3}",
         f.f_n_hz, f.damping_ratio
     ))
     .with_command(command_line())
-    .with_section(Section::new("Stage").with(Block::KeyValues(kv)));
+    .with_section(stage);
     if !verdicts.is_empty() {
         rep = rep.with_section(Section::new("Conditions").with(Block::Verdicts(verdicts)));
     }
+    let diff_fig = report::model::difference_figure(diff, fs)
+        .with_data("difference.csv", "gain ratios and absolute phases (deg)");
+    rep = rep.with_section(
+        Section::new("Velocity from position")
+            .with(Block::Paragraph(format!(
+                "The centred and the forward difference as differentiators at F_s = {} Hz: {{fig:{}}} (thesis Fig. 28).",
+                report::kinds::fmt_sig(fs, 4),
+                diff_fig.id
+            )))
+            .with_figure(diff_fig),
+    );
     if let Some(v) = &json.velocity_response {
-        rep = rep.with_section(
+        let mut sec =
             Section::new("Velocity response to the friction pulses").with(Block::KeyValues(vec![
                 (
                     "velocity peak to peak".into(),
-                    format!("{:.4e} mm/s", v.velocity_peak_to_peak_mm_s),
+                    format!(
+                        "{} mm/s",
+                        report::kinds::fmt_sig(v.velocity_peak_to_peak_mm_s, 5)
+                    ),
                 ),
                 (
                     "error of the thesis' magnitude-only sum".into(),
-                    format!("{:.1}% of the peak", 100.0 * v.magnitude_only_error_of_peak),
+                    format!(
+                        "{:.1} % of the peak",
+                        100.0 * v.magnitude_only_error_of_peak
+                    ),
                 ),
-            ])),
-        );
+            ]));
+        if let Some(r) = resp {
+            let fig = report::model::velocity_response_figure(r)
+                .with_data("velocity_response.csv", "t_s, friction_n, velocity_mm_s")
+                .with_data("harmonics.csv", "C_n, G_vf and D_n per harmonic");
+            sec = sec
+                .with(Block::Paragraph(format!(
+                    "One period of the friction pulses and the velocity error they cause: {{fig:{}}} (thesis Fig. 51).",
+                    fig.id
+                )))
+                .with_figure(fig);
+        }
+        rep = rep.with_section(sec);
     }
     rep = rep.with_section(Section::new("Settings").with(Block::settings(&json.stage)?));
-    for fig in report::model::stage_bode_figures(bode, f.f_n_hz, f_c) {
-        rep = rep.with_figure(fig);
-    }
-    rep = rep.with_figure(report::model::difference_figure(diff, fs));
-    if let Some(r) = resp {
-        rep = rep.with_figure(report::model::velocity_response_figure(r));
-    }
     Ok(rep)
 }
 
@@ -869,7 +993,7 @@ fn summarize_stage(
     written: &[&str],
 ) -> Result<()> {
     let f = &json.features;
-    let mut out = std::io::stdout().lock();
+    let mut out = output::stdout();
     writeln!(
         out,
         "PD stage: m = {} kg, K*KP = {:.6e} N/m, K*KD = {:.6e} N*s/m",
@@ -937,7 +1061,7 @@ fn summarize_stage(
     writeln!(
         out,
         "wrote {}/{{{}}}",
-        out_dir.display(),
+        text::path(out_dir),
         written.join(", ")
     )?;
     Ok(())

@@ -5,14 +5,19 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
+use ballpass::analysis::preflight::{check, check_channels, PreflightSettings, VelocitySource};
+use ballpass::bearing::Geometry;
 use ballpass::recording::io::load_all;
-use ballpass::recording::Recording;
+use ballpass::recording::segment::Window;
+use ballpass::recording::{Channel, Recording};
 use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
-use crate::output::{ensure_dir, write_csv, write_json};
+use crate::output::{self, write_csv, write_json};
+use crate::records::{self, CheckArgs, SegmentArgs};
+use crate::text;
 
 /// Arguments of `ballpass passage`.
 #[derive(Debug, Args)]
@@ -25,19 +30,23 @@ pub struct PassageArgs {
     #[command(flatten)]
     load: LoadArgs,
     /// Smallest pulse prominence, in noise standard deviations.
-    #[arg(long, default_value_t = PassageSettings::default().min_snr)]
+    #[arg(long, default_value_t = PassageSettings::default().min_snr, value_name = "X")]
     min_snr: f64,
     /// Pulses in the Gaussian/rectangular train fits (0: no fits).
-    #[arg(long, default_value_t = PassageSettings::default().fit_pulses)]
+    #[arg(long, default_value_t = PassageSettings::default().fit_pulses, value_name = "N")]
     fit_pulses: usize,
     /// Order of the rectangular Fourier series fitted.
-    #[arg(long, default_value_t = PassageSettings::default().rectangular_order)]
+    #[arg(long, default_value_t = PassageSettings::default().rectangular_order, value_name = "N")]
     order: usize,
-    /// Output directory for passages.csv, passage.json and the report.
-    #[arg(long)]
+    /// Output folder for passages.csv, passage.json and the report.
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
+    #[command(flatten)]
+    check: CheckArgs,
+    #[command(flatten)]
+    segment: SegmentArgs,
 }
 
 #[derive(Serialize)]
@@ -67,53 +76,94 @@ struct Output<'a> {
     schema: &'static str,
     version: &'static str,
     bearing: &'a str,
+    /// The time window of every record, when one was given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    window: Option<Window>,
     records: &'a [PassageAnalysis],
     failed: &'a [Failure],
+    /// Dead channels left out, a forced velocity.
+    warnings: &'a [String],
 }
 
 /// Runs `ballpass passage`.
 pub fn run(a: &PassageArgs) -> Result<()> {
     let opts = a.load.options()?;
     let bearing_name = opts.bearing.clone().unwrap_or_default();
+    let geometry = opts.geometry.expect("options() resolves the bearing");
     let settings = PassageSettings {
-        // An explicit --velocity is a setting; a profile's or the file's
-        // velocity reaches the analysis through the recording's metadata.
-        velocity_mm_s: a.load.velocity,
         geometry: opts.geometry,
         min_snr: a.min_snr,
         fit_pulses: a.fit_pulses,
         rectangular_order: a.order,
         ..Default::default()
     };
+    a.load.window.parsed()?;
+    let out = output::open_dir(&a.out, "passage")?;
+    let pre = a.check.preflight();
     let mut done = Vec::new();
     let mut recs: Vec<Recording> = Vec::new();
     let mut failed = Vec::new();
+    let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     for path in &a.records {
-        // One recording per file, or its pieces with --split-gaps.
-        let pieces = match load_all(path, &opts) {
-            Ok(p) => p.into_iter().map(Ok).collect(),
-            Err(e) => vec![Err(anyhow::Error::from(e))],
+        // One recording per file, or its pieces with --split-gaps; each cut
+        // to the window, then taken apart into plateaus with --segment.
+        let loaded = load_all(path, &opts)
+            .map_err(anyhow::Error::from)
+            .and_then(|pieces| a.load.window.apply_pieces(pieces));
+        let parts = match loaded {
+            Ok(pieces) if a.segment.segment => {
+                records::segment_all(&pieces).map(|(found, parts)| {
+                    for f in &found {
+                        notes.push(format!(
+                            "{}: {} plateau(s) from the encoder",
+                            f.source,
+                            f.plateaus.len()
+                        ));
+                    }
+                    parts
+                })
+            }
+            Ok(pieces) => Ok(pieces),
+            Err(e) => Err(e),
         };
-        for piece in pieces {
-            let result = piece.and_then(|rec| {
-                let r = detect_passages(&rec, &settings)?;
-                Ok((rec, r))
-            });
-            match result {
-                Ok((rec, r)) => {
+        let parts = match parts {
+            Ok(p) => p,
+            Err(e) => {
+                failed.push(Failure {
+                    record: path.display().to_string(),
+                    error: e.to_string(),
+                });
+                continue;
+            }
+        };
+        for rec in parts {
+            let name = rec.source_name();
+            match one(rec, a, &settings, &geometry, &pre) {
+                Ok((rec, r, w, n)) => {
+                    warnings.extend(w);
+                    notes.extend(n);
                     done.push(r);
                     recs.push(rec);
                 }
                 Err(e) => failed.push(Failure {
-                    record: path.display().to_string(),
+                    record: name,
                     error: e.to_string(),
                 }),
             }
         }
     }
-    let mut err = std::io::stderr().lock();
-    for f in &failed {
-        writeln!(err, "error: {}", f.error)?;
+    {
+        let mut err = std::io::stderr().lock();
+        for n in &notes {
+            writeln!(err, "note: {}", text::line(n))?;
+        }
+        for w in &warnings {
+            writeln!(err, "warning: {}", text::line(w))?;
+        }
+        for f in &failed {
+            writeln!(err, "error: {}", text::line(&f.error))?;
+        }
     }
     if done.is_empty() {
         bail!(
@@ -140,34 +190,38 @@ pub fn run(a: &PassageArgs) -> Result<()> {
             })
         })
         .collect();
-    ensure_dir(&a.out)?;
-    write_csv(&a.out.join("passages.csv"), &rows)?;
+    let staged = out.path();
+    write_csv(&staged.join("passages.csv"), &rows)?;
     write_json(
-        &a.out.join("passage.json"),
+        &staged.join("passage.json"),
         &Output {
             schema: "ballpass.passage/1",
             version: ballpass::VERSION,
             bearing: &bearing_name,
+            window: a.load.window.parsed()?,
             records: &done,
             failed: &failed,
+            warnings: &warnings,
         },
     )?;
     let report = build_report(&recs, &done, &failed, &settings, &bearing_name)?;
-    let written = a.report.write(&report, &a.out)?;
-    let mut out = std::io::stdout().lock();
+    let written = a.report.write(&report, staged)?;
+    let dir = output::commit(out)?;
+    let mut out = output::stdout();
     for r in &done {
         summarize(&mut out, r)?;
     }
     writeln!(
         out,
         "wrote {}/{{passages.csv, passage.json{}}}",
-        a.out.display(),
+        text::path(&dir),
         if written.is_some() {
             ", report.html, figures/"
         } else {
             ""
         }
     )?;
+    out.flush()?;
     if !failed.is_empty() {
         bail!(
             "{} of {} record(s) failed (see above); the others were written",
@@ -176,6 +230,43 @@ pub fn run(a: &PassageArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The checks and the passages of one record: the record as analysed, its
+/// passages, warnings and notes.
+fn one(
+    rec: Recording,
+    a: &PassageArgs,
+    settings: &PassageSettings,
+    geometry: &Geometry,
+    pre: &PreflightSettings,
+) -> Result<(Recording, PassageAnalysis, Vec<String>, Vec<String>)> {
+    // An explicit --velocity is a setting; a profile's or the file's
+    // reaches the analysis through the recording's metadata; without
+    // either, the encoder's is used when there is an encoder.
+    // A plateau's velocity is the encoder's: measured, not stated.
+    let file_velocity = rec.meta.velocity_mm_s.filter(|_| !a.segment.segment);
+    let stated = a.load.velocity.or(file_velocity);
+    let (rec, velocity, measured, warnings, notes) =
+        if stated.is_none() && rec.channel(Channel::Position).is_none() {
+            let c = check_channels(vec![rec], pre)?;
+            let rec = c.recordings.into_iter().next().expect("one in, one out");
+            (rec, None, false, c.warnings, Vec::new())
+        } else {
+            let c = check(vec![rec], stated, geometry, pre)?;
+            let measured = c.velocity_source == VelocitySource::Measured;
+            let rec = c.recordings.into_iter().next().expect("one in, one out");
+            (rec, Some(c.velocity_mm_s), measured, c.warnings, c.notes)
+        };
+    let s = PassageSettings {
+        velocity_mm_s: if measured { velocity } else { a.load.velocity },
+        ..settings.clone()
+    };
+    let mut r = detect_passages(&rec, &s)?;
+    if measured {
+        r.velocity_source = "measured from the encoder".into();
+    }
+    Ok((rec, r, warnings, notes))
 }
 
 fn build_report(
@@ -191,11 +282,8 @@ fn build_report(
     };
     let mut rep = Report::new(title).with_command(command_line());
     for (k, (rec, r)) in recs.iter().zip(done).enumerate() {
-        for s in report::passage::passage_sections(r) {
+        for s in report::passage::record_sections(k + 1, rec, r, "passages.csv", "")? {
             rep = rep.with_section(s);
-        }
-        for f in report::passage::passage_figures(k + 1, rec, r)? {
-            rep = rep.with_figure(f);
         }
     }
     if !failed.is_empty() {
@@ -217,7 +305,7 @@ fn build_report(
 }
 
 fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {
-    writeln!(out, "{}:", r.source)?;
+    writeln!(out, "{}:", text::line(&r.source))?;
     let vel = match r.velocity_mm_s {
         Some(v) => format!("v = {v} mm/s ({})", r.velocity_source),
         None => "velocity unknown (period from the pulses)".into(),
@@ -281,7 +369,7 @@ fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {
         )?;
     }
     for c in &r.conditions {
-        writeln!(out, "  {}: {}", c.kind.name(), c.message)?;
+        writeln!(out, "  {}: {}", c.kind.name(), text::line(&c.message))?;
         writeln!(out, "    → {}", c.advice)?;
     }
     Ok(())

@@ -19,11 +19,12 @@ pub struct PredictArgs {
         long,
         short = 'v',
         allow_hyphen_values = true,
-        required_unless_present = "list_bearings"
+        required_unless_present = "list_bearings",
+        value_name = "MM/S"
     )]
     velocity: Option<String>,
     /// Number of harmonics k·f_c to list.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_name = "K")]
     harmonics: usize,
     /// Print JSON for a program instead of text for a person.
     #[arg(long)]
@@ -44,7 +45,7 @@ struct Output<'a> {
 
 /// Runs `ballpass predict`.
 pub fn run(a: &PredictArgs) -> Result<()> {
-    let mut out = std::io::stdout().lock();
+    let mut out = crate::output::stdout();
     if a.list_bearings {
         for e in bearing::CATALOG {
             let g = e.geometry;

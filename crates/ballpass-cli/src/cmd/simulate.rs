@@ -5,10 +5,13 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use ballpass::fsutil::{commit_all, Pending};
 use ballpass::recording::{write_csv, write_mat};
 use ballpass::sim::{self, campaign, Condition, SimSettings, Simulation, Start};
 use clap::{Args, ValueEnum};
 use rayon::prelude::*;
+
+use crate::{output, text};
 
 /// Bearing condition on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -41,8 +44,9 @@ pub enum StartArg {
 /// overrides the settings file (if any), which overrides the defaults.
 #[derive(Debug, Clone, Args)]
 pub struct SimFlags {
-    /// Settings file (JSON): a `SimSettings` object, or a truth file whose
-    /// `settings` are reused. Flags given as well override it.
+    /// Settings file (JSON): the simulator's settings, as in the `settings` of
+    /// a truth file (or a whole truth file, whose settings are reused). Flags
+    /// given as well override it.
     #[arg(long, value_name = "FILE")]
     settings: Option<PathBuf>,
     /// Recorded duration, s [default: 30].
@@ -81,6 +85,12 @@ pub struct SimFlags {
     /// Period of the interference drift, s [default: 5].
     #[arg(long, value_name = "S")]
     interference_period: Option<f64>,
+    /// A multi-speed run instead of one velocity: the lab's benchmark run,
+    /// plateaus of 3.5 s at 42, 83 and 125 mm/s, each forward then
+    /// backward, ramps at 400 mm/s² (the truth lists the plateaus; any
+    /// profile can be given in the --settings file's `profile`).
+    #[arg(long)]
+    multi_speed: bool,
 }
 
 impl SimFlags {
@@ -129,6 +139,9 @@ impl SimFlags {
         if let Some(v) = self.interference_period {
             s.optical.interference_period_s = v;
         }
+        if self.multi_speed {
+            s.profile = Some(sim::SpeedProfile::lab_run());
+        }
         Ok(s)
     }
 }
@@ -154,12 +167,14 @@ fn read_settings(path: &Path) -> Result<SimSettings> {
 /// Arguments of `ballpass simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Tracking velocity, mm/s [default with --settings: the file's].
+    /// Tracking velocity, mm/s [default with --settings: the file's; not
+    /// needed with --multi-speed].
     #[arg(
         long,
         short = 'v',
-        required_unless_present = "settings",
-        allow_hyphen_values = true
+        required_unless_present_any = ["settings", "multi_speed"],
+        allow_hyphen_values = true,
+        value_name = "MM/S"
     )]
     velocity: Option<f64>,
     /// Bearing from the catalog [default: sr25w].
@@ -171,8 +186,14 @@ pub struct SimulateArgs {
     /// Random seed; the same seed gives the same bytes [default: 0].
     #[arg(long)]
     seed: Option<u64>,
-    /// Output recording (`.csv`); the truth goes beside it as `NAME.truth.json`.
-    #[arg(long, short = 'o', value_name = "FILE")]
+    /// Output recording (`.csv` or `.mat`); the truth goes beside it as
+    /// `NAME.truth.json`.
+    #[arg(
+        long = "out",
+        short = 'o',
+        visible_alias = "output",
+        value_name = "FILE"
+    )]
     output: PathBuf,
     #[command(flatten)]
     flags: SimFlags,
@@ -197,18 +218,36 @@ pub fn run(a: &SimulateArgs) -> Result<()> {
     }
     check_output(&a.output)?;
     let sim = sim::simulate(&s)?;
-    let truth_file = write_pair(&sim, &a.output)?;
+    let truth_file = sim::truth_path(&a.output);
+    // Temporary files of a killed earlier run of these two targets.
+    if let (Some(dir), Some(n1), Some(n2)) = (
+        a.output.parent(),
+        a.output.file_name(),
+        truth_file.file_name(),
+    ) {
+        let dir = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        ballpass::fsutil::remove_stale_temps(dir, Some(&[n1, n2]))?;
+    }
+    write_pair(&sim, &a.output)?;
     let t = &sim.truth;
-    let mut out = std::io::stdout().lock();
+    let mut out = output::stdout();
+    let speed = if t.plateaus.is_empty() {
+        format!("{} mm/s", t.velocity_mm_s)
+    } else {
+        format!("{} plateaus", t.plateaus.len())
+    };
     writeln!(
         out,
-        "wrote {} ({} samples at {} Hz, {} bearing, {} mm/s) and {}",
-        a.output.display(),
+        "wrote {} ({} samples at {} Hz, {} bearing, {speed}) and {}",
+        text::path(&a.output),
         t.n_samples,
         t.fs_hz,
         t.condition.name(),
-        t.velocity_mm_s,
-        truth_file.display()
+        text::path(&truth_file)
     )?;
     writeln!(
         out,
@@ -236,18 +275,28 @@ fn check_output(path: &Path) -> Result<()> {
     }
 }
 
-/// Writes the recording and its truth; returns the truth file's path.
+/// Writes the recording and its truth together: both go to temporary
+/// names beside their targets first and are put in place only when both
+/// are whole ([`ballpass::fsutil::commit_all`]), so a failure or an
+/// interrupt never leaves a recording without its truth. Returns the
+/// truth file's path.
 fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
     let is_mat = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mat"));
-    if is_mat {
-        write_mat(&sim.recording, path)?;
-    } else {
-        write_csv(&sim.recording, path)?;
-    }
     let truth_file = sim::truth_path(path);
-    sim.truth.write_json(&truth_file)?;
+    let rec = Pending::new(path)?;
+    let truth = Pending::new(&truth_file)?;
+    if is_mat {
+        write_mat(&sim.recording, rec.path())
+    } else {
+        write_csv(&sim.recording, rec.path())
+    }
+    .with_context(|| format!("writing {}", path.display()))?;
+    sim.truth
+        .write_json(truth.path())
+        .with_context(|| format!("writing {}", truth_file.display()))?;
+    commit_all(vec![rec, truth])?;
     Ok(truth_file)
 }
 
@@ -255,7 +304,7 @@ fn write_pair(sim: &Simulation, path: &Path) -> Result<PathBuf> {
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
     /// Output folder (created if missing): recordings, truth files and `manifest.csv`.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, short = 'o', value_name = "DIR")]
     out: PathBuf,
     /// Campaign seed; each record's seed is derived from it and the record's index.
     #[arg(long, default_value_t = 0)]
@@ -271,18 +320,29 @@ pub struct CampaignArgs {
 pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
     let base = a.flags.settings()?;
     base.validate()?;
+    if base.profile.is_some() {
+        bail!("--multi-speed (a speed profile) does not apply to the thesis campaign, whose records each have one velocity");
+    }
     let plan = campaign::plan(&base, a.seed);
+    let out = output::open_dir(&a.out, "simulate-campaign")?;
+    let staged = out.path().to_path_buf();
     for sub in ["sweep", "diagnosis"] {
-        let d = a.out.join(sub);
+        let d = staged.join(sub);
         std::fs::create_dir_all(&d)
             .with_context(|| format!("cannot create folder {}", d.display()))?;
     }
+    // A progress bar on a terminal (the campaign takes a while), nothing
+    // when stderr is a file or a pipe.
+    let bar = crate::output::progress(plan.len(), "recordings");
     let work = || -> Result<()> {
         plan.par_iter().try_for_each(|e| -> Result<()> {
-            let path = a.out.join(format!("{}.csv", e.path));
+            let path = staged.join(format!("{}.csv", e.path));
             let sim =
                 sim::simulate(&e.settings).with_context(|| format!("simulating {}", e.path))?;
             write_pair(&sim, &path)?;
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
             Ok(())
         })
     };
@@ -295,6 +355,9 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
             .install(work)?,
         None => work()?,
     }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
     let mut manifest = String::from("path,bearing,velocity_mm_s,repeat,condition\n");
     for e in &plan {
         manifest.push_str(&format!(
@@ -306,13 +369,15 @@ pub fn run_campaign(a: &CampaignArgs) -> Result<()> {
             e.condition.name()
         ));
     }
-    let manifest_path = a.out.join("manifest.csv");
-    ballpass::fsutil::write_atomic(&manifest_path, manifest.as_bytes())?;
+    ballpass::fsutil::write_atomic(&staged.join("manifest.csv"), manifest.as_bytes())?;
+    let dir = output::commit(out)?;
+    let mut o = output::stdout();
     writeln!(
-        std::io::stdout().lock(),
+        o,
         "wrote {} recordings with truth files and {}",
         plan.len(),
-        manifest_path.display()
+        text::path(&dir.join("manifest.csv"))
     )?;
+    o.flush()?;
     Ok(())
 }

@@ -1,22 +1,32 @@
 //! Writing an [`Analysis`]: `analysis.json`, `correlations.csv`,
-//! `spectra.csv`, `spectra_hires.csv`, each written atomically by
-//! [`crate::fsutil::write_atomic_with`] (a reader never sees half a file; no
-//! `fsync`, see [`crate::fsutil`]).
+//! `spectra.csv`, `spectra_hires.csv`, `spectra_unfiltered.csv`, each
+//! written atomically by [`crate::fsutil::write_atomic_with`] (a reader never
+//! sees half a file; no `fsync`, see [`crate::fsutil`]).
 //!
 //! CSV layout: one header row, `,`-separated, numbers in the shortest form
 //! that reads back to the same `f64` (`nan`/`inf`/`-inf` for non-finite
-//! values, as NumPy writes them).
+//! values, as NumPy writes them). Every column name ends in its unit
+//! (`docs/user-guide.md`, "Units in names"): lowercase tokens joined by `_`
+//! (`n` newton, `v` volt, `mm_s` mm/s, `hz`, `s`), a digit for a power
+//! (`n2` = N², `mm2_s2` = (mm/s)²), `per_` before a divisor; a name without
+//! a unit token is dimensionless.
 //!
-//! - `correlations.csv`: `lag_s`, then `friction`, `velocity_error`,
-//!   `optical`, `friction__velocity_error`, `friction__optical`,
-//!   `velocity_error__optical` (absent series are left out).
-//! - `spectra.csv`, `spectra_hires.csv`: `freq_hz`, the auto-spectra by
-//!   signal name, then per cross pair `<pair>_re`, `<pair>_im`, `<pair>_coh`.
+//! - `correlations.csv`: `lag_s`, then `r_<series>` for `friction`,
+//!   `velocity_error`, `optical`, `friction__velocity_error`,
+//!   `friction__optical`, `velocity_error__optical` (absent series are left
+//!   out), with the unit of the normalisation: none for `coeff`
+//!   (`r_friction`), the product of the signals' units otherwise
+//!   (`r_friction_n2`, `r_friction__optical_n_v`).
+//! - `spectra.csv`, `spectra_hires.csv`, `spectra_unfiltered.csv`:
+//!   `freq_hz`, the auto-spectra `psd_<signal>_<unit²>_per_hz`
+//!   (`psd_friction_n2_per_hz`), then per cross pair
+//!   `csd_<pair>_re_<unit>_per_hz`, `csd_<pair>_im_<unit>_per_hz` and the
+//!   coherence `coh_<pair>`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::{pair_name, Analysis, Correlations, Spectra};
+use super::{pair_name, Analysis, CorrNorm, Correlations, Signal, Spectra};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic_with;
 
@@ -31,6 +41,40 @@ pub struct OutputPaths {
     pub spectra: PathBuf,
     /// `spectra_hires.csv`.
     pub spectra_hires: PathBuf,
+    /// `spectra_unfiltered.csv`.
+    pub spectra_unfiltered: PathBuf,
+}
+
+/// Unit token of a signal in column names (`n`, `mm_s`, `v`).
+pub fn unit_token(s: Signal) -> &'static str {
+    match s {
+        Signal::Friction => "n",
+        Signal::VelocityError => "mm_s",
+        Signal::Optical => "v",
+    }
+}
+
+/// Unit token of the product of two signals: `n2`, `mm2_s2`, `v2` for a
+/// signal with itself, `n_mm_s`, `n_v`, `mm_s_v` for a pair.
+pub fn product_token(x: Signal, y: Signal) -> String {
+    if x != y {
+        return format!("{}_{}", unit_token(x), unit_token(y));
+    }
+    match x {
+        Signal::Friction => "n2".into(),
+        Signal::VelocityError => "mm2_s2".into(),
+        Signal::Optical => "v2".into(),
+    }
+}
+
+/// Column name of a correlation series under a normalisation:
+/// `r_<series>` (dimensionless for `coeff`), else with the unit of the
+/// product (`r_friction_n2`).
+pub fn correlation_column(x: Signal, y: Signal, norm: CorrNorm) -> String {
+    match norm {
+        CorrNorm::Coeff => format!("r_{}", pair_name(x, y)),
+        _ => format!("r_{}_{}", pair_name(x, y), product_token(x, y)),
+    }
 }
 
 /// A table of named columns over one index column.
@@ -40,26 +84,40 @@ pub(crate) struct Table<'a> {
     pub columns: Vec<(String, Vec<f64>)>,
 }
 
-/// Columns of `correlations.csv`.
-pub fn correlation_columns(c: &Correlations) -> Vec<(String, &[f64])> {
+/// Columns of `correlations.csv` (without `lag_s`), for correlations
+/// normalised by `norm`.
+pub fn correlation_columns(c: &Correlations, norm: CorrNorm) -> Vec<(String, &[f64])> {
     c.series
         .iter()
-        .map(|((x, y), v)| (pair_name(*x, *y), v.as_slice()))
+        .map(|((x, y), v)| (correlation_column(*x, *y, norm), v.as_slice()))
         .collect()
 }
 
-/// Columns of `spectra.csv` / `spectra_hires.csv` (without `freq_hz`).
+/// Column name of an auto-spectrum: `psd_friction_n2_per_hz`.
+pub fn psd_column(s: Signal) -> String {
+    format!("psd_{}_{}_per_hz", s.name(), product_token(s, s))
+}
+
+/// Columns of `spectra.csv` / `spectra_hires.csv` /
+/// `spectra_unfiltered.csv` (without `freq_hz`).
 pub fn spectrum_columns(s: &Spectra) -> Vec<(String, Vec<f64>)> {
     let mut cols: Vec<(String, Vec<f64>)> = s
         .auto
         .iter()
-        .map(|(k, v)| (k.name().to_string(), v.clone()))
+        .map(|(k, v)| (psd_column(*k), v.clone()))
         .collect();
     for c in &s.cross {
         let name = pair_name(c.x, c.y);
-        cols.push((format!("{name}_re"), c.pxy.iter().map(|z| z.re).collect()));
-        cols.push((format!("{name}_im"), c.pxy.iter().map(|z| z.im).collect()));
-        cols.push((format!("{name}_coh"), c.coherence.clone()));
+        let unit = product_token(c.x, c.y);
+        cols.push((
+            format!("csd_{name}_re_{unit}_per_hz"),
+            c.pxy.iter().map(|z| z.re).collect(),
+        ));
+        cols.push((
+            format!("csd_{name}_im_{unit}_per_hz"),
+            c.pxy.iter().map(|z| z.im).collect(),
+        ));
+        cols.push((format!("coh_{name}"), c.coherence.clone()));
     }
     cols
 }
@@ -206,12 +264,13 @@ pub(crate) fn write_csv(path: &Path, t: &Table<'_>) -> Result<()> {
     write_atomic_with(path, |w| write_table(w, t.index_name, t.index, &cols))
 }
 
-/// Writes `correlations.csv` to `path`.
+/// Writes `correlations.csv` to `path`; `norm` is the normalisation the
+/// correlations were computed with (it sets the columns' unit).
 ///
 /// # Errors
 /// [`Error::Io`] naming the file.
-pub fn write_correlations(path: &Path, c: &Correlations) -> Result<()> {
-    let cols = correlation_columns(c);
+pub fn write_correlations(path: &Path, c: &Correlations, norm: CorrNorm) -> Result<()> {
+    let cols = correlation_columns(c, norm);
     write_atomic_with(path, |w| write_table(w, "lag_s", &c.lag_s, &cols))
 }
 
@@ -230,7 +289,7 @@ pub fn write_spectra(path: &Path, s: &Spectra) -> Result<()> {
     )
 }
 
-/// Writes `analysis.json` and the three CSV files into `dir` (created if
+/// Writes `analysis.json` and the four CSV files into `dir` (created if
 /// needed).
 ///
 /// # Errors
@@ -245,13 +304,15 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
         correlations: dir.join("correlations.csv"),
         spectra: dir.join("spectra.csv"),
         spectra_hires: dir.join("spectra_hires.csv"),
+        spectra_unfiltered: dir.join("spectra_unfiltered.csv"),
     };
-    // The large correlations.csv beside the three small files.
+    // The large correlations.csv beside the four small files.
     let (corr, rest) = rayon::join(
-        || write_correlations(&paths.correlations, &a.correlations),
+        || write_correlations(&paths.correlations, &a.correlations, a.settings.corr_norm),
         || {
             write_spectra(&paths.spectra, &a.spectra)?;
             write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
+            write_spectra(&paths.spectra_unfiltered, &a.spectra_unfiltered)?;
             write_atomic_with(&paths.json, |w| {
                 serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
                 w.write_all(b"\n")
@@ -277,6 +338,31 @@ mod tests {
     }
 
     use super::*;
+
+    /// Every column name carries the unit of its numbers; the coefficient
+    /// normalisation is dimensionless and says so by having none.
+    #[test]
+    fn column_names_carry_their_units() {
+        use Signal::*;
+        assert_eq!(psd_column(Friction), "psd_friction_n2_per_hz");
+        assert_eq!(
+            psd_column(VelocityError),
+            "psd_velocity_error_mm2_s2_per_hz"
+        );
+        assert_eq!(psd_column(Optical), "psd_optical_v2_per_hz");
+        assert_eq!(
+            correlation_column(Friction, Optical, CorrNorm::Biased),
+            "r_friction__optical_n_v"
+        );
+        assert_eq!(
+            correlation_column(VelocityError, VelocityError, CorrNorm::None),
+            "r_velocity_error_mm2_s2"
+        );
+        assert_eq!(
+            correlation_column(Friction, VelocityError, CorrNorm::Coeff),
+            "r_friction__velocity_error"
+        );
+    }
 
     fn table(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let index: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3 - 3.0).collect();

@@ -44,6 +44,7 @@ use crate::recording::Recording;
 pub mod correlation;
 pub mod export;
 pub mod passage;
+pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
@@ -57,7 +58,7 @@ pub use repeats::{RecordScalars, Repeats, Spread};
 pub use spectra::{CoherenceRow, HarmonicRow, HarmonicValue, Spectra, SpectrumInfo};
 
 /// Schema tag of `analysis.json`.
-pub const SCHEMA: &str = "ballpass.analysis/1";
+pub const SCHEMA: &str = "ballpass.analysis/2";
 
 /// One of the three analysed signals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -462,6 +463,8 @@ pub struct Analysis {
     pub spectrum_full: SpectrumInfo,
     /// High-resolution spectrum parameters.
     pub spectrum_hires: SpectrumInfo,
+    /// Parameters of the full-range spectrum of the unfiltered signals.
+    pub spectrum_unfiltered: SpectrumInfo,
     /// Period measured from the autocorrelations.
     pub measured_period: MeasuredPeriod,
     /// Phases of the cross pairs.
@@ -470,8 +473,10 @@ pub struct Analysis {
     pub harmonics: Vec<HarmonicRow>,
     /// Coherence at the harmonics.
     pub coherence: Vec<CoherenceRow>,
-    /// Velocity-error statistics of the (first, or only) record; see
-    /// [`Analysis::repeats`] for every record.
+    /// Velocity-error statistics: of the record, or for repeats the mean
+    /// over the records of each record's statistics (see
+    /// [`VelocityErrorStats::mean_of`]; every record's own value is in
+    /// [`Analysis::repeats`]).
     pub velocity_error: Option<VelocityErrorStats>,
     /// Per-record results and spread, when more than one record was given.
     pub repeats: Option<Repeats>,
@@ -491,6 +496,12 @@ pub struct Analysis {
     /// High-resolution spectra, exported as `spectra_hires.csv`.
     #[serde(skip)]
     pub spectra_hires: Spectra,
+    /// Full-range spectra of the signals before the low-pass and detrend
+    /// (thesis Figs. 62 and 64: the white-noise floor above the band of
+    /// interest), exported as `spectra_unfiltered.csv`. Welch still removes
+    /// each segment's mean.
+    #[serde(skip)]
+    pub spectra_unfiltered: Spectra,
 }
 
 /// Runs the whole analysis on one record or several repeats at the same

@@ -27,6 +27,10 @@ pub struct Prepared {
     pub signals: Vec<(Signal, Vec<f64>)>,
     /// Velocity-error statistics, when the position channel is present.
     pub velocity_error: Option<VelocityErrorStats>,
+    /// The same signals after step 1 only (trimmed; velocity error
+    /// `v - V`), neither low-passed nor detrended: what the full-range
+    /// spectra of the thesis' Figs. 62 and 64 are computed from.
+    pub unfiltered: Vec<(Signal, Vec<f64>)>,
     /// Samples removed at the start.
     pub trimmed_samples: usize,
 }
@@ -42,8 +46,18 @@ impl Prepared {
 }
 
 /// Statistics of the velocity error `v - V`, µm/s.
+///
+/// Of one record as [`prepare`] computes them; in an [`super::Analysis`] of
+/// several repeats, each field is the mean over the records of that
+/// record's value (the thesis' Fig. 29 averages the per-test standard
+/// deviations), see [`VelocityErrorStats::mean_of`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct VelocityErrorStats {
+    /// Records the statistics are the mean of (1 for one record).
+    pub records: usize,
+    /// Sample standard deviation (ddof 1) over the records of each record's
+    /// `std_um_s`, µm/s; `None` for one record.
+    pub std_spread_um_s: Option<f64>,
     /// Mean of the raw (after trim) velocity error, µm/s.
     pub mean_um_s: f64,
     /// Standard deviation (ddof 0) of the raw velocity error, µm/s (the
@@ -60,6 +74,31 @@ pub struct VelocityErrorStats {
     /// Encoder quantisation noise floor `q / (T_s sqrt(24))` of the centred
     /// difference, µm/s (ERRATA §2; 20.4 µm/s at 0.1 µm and 1 kHz).
     pub quantisation_floor_um_s: f64,
+}
+
+impl VelocityErrorStats {
+    /// The mean over records of each statistic, with the spread of the
+    /// standard deviations; `None` when `records` is empty.
+    pub fn mean_of(records: &[&VelocityErrorStats]) -> Option<VelocityErrorStats> {
+        let first = records.first()?;
+        let n = records.len() as f64;
+        let mean =
+            |f: fn(&VelocityErrorStats) -> f64| records.iter().map(|r| f(r)).sum::<f64>() / n;
+        let stds: Vec<f64> = records.iter().map(|r| r.std_um_s).collect();
+        Some(VelocityErrorStats {
+            records: records.len(),
+            std_spread_um_s: crate::stats::MeanStd::of(&stds)
+                .filter(|m| m.n > 1)
+                .map(|m| m.std),
+            mean_um_s: mean(|r| r.mean_um_s),
+            std_um_s: mean(|r| r.std_um_s),
+            rms_um_s: mean(|r| r.rms_um_s),
+            lowpassed_mean_um_s: mean(|r| r.lowpassed_mean_um_s),
+            lowpassed_std_um_s: mean(|r| r.lowpassed_std_um_s),
+            lowpassed_rms_um_s: mean(|r| r.lowpassed_rms_um_s),
+            quantisation_floor_um_s: first.quantisation_floor_um_s,
+        })
+    }
 }
 
 fn moments_um_s(x: &[f64]) -> (f64, f64, f64) {
@@ -140,6 +179,7 @@ pub(crate) fn prepare(
     let ctx = |what: &str| format!("{name}: {what}");
     let mut signals = Vec::with_capacity(3);
     let mut velocity_error = None;
+    let mut unfiltered = Vec::with_capacity(3);
     for s in Signal::ALL {
         let raw: Vec<f64> = match s {
             Signal::Friction => match rec.channel(Channel::Friction) {
@@ -172,6 +212,8 @@ pub(crate) fn prepare(
             let (m, sd, rms) = moments_um_s(&raw);
             let (lm, lsd, lrms) = moments_um_s(&y);
             velocity_error = Some(VelocityErrorStats {
+                records: 1,
+                std_spread_um_s: None,
                 mean_um_s: m,
                 std_um_s: sd,
                 rms_um_s: rms,
@@ -184,12 +226,14 @@ pub(crate) fn prepare(
         detrend_in_place(&mut y, settings.detrend.to_dsp())
             .map_err(|e| Error::dsp(ctx(&format!("detrend of {}", s.name())), e))?;
         signals.push((s, y));
+        unfiltered.push((s, raw));
     }
     Ok(Prepared {
         fs_hz: fs,
         n: n_keep,
         signals,
         velocity_error,
+        unfiltered,
         trimmed_samples: trim,
     })
 }

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::correlation::{self, pairs_for, Correlations, MeasuredPeriod, Phase, SignalPeriod};
-use super::preprocess::{self, Prepared};
+use super::preprocess::{self, Prepared, VelocityErrorStats};
 use super::spectra::{self, HarmonicRow, Spectra};
 use super::{
     pair_name, Absent, Analysis, AnalyzeSettings, InputInfo, SeriesInfo, Signal, Verdict, SCHEMA,
@@ -566,9 +566,11 @@ pub(crate) fn run(
     // detection of all of them: all run in parallel (rayon), and the
     // results are taken in record order, so they and the first error
     // reported are those of a sequential pass.
-    let one = |r: &Recording| -> Result<(Prepared, Correlations, Spectra, Spectra)> {
+    let one = |r: &Recording| -> Result<(Prepared, Correlations, Spectra, Spectra, Spectra)> {
         let mut p = preprocess::prepare(r, pred.velocity_mm_s, settings, filter.as_ref(), trim, n)?;
         p.signals.retain(|(s, _)| signals.contains(s));
+        p.unfiltered.retain(|(s, _)| signals.contains(s));
+        let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
         let (c, (f, h)) = rayon::join(
             || {
                 with_correlator(
@@ -586,7 +588,7 @@ pub(crate) fn run(
                 )
             },
         );
-        Ok((p, c?, f?, h?))
+        Ok((p, c?, f?, h?, u))
     };
     let (per_record, passages) = rayon::join(
         || {
@@ -608,12 +610,15 @@ pub(crate) fn run(
     let mut corrs = Vec::with_capacity(recs.len());
     let mut fulls = Vec::with_capacity(recs.len());
     let mut hires = Vec::with_capacity(recs.len());
-    for (p, c, f, h) in per_record? {
+    let mut unfiltered = Vec::with_capacity(recs.len());
+    for (p, c, f, h, u) in per_record? {
         prepared.push(p);
         corrs.push(c);
         fulls.push(f);
         hires.push(h);
+        unfiltered.push(u);
     }
+    let unfiltered = average_spectra(&unfiltered);
     // One record: its correlations are the result (no copy).
     let corr = if corrs.len() == 1 {
         corrs.pop().expect("one record")
@@ -730,11 +735,17 @@ pub(crate) fn run(
         },
         spectrum_full: full.info.clone(),
         spectrum_hires: hr.info.clone(),
+        spectrum_unfiltered: unfiltered.info.clone(),
         measured_period: findings.measured,
         phases: findings.phases,
         harmonics: findings.harmonics,
         coherence: findings.coherence,
-        velocity_error: prepared[0].velocity_error.clone(),
+        velocity_error: VelocityErrorStats::mean_of(
+            &prepared
+                .iter()
+                .filter_map(|p| p.velocity_error.as_ref())
+                .collect::<Vec<_>>(),
+        ),
         repeats,
         verdict,
         passages,
@@ -742,6 +753,7 @@ pub(crate) fn run(
         correlations: corr,
         spectra: full,
         spectra_hires: hr,
+        spectra_unfiltered: unfiltered,
     })
 }
 

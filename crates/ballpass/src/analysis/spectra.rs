@@ -343,7 +343,18 @@ fn welch_all(
 
 /// Full-range spectra of one prepared record.
 pub(crate) fn full(p: &Prepared, settings: &AnalyzeSettings) -> Result<Spectra> {
-    let nperseg = settings.nperseg.min(p.n);
+    full_of(&p.signals, p.fs_hz, p.n, settings)
+}
+
+/// Full-range spectra of equal-length signals of `n` samples at `fs_hz`
+/// (the step-2 signals, or the unfiltered ones).
+pub(crate) fn full_of(
+    signals: &[(Signal, Vec<f64>)],
+    fs_hz: f64,
+    n: usize,
+    settings: &AnalyzeSettings,
+) -> Result<Spectra> {
+    let nperseg = settings.nperseg.min(n);
     let noverlap = settings.noverlap.unwrap_or(nperseg / 2);
     if noverlap >= nperseg {
         return Err(Error::setting(
@@ -353,8 +364,8 @@ pub(crate) fn full(p: &Prepared, settings: &AnalyzeSettings) -> Result<Spectra> 
     }
     let mut welch = Welch::new(welch_settings(settings, nperseg, noverlap))
         .map_err(|e| Error::dsp("Welch settings", e))?;
-    let (mut s, nseg) = welch_all(&p.signals, p.fs_hz, &mut welch)?;
-    s.info = info("welch", settings, p.fs_hz, 1, nperseg, noverlap, nseg)?;
+    let (mut s, nseg) = welch_all(signals, fs_hz, &mut welch)?;
+    s.info = info("welch", settings, fs_hz, 1, nperseg, noverlap, nseg)?;
     s.refresh_coherence();
     Ok(s)
 }

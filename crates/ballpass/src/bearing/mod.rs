@@ -1,5 +1,5 @@
 //! Bearing geometry, the catalog, and the ball-pass predictions of thesis
-//! Eqs. 1.1–1.4 (checked in ERRATA §1).
+//! Eqs. 1.1–1.4 (checked in docs/methods.md §1).
 
 use serde::{Deserialize, Serialize};
 
@@ -91,7 +91,7 @@ impl Geometry {
         let f_c = velocity_mm_s / (2.0 * d_avg);
         let lo = velocity_mm_s / 2.0 / (d_avg + d_var);
         let hi = velocity_mm_s / 2.0 / (d_avg - d_var);
-        // A single gap can range from 0 to d_ext (ERRATA §1): spacing d ..= d + d_ext.
+        // A single gap can range from 0 to d_ext (docs/methods.md §1): spacing d ..= d + d_ext.
         let min_single = velocity_mm_s / 2.0 / (self.ball_diameter_mm + self.free_space_mm);
         let max_single = velocity_mm_s / 2.0 / self.ball_diameter_mm;
         Ok(Prediction {
@@ -153,7 +153,7 @@ pub struct Prediction {
 mod tests {
     use super::*;
 
-    /// Reference values from ERRATA §1 and §11 (5–6 significant digits as printed there).
+    /// Reference values from docs/methods.md §1 (5–6 significant digits as printed there).
     #[test]
     fn sr25w_matches_errata_reference_values() {
         let g = lookup("sr25w").unwrap().geometry;
@@ -176,7 +176,7 @@ mod tests {
             );
         }
         let p = g.predict(1.0, 1).unwrap();
-        // ERRATA §1: f_d/v from 0.12162 to 0.12500.
+        // docs/methods.md §1: f_d/v from 0.12162 to 0.12500.
         assert!(
             (p.f_band_low_hz - 0.12162).abs() < 5e-6,
             "{}",
@@ -187,7 +187,7 @@ mod tests {
             "{}",
             p.f_band_high_hz
         );
-        // ERRATA §1: a single spacing of 4–6 mm gives f/v from 0.0833 to 0.125.
+        // docs/methods.md §1: a single spacing of 4–6 mm gives f/v from 0.0833 to 0.125.
         assert!((p.f_single_spacing_low_hz - 1.0 / 12.0).abs() < 1e-12);
         assert!((p.f_single_spacing_high_hz - 0.125).abs() < 1e-12);
     }

@@ -3,7 +3,12 @@
 //! - `records.csv`: one row per record, every scalar the analyses produced
 //!   (failed records too, with their reason);
 //! - `sweep.csv`: one row per velocity; `diagnosis.csv`: one row per bearing;
-//! - `friction_spectra.csv`: the averaged friction spectrum of each bearing;
+//! - `friction_spectra.csv`: the averaged friction spectrum of each bearing
+//!   (`freq_hz`, then `psd_friction_<bearing>_n2_per_hz`);
+//!
+//! Every column name ends in its unit, as in the analysis tables (see
+//! [`crate::analysis::export`]); counts, ratios, fractions and flags have
+//! none.
 //! - `sweep.json` / `diagnosis.json`: everything, with the failures.
 
 use std::fmt::Write as _;
@@ -155,11 +160,12 @@ pub fn diagnosis_csv(d: &Diagnosis) -> String {
     s
 }
 
-/// `friction_spectra.csv`: `freq_hz` then one column per bearing (worst first).
+/// `friction_spectra.csv`: `freq_hz` then one column per bearing (worst
+/// first), `psd_friction_<bearing>_n2_per_hz`.
 pub fn friction_spectra_csv(d: &Diagnosis) -> String {
     let mut s = String::from("freq_hz");
     for b in &d.bearings {
-        let _ = write!(s, ",{}", quote(&b.bearing));
+        let _ = write!(s, ",{}", quote(&friction_psd_column(&b.bearing)));
     }
     s.push('\n');
     for (i, f) in d.freq_hz.iter().enumerate() {
@@ -170,6 +176,12 @@ pub fn friction_spectra_csv(d: &Diagnosis) -> String {
         s.push('\n');
     }
     s
+}
+
+/// Column of a bearing's averaged friction auto-spectrum in
+/// `friction_spectra.csv`: `psd_friction_<bearing>_n2_per_hz` (N²/Hz).
+pub fn friction_psd_column(bearing: &str) -> String {
+    format!("psd_friction_{bearing}_n2_per_hz")
 }
 
 /// A failed record in the JSON.
@@ -219,6 +231,14 @@ mod tests {
     use super::super::batch::RecordOutcome;
     use super::super::sweep::tests::record;
     use super::*;
+
+    #[test]
+    fn friction_spectra_columns_carry_the_unit() {
+        assert_eq!(
+            friction_psd_column("bearing4"),
+            "psd_friction_bearing4_n2_per_hz"
+        );
+    }
 
     /// Every row of records.csv has as many fields as the header, for good
     /// and failed records alike.

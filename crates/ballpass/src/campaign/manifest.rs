@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::pattern::{Field, Pattern};
 use crate::error::{excerpt, Error, Result};
 
 /// One recording of a campaign.
@@ -43,6 +44,19 @@ pub struct Manifest {
     pub source: PathBuf,
     /// Its recordings, in file order.
     pub entries: Vec<ManifestEntry>,
+    /// Folder mode: what in the folder was left out, and why (see
+    /// [`from_directory`]); empty for a manifest file.
+    #[serde(default)]
+    pub skipped: Vec<Skipped>,
+}
+
+/// Something in a folder that folder mode left out.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Skipped {
+    /// The name in the folder (lossily decoded for display).
+    pub name: String,
+    /// Why (`a folder`, `a broken link`, `does not match the pattern`, ...).
+    pub reason: String,
 }
 
 impl Manifest {
@@ -239,6 +253,7 @@ pub fn parse_manifest(path: &Path, text: &str) -> Result<Manifest> {
     Ok(Manifest {
         source: path.to_path_buf(),
         entries,
+        skipped: Vec::new(),
     })
 }
 
@@ -288,13 +303,21 @@ pub fn manifest_csv(entries: &[ManifestEntry]) -> String {
     s
 }
 
-/// Builds a manifest from the files of a folder whose names match `pattern`.
+/// Builds a manifest from the files of a folder whose names match `pattern`
+/// (see [`Pattern`] for the syntax and how matching works).
 ///
 /// `{velocity}` (mm/s), `{repeat}` and `{bearing}` in the pattern capture those
 /// fields from the name; `*` matches anything. A field the pattern does not
 /// capture comes from the defaults: `bearing` (required then) and
 /// `velocity_mm_s` (required then); repeats are numbered 1, 2, … in name
 /// order per (bearing, velocity) when not captured.
+///
+/// Links are followed: a link to a file is a recording like the file. A name
+/// that is not valid UTF-8 is matched in its lossy form (each bad byte reads
+/// as `�`, which `*` and fields match) and its file is opened by its real
+/// name. Everything left out is listed in [`Manifest::skipped`] with the
+/// reason: entries whose name matches but that are not readable files
+/// (folders, broken links, sockets), and each name that does not match.
 ///
 /// # Errors
 /// [`Error::Io`] for an unreadable folder; [`Error::InvalidSetting`] for a
@@ -306,40 +329,56 @@ pub fn from_directory(
     bearing: Option<&str>,
     velocity_mm_s: Option<f64>,
 ) -> Result<Manifest> {
-    let tokens = parse_pattern(pattern)?;
-    let has = |f: Field| {
-        tokens
-            .iter()
-            .any(|t| matches!(t, Token::Field(g) if *g == f))
-    };
-    if !has(Field::Bearing) && bearing.is_none() {
+    let pat = Pattern::parse(pattern)?;
+    if !pat.has(Field::Bearing) && bearing.is_none() {
         return Err(Error::setting(
             "bearing",
             "the pattern has no {bearing}: give --bearing",
         ));
     }
-    if !has(Field::Velocity) && velocity_mm_s.is_none() {
+    if !pat.has(Field::Velocity) && velocity_mm_s.is_none() {
         return Err(Error::setting(
             "velocity",
             "the pattern has no {velocity}: give --velocity",
         ));
     }
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .map_err(|source| Error::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?
-        .filter_map(|e| e.ok())
-        .filter(|e| e.file_type().map(|t| t.is_file()).unwrap_or(false))
-        .filter_map(|e| e.file_name().into_string().ok())
-        .collect();
-    names.sort();
+    let io_err = |source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut found: Vec<(String, std::ffi::OsString)> = Vec::new();
+    for e in std::fs::read_dir(dir).map_err(io_err)? {
+        let e = e.map_err(io_err)?;
+        let os = e.file_name();
+        found.push((os.to_string_lossy().into_owned(), os));
+    }
+    found.sort();
     let mut entries = Vec::new();
+    let mut skipped = Vec::new();
     let mut counters: BTreeMap<(String, u64), u32> = BTreeMap::new();
-    for name in names {
-        let Some(caps) = match_pattern(&tokens, &name) else {
+    for (name, os) in found {
+        let path = dir.join(&os);
+        let Some(caps) = pat.captures(&name) else {
+            skipped.push(Skipped {
+                name,
+                reason: format!("does not match '{pattern}'"),
+            });
             continue;
         };
+        // `metadata` follows links: a link to a file is a file.
+        let kind = match std::fs::metadata(&path) {
+            Ok(m) if m.is_file() => None,
+            Ok(m) if m.is_dir() => Some("a folder".to_string()),
+            Ok(_) => Some("not a regular file".to_string()),
+            Err(e) if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_symlink()) => {
+                Some(format!("a broken link ({e})"))
+            }
+            Err(e) => Some(format!("cannot be read ({e})")),
+        };
+        if let Some(reason) = kind {
+            skipped.push(Skipped { name, reason });
+            continue;
+        }
         let get = |f: Field| caps.iter().find(|(g, _)| *g == f).map(|(_, s)| s.clone());
         let bearing = get(Field::Bearing)
             .or_else(|| bearing.map(str::to_string))
@@ -377,7 +416,7 @@ pub fn from_directory(
             }
         };
         entries.push(ManifestEntry {
-            path: dir.join(&name),
+            path,
             bearing,
             velocity_mm_s: velocity,
             repeat,
@@ -386,105 +425,29 @@ pub fn from_directory(
         });
     }
     if entries.is_empty() {
+        let why: Vec<String> = skipped
+            .iter()
+            .filter(|s| !s.reason.starts_with("does not match"))
+            .map(|s| format!("{} is {}", s.name, s.reason))
+            .collect();
         return Err(Error::setting(
             "pattern",
-            format!("no file in {} matches '{pattern}'", dir.display()),
+            if why.is_empty() {
+                format!("no file in {} matches '{pattern}'", dir.display())
+            } else {
+                format!(
+                    "no file in {} matches '{pattern}' ({})",
+                    dir.display(),
+                    why.join("; ")
+                )
+            },
         ));
     }
     Ok(Manifest {
         source: dir.to_path_buf(),
         entries,
+        skipped,
     })
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Field {
-    Velocity,
-    Repeat,
-    Bearing,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-enum Token {
-    Lit(String),
-    Star,
-    Field(Field),
-}
-
-fn parse_pattern(p: &str) -> Result<Vec<Token>> {
-    let mut out = Vec::new();
-    let mut lit = String::new();
-    let mut rest = p;
-    while let Some(c) = rest.chars().next() {
-        if c == '*' {
-            if !lit.is_empty() {
-                out.push(Token::Lit(std::mem::take(&mut lit)));
-            }
-            out.push(Token::Star);
-            rest = &rest[1..];
-        } else if c == '{' {
-            let end = rest
-                .find('}')
-                .ok_or_else(|| Error::setting("pattern", format!("'{p}': unclosed '{{'")))?;
-            let field = match &rest[1..end] {
-                "velocity" => Field::Velocity,
-                "repeat" => Field::Repeat,
-                "bearing" => Field::Bearing,
-                other => {
-                    return Err(Error::setting(
-                        "pattern",
-                        format!("'{p}': unknown field {{{other}}} (expected {{velocity}}, {{repeat}} or {{bearing}})"),
-                    ))
-                }
-            };
-            if !lit.is_empty() {
-                out.push(Token::Lit(std::mem::take(&mut lit)));
-            }
-            out.push(Token::Field(field));
-            rest = &rest[end + 1..];
-        } else {
-            lit.push(c);
-            rest = &rest[c.len_utf8()..];
-        }
-    }
-    if !lit.is_empty() {
-        out.push(Token::Lit(lit));
-    }
-    Ok(out)
-}
-
-/// Matches a name against the tokens (backtracking; names are short).
-fn match_pattern(tokens: &[Token], name: &str) -> Option<Vec<(Field, String)>> {
-    fn go(tokens: &[Token], s: &str, caps: &mut Vec<(Field, String)>) -> bool {
-        let Some((first, rest)) = tokens.split_first() else {
-            return s.is_empty();
-        };
-        match first {
-            Token::Lit(l) => s
-                .strip_prefix(l.as_str())
-                .is_some_and(|r| go(rest, r, caps)),
-            Token::Star | Token::Field(_) => {
-                let min = usize::from(matches!(first, Token::Field(_)));
-                for (i, _) in s.char_indices().chain(std::iter::once((s.len(), ' '))) {
-                    if i < min {
-                        continue;
-                    }
-                    if let Token::Field(f) = first {
-                        caps.push((*f, s[..i].to_string()));
-                    }
-                    if go(rest, &s[i..], caps) {
-                        return true;
-                    }
-                    if matches!(first, Token::Field(_)) {
-                        caps.pop();
-                    }
-                }
-                false
-            }
-        }
-    }
-    let mut caps = Vec::new();
-    go(tokens, name, &mut caps).then_some(caps)
 }
 
 #[cfg(test)]
@@ -576,5 +539,48 @@ mod tests {
         assert!(from_directory(&d, "{speed}.csv", Some("b"), None).is_err());
         assert!(from_directory(&d, "*.csv", None, Some(3.0)).is_err());
         assert!(from_directory(&d, "*.dat", Some("b"), Some(3.0)).is_err());
+    }
+
+    /// Issue 18 item 9: a linked recording and a file whose name is not
+    /// UTF-8 are recordings like the others; what is left out is listed
+    /// with the reason.
+    #[cfg(unix)]
+    #[test]
+    fn item9_links_and_non_utf8_names_are_read_and_skips_are_listed() {
+        use std::os::unix::ffi::OsStrExt;
+        let d = tmpdir("item9");
+        let real = tmpdir("item9-real");
+        std::fs::write(real.join("elsewhere.csv"), "").unwrap();
+        std::fs::write(d.join("v9_r1.csv"), "").unwrap();
+        std::os::unix::fs::symlink(real.join("elsewhere.csv"), d.join("v9_r2.csv")).unwrap();
+        std::os::unix::fs::symlink(d.join("gone.csv"), d.join("v9_r4.csv")).unwrap();
+        let odd = std::ffi::OsStr::from_bytes(b"v9_r3_caf\xe9.csv");
+        std::fs::write(d.join(odd), "").unwrap();
+        std::fs::create_dir(d.join("v9_r5.csv")).unwrap();
+        std::fs::write(d.join("notes.txt"), "").unwrap();
+        let m = from_directory(&d, "v{velocity}_r{repeat}*.csv", Some("b"), None).unwrap();
+        let repeats: Vec<u32> = m.entries.iter().map(|e| e.repeat).collect();
+        assert_eq!(repeats, [1, 2, 3]);
+        assert_eq!(m.entries[2].path, d.join(odd));
+        let why = |n: &str| {
+            m.skipped
+                .iter()
+                .find(|s| s.name == n)
+                .map(|s| s.reason.clone())
+                .unwrap_or_default()
+        };
+        assert!(
+            why("v9_r4.csv").starts_with("a broken link"),
+            "{:?}",
+            m.skipped
+        );
+        assert_eq!(why("v9_r5.csv"), "a folder");
+        assert!(why("notes.txt").starts_with("does not match"));
+        assert_eq!(m.skipped.len(), 3);
+        // Nothing readable: the error says what was there.
+        let e = from_directory(&d, "v9_r5.csv", Some("b"), Some(9.0)).unwrap_err();
+        assert!(e.to_string().contains("v9_r5.csv is a folder"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+        std::fs::remove_dir_all(&real).unwrap();
     }
 }

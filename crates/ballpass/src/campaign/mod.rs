@@ -5,10 +5,11 @@ pub mod batch;
 pub mod diagnose;
 pub mod export;
 pub mod manifest;
+pub mod pattern;
 pub mod record;
 pub mod run;
 pub mod sticking;
 pub mod sweep;
 
 pub use batch::{run_batch, BatchOutcome, RecordOutcome};
-pub use manifest::{from_directory, manifest_csv, read_manifest, Manifest, ManifestEntry};
+pub use manifest::{from_directory, manifest_csv, read_manifest, Manifest, ManifestEntry, Skipped};

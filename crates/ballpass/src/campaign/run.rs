@@ -10,11 +10,13 @@ use super::diagnose::low_band_power;
 use super::manifest::ManifestEntry;
 use super::record::RecordResult;
 use super::sticking::{sticking_events, StickingSettings};
+use crate::analysis::preflight::{self, PreflightSettings};
 use crate::analysis::{
     analyze_without_passages, detect_passages, AnalyzeSettings, PassageSettings, Signal,
 };
 use crate::bearing::{lookup, Geometry};
 use crate::error::Result;
+use crate::recording::segment::{window, Window};
 use crate::recording::{load, Channel, LoadOptions, Recording};
 
 /// Settings of the per-record work of a campaign.
@@ -30,6 +32,12 @@ pub struct CampaignSettings {
     pub sticking: StickingSettings,
     /// Upper edge of the friction low band, Hz.
     pub low_band_hz: f64,
+    /// Checks before the analysis: dead channels, the manifest's velocity
+    /// against the encoder's ([`preflight`]).
+    pub preflight: PreflightSettings,
+    /// Only this time window of each record (`None`: all of it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<Window>,
 }
 
 impl Default for CampaignSettings {
@@ -42,6 +50,8 @@ impl Default for CampaignSettings {
             },
             sticking: StickingSettings::default(),
             low_band_hz: 25.0,
+            preflight: PreflightSettings::default(),
+            window: None,
         }
     }
 }
@@ -52,10 +62,13 @@ pub fn geometry_for(bearing: &str, fallback: Geometry) -> Geometry {
     lookup(bearing).map_or(fallback, |e| e.geometry)
 }
 
-/// Loads one manifest entry and processes it.
+/// Loads one manifest entry, cuts it to the settings' window, runs the [`preflight`] checks (dead channels
+/// left out with a warning, the manifest's velocity against the encoder's)
+/// and processes it.
 ///
 /// # Errors
-/// Whatever loading or the analysis reports (the message names the file).
+/// Whatever loading, the checks or the analysis report (the message names
+/// the file).
 pub fn process_entry(
     entry: &ManifestEntry,
     load_options: &LoadOptions,
@@ -69,8 +82,20 @@ pub fn process_entry(
         geometry: Some(geometry),
         ..load_options.clone()
     };
-    let rec = load(&entry.path, &opts)?;
-    process_recording(&rec, entry, geometry, settings)
+    let mut rec = load(&entry.path, &opts)?;
+    if let Some(w) = &settings.window {
+        rec = window(&rec, w)?;
+    }
+    let checked = preflight::check(
+        vec![rec],
+        Some(entry.velocity_mm_s),
+        &geometry,
+        &settings.preflight,
+    )?;
+    let rec = &checked.recordings[0];
+    let mut result = process_recording(rec, entry, geometry, settings)?;
+    result.warnings.splice(0..0, checked.warnings);
+    Ok(result)
 }
 
 /// Processes a recording already in memory (a loaded file or a simulation).

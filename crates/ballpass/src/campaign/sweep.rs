@@ -13,6 +13,8 @@
 
 use serde::Serialize;
 
+use crate::report::kinds::fmt_pm;
+
 use ballpass_dsp::lsq::{least_squares, FnProblem, LeastSquares};
 
 use super::record::RecordResult;
@@ -217,23 +219,33 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
     let mut findings = Vec::new();
     if let Some((v, s)) = worst_velocity {
         findings.push(format!(
-            "the velocity error is largest at {v} mm/s: std {s:.1} µm/s"
+            "the velocity error is largest at {v} mm/s: std {s:.1} µm/s (mean over the repeats)"
         ));
     }
     if let Some(t) = &stage_trend {
         findings.push(t.text.clone());
     }
     for f in [&tau_c_fit, &tau_p_fit].into_iter().flatten() {
+        // The systematic error that can hold an exponent off −1 beyond its
+        // interval differs: a width bias of the pulse detector for τp; for
+        // τc, a velocity that differs from the commanded one by a
+        // speed-dependent fraction (or ball spacings that change with speed).
+        let (symbol, bias) = if f.quantity.starts_with("tau_p") {
+            ("τp", "a small systematic bias of the measured pulse widths")
+        } else {
+            (
+                "τc",
+                "a small systematic error: the stage's mean velocity or the ball spacing changing slightly with speed",
+            )
+        };
         findings.push(format!(
-            "{} ∝ v^({:.3} ± {:.3}), R² = {:.4}: {}",
-            f.quantity.trim_end_matches("_s"),
-            f.slope,
-            f.slope_ci95,
+            "{symbol} ∝ v^({}), R² = {:.4}: {}",
+            fmt_pm(f.slope, f.slope_ci95, 4),
             f.r2,
             match (f.inverse_proportional, f.within_ci95) {
                 (true, true) => "inversely proportional to velocity".to_string(),
                 (true, false) => format!(
-                    "inversely proportional to velocity within the measurement's ±{SLOPE_TOLERANCE} (the 95 % interval alone excludes −1: a small systematic width bias)"
+                    "inversely proportional to velocity within the measurement's ±{SLOPE_TOLERANCE} (the 95 % interval alone excludes −1: {bias})"
                 ),
                 _ => "not inversely proportional to velocity".to_string(),
             }
@@ -241,8 +253,9 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
     }
     if let Some(m) = tau_ratio {
         findings.push(format!(
-            "tau_p / tau_c = {:.4} ± {:.4} over {} velocities (thesis: 0.155)",
-            m.mean, m.std, m.n
+            "τp/τc = {} over {} velocities (mean ± standard deviation; thesis: 0.155)",
+            fmt_pm(m.mean, m.std, 4),
+            m.n
         ));
     }
     if let (Some(d), Some(ci)) = (d_avg_fitted_mm, d_avg_ci95_mm) {
@@ -250,7 +263,8 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
             .map(|c| format!("; catalog {c:.4} mm ({:+.2} %)", 100.0 * (d - c) / c))
             .unwrap_or_default();
         findings.push(format!(
-            "mean ball spacing from f_c = v/(2 d_avg): d_avg = {d:.4} ± {ci:.4} mm{cat}"
+            "mean ball spacing from f_c = v/(2 d_avg): d_avg = {} mm (95 % interval){cat}",
+            fmt_pm(d, ci, 5)
         ));
     }
     Sweep {
@@ -450,6 +464,36 @@ pub(crate) mod tests {
             assert_eq!(f.inverse_proportional, want, "drift {drift}: {f:?}");
             assert!(!f.within_ci95, "drift {drift}: {f:?}");
         }
+    }
+
+    /// Regression: the τc finding reused the τp sentence about a pulse-width
+    /// bias. A 1 % drift of τc (a period, not a width) is tolerated and
+    /// explained as a period's systematic error, named τc.
+    #[test]
+    fn the_tau_c_finding_names_a_period_error_not_a_width_bias() {
+        let recs: Vec<RecordResult> = (1..=20)
+            .flat_map(|v| {
+                (1..=5).map(move |r| {
+                    let mut x = record(f64::from(v), r);
+                    let k = 1.0 + 0.01 * f64::from(v - 1) / 19.0;
+                    x.tau_c_s = x.tau_c_s.map(|t| t * k);
+                    x
+                })
+            })
+            .collect();
+        let refs: Vec<&RecordResult> = recs.iter().collect();
+        let s = sweep(&refs, None);
+        let f = s.tau_c_fit.as_ref().unwrap();
+        assert!(f.inverse_proportional && !f.within_ci95, "{f:?}");
+        let tc = s
+            .findings
+            .iter()
+            .find(|t| t.starts_with("τc ∝"))
+            .expect("a τc finding");
+        assert!(tc.contains("stage's mean velocity"), "{tc}");
+        assert!(!tc.contains("width"), "{tc}");
+        let tp = s.findings.iter().find(|t| t.starts_with("τp ∝")).unwrap();
+        assert!(!tp.contains("stage's mean velocity"), "{tp}");
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Signal and stage models of thesis chapter 6, with the corrections of ERRATA
+//! Signal and stage models of thesis chapter 6, with the corrections of docs/methods.md
 //! §2–7: the sinusoid model signals and their analytic correlations and
 //! spectra ([`signals`]), rectangular and Gaussian pulse trains with their
 //! exact Fourier coefficients ([`pulse_train`]), and the PD-controlled stage

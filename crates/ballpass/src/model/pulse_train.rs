@@ -1,7 +1,7 @@
 //! Pulse-train models of the optical sensor and of friction (thesis §6.3),
-//! with the Fourier coefficients as corrected in ERRATA §5–6.
+//! with the Fourier coefficients as corrected in docs/methods.md §5–6.
 //!
-//! # Rectangular train (Eqs. 6.18–6.22, ERRATA §5)
+//! # Rectangular train (Eqs. 6.18–6.22, docs/methods.md §5)
 //!
 //! One period is `S` on `[0, τ_c − τ_p)` and `S + P` on `[τ_c − τ_p, τ_c)`;
 //! with `r = τ_p / τ_c`:
@@ -11,7 +11,7 @@
 //! s_r(t) = S + P r + Σ_{n=1}^{N} (2P / nπ) sin(nπ r) cos(nπ (2t + τ_p) / τ_c)
 //! ```
 //!
-//! # Gaussian train (Eqs. 6.23–6.28, ERRATA §6)
+//! # Gaussian train (Eqs. 6.23–6.28, docs/methods.md §6)
 //!
 //! Pulses `g(t) = P exp(−(t − kτ_c − t_0)² / (2σ²))` repeated over all k, with
 //! `r = σ / τ_c` (the thesis writes σ as τ_p in Eq. 6.23). Exactly, by Poisson
@@ -82,7 +82,7 @@ pub struct RectangularTrain {
     pub dc: f64,
 }
 
-/// The real Fourier coefficients of a [`RectangularTrain`] (ERRATA §5).
+/// The real Fourier coefficients of a [`RectangularTrain`] (docs/methods.md §5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RectangularCoefficients {
     /// `a_0 = 2 P r` (the series' constant term is `S + a_0 / 2`).
@@ -112,14 +112,14 @@ impl RectangularTrain {
         })
     }
 
-    /// `a_0`, `a_n`, `b_n` for n = 1..=`order` (ERRATA §5).
+    /// `a_0`, `a_n`, `b_n` for n = 1..=`order` (docs/methods.md §5).
     ///
     /// ```
     /// use ballpass::model::pulse_train::RectangularTrain;
     /// let c = RectangularTrain::new(1.0, 0.155, 1.0, 0.0).unwrap().coefficients(1);
-    /// // ERRATA §11: a0, a1, b1 = 0.310, 0.26326, −0.13939 at r = 0.155.
+    /// // docs/methods.md §5: a0, a1, b1 = 0.310, 0.26326, −0.13939 at r = 0.155.
     /// assert!((c.a0 - 0.310).abs() < 5e-4);
-    /// // ERRATA truncates (0.2632679 is printed 0.26326): one unit of the last digit.
+    /// // docs/methods.md truncates (0.2632679 is printed 0.26326): one unit of the last digit.
     /// assert!((c.a[0] - 0.26326).abs() < 1e-5 && (c.b[0] + 0.13939).abs() < 1e-5);
     /// ```
     pub fn coefficients(&self, order: usize) -> RectangularCoefficients {
@@ -154,7 +154,7 @@ impl RectangularTrain {
         }
     }
 
-    /// The corrected series (ERRATA §5) truncated at order `order`, at `t_s`.
+    /// The corrected series (docs/methods.md §5) truncated at order `order`, at `t_s`.
     pub fn partial_sum(&self, t_s: f64, order: usize) -> f64 {
         let r = self.ratio;
         let p = self.amplitude;
@@ -174,7 +174,7 @@ impl RectangularTrain {
     }
 
     /// Gibbs overshoot of the order-`order` series above the pulse top, as a
-    /// fraction of the jump `P` (ERRATA §5: 10.05 %, 9.10 %, 8.96 % at
+    /// fraction of the jump `P` (docs/methods.md §5: 10.05 %, 9.10 %, 8.96 % at
     /// N = 20, 200, 2000 for r = 0.155, tending to 8.95 %).
     ///
     /// Found by a grid over the four ripples after the rising edge (where the
@@ -225,7 +225,7 @@ impl RectangularTrain {
 pub struct GaussianTrain {
     /// Period `τ_c`, s.
     pub tau_c_s: f64,
-    /// Sigma ratio `r = σ / τ_c` (the `τ_p / τ_c` of Eq. 6.23 and ERRATA §6).
+    /// Sigma ratio `r = σ / τ_c` (the `τ_p / τ_c` of Eq. 6.23 and docs/methods.md §6).
     pub sigma_ratio: f64,
     /// Pulse height `P`.
     pub amplitude: f64,
@@ -266,7 +266,7 @@ impl GaussianTrain {
         FWHM_PER_SIGMA * self.sigma_s()
     }
 
-    /// Exact complex Fourier coefficient `C_n` (ERRATA §6), `n` may be negative;
+    /// Exact complex Fourier coefficient `C_n` (docs/methods.md §6), `n` may be negative;
     /// the DC level `S` is not included in `C_0`.
     ///
     /// ```text
@@ -276,7 +276,7 @@ impl GaussianTrain {
     /// ```
     /// use ballpass::model::pulse_train::GaussianTrain;
     /// let g = GaussianTrain::new(1.0, 0.155, 1.0, 0.0, 0.0).unwrap();
-    /// // ERRATA §6 reference values, printed to 5 significant digits.
+    /// // docs/methods.md §6 reference values, printed to 5 significant digits.
     /// for (n, c) in [(0, 0.38853), (1, 0.24180), (2, 0.058290), (3, 0.0054426)] {
     ///     assert!((g.coefficient(n).re - c).abs() / c < 5e-5);
     /// }
@@ -361,13 +361,13 @@ mod tests {
         let refs = [0.38853, 0.24180, 0.058290, 0.0054426, 1.968e-4];
         for (n, want) in refs.iter().enumerate() {
             let got = g.coefficient(n as i64);
-            // ERRATA prints 5 (4 for n = 4) significant digits: half a unit in the
+            // docs/methods.md prints 5 (4 for n = 4) significant digits: half a unit in the
             // last digit is ≤ 5e-5 relative (2.6e-4 for 1.968e-4).
             let tol = if n == 4 { 2.6e-4 } else { 5e-5 };
             assert!((got.re - want).abs() / want < tol, "C_{n} = {got}");
             assert_eq!(got.im, 0.0);
         }
-        // The printed (wrong) formula's values, ERRATA §6, for the record.
+        // The printed (wrong) formula's values, docs/methods.md §6, for the record.
         for (n, want) in [0.13737, 0.12946, 0.10837, 0.08057].iter().enumerate() {
             assert!((g.thesis_printed_coefficient(n as i64) - want).abs() / want < 5e-5);
         }
@@ -381,7 +381,7 @@ mod tests {
         let samples: Vec<f64> = (0..m).map(|i| g.value(tc * i as f64 / m as f64)).collect();
         let x = fft_coefficients(&samples);
         // C_n decays below 1e-16 by n ≈ 9, so aliasing from n ± 512 is nil and the
-        // DFT equals C_n to rounding (ERRATA §6: agreement to 1e-12).
+        // DFT equals C_n to rounding (docs/methods.md §6: agreement to 1e-12).
         for (n, xn) in x.iter().enumerate().take(40) {
             let mut want = g.coefficient(n as i64);
             if n == 0 {
@@ -410,7 +410,7 @@ mod tests {
         let r = 0.155;
         let train = RectangularTrain::new(tc, r, 1.0, 0.0).unwrap();
         let c = train.coefficients(6);
-        // ERRATA §11: a0 = 0.310 (3 decimals), a1 = 0.26326, b1 = −0.13939 (5
+        // docs/methods.md §5: a0 = 0.310 (3 decimals), a1 = 0.26326, b1 = −0.13939 (5
         // decimals, truncated rather than rounded: 0.2632679 is printed 0.26326),
         // so one unit of the last printed digit.
         assert!((c.a0 - 0.310).abs() < 5e-4);
@@ -418,7 +418,7 @@ mod tests {
         assert!((c.b[0] + 0.13939).abs() < 1e-5);
         // FFT of the sampled train with the jump mean on the jumps: the DFT
         // aliases c_{n+kM}, whose ~1/(kM) tails leave O(1e-5) at M = 2^16
-        // (ERRATA §5 quotes agreement within 1e-4).
+        // (docs/methods.md §5 quotes agreement within 1e-4).
         let m = 1 << 16;
         let samples: Vec<f64> = (0..m)
             .map(|i| train.value(tc * i as f64 / m as f64))
@@ -461,7 +461,7 @@ mod tests {
     #[test]
     fn gibbs_overshoot_matches_errata() {
         let train = RectangularTrain::new(1.0, 0.155, 1.0, 0.0).unwrap();
-        // ERRATA §5 prints 10.05 %, 9.10 %, 8.96 % (two decimals of a percent:
+        // docs/methods.md §5 prints 10.05 %, 9.10 %, 8.96 % (two decimals of a percent:
         // ±5e-5 as a fraction).
         for (n, want) in [(20, 0.1005), (200, 0.0910), (2000, 0.0896)] {
             let got = train.gibbs_overshoot(n).unwrap();

@@ -1,5 +1,5 @@
 //! The sinusoid model signals of thesis §6.2 (Eqs. 6.7–6.9) and their analytic
-//! correlations and spectra (Eqs. 6.10–6.17, corrected by ERRATA §4 and §9).
+//! correlations and spectra (Eqs. 6.10–6.17, corrected by docs/methods.md §4 and §9).
 //!
 //! Every model signal is a DC level plus one sinusoid at the ball-pass
 //! frequency:
@@ -14,7 +14,7 @@
 //! # Lag conventions
 //!
 //! Two correlation conventions are in use and they are mirror images
-//! (ERRATA §9, CONVENTIONS.md):
+//! (docs/methods.md §9, CONVENTIONS.md):
 //!
 //! ```text
 //! Eq. 6.12 (thesis ch. 6):        R_xy(τ) = ⟨x(t) y(t+τ)⟩
@@ -28,7 +28,7 @@
 //! the unitary Fourier transforms of the Eq. 6.12 correlation, which is what
 //! `scipy.signal.csd(x, y)` (`conj(X)·Y`) estimates.
 //!
-//! With Eq. 6.12 the analytic results are (ERRATA §4):
+//! With Eq. 6.12 the analytic results are (docs/methods.md §4):
 //!
 //! ```text
 //! R_xy(τ) = c_x c_y + ½[(p_x p_y + q_x q_y) cos ω_c τ + (p_x q_y − q_x p_y) sin ω_c τ]
@@ -180,7 +180,7 @@ impl SpectralLine {
 pub struct CorrelationPeak {
     /// Lag of the peak nearest zero, s, in the stated convention.
     pub tau_phi_s: f64,
-    /// `φ = 360° τ_φ / τ_c`, degrees (ERRATA §8), in (−180, 180].
+    /// `φ = 360° τ_φ / τ_c`, degrees (docs/methods.md §8), in (−180, 180].
     pub phase_deg: f64,
     /// The convention the lag is expressed in.
     pub convention: LagConvention,
@@ -283,7 +283,7 @@ impl SinusoidModel {
     /// ```
     /// use ballpass::model::signals::{ModelSignal as M, SinusoidModel};
     /// let m = SinusoidModel::default();
-    /// // ERRATA §4: S_Fve has +j (a_f a_v / 2) √(π/2) at +ω_c.
+    /// // docs/methods.md §4: S_Fve has +j (a_f a_v / 2) √(π/2) at +ω_c.
     /// let lines = m.cross_spectrum(M::Friction, M::VelocityError);
     /// let w = lines.iter().find(|l| l.omega_rad_s > 0.0).unwrap().weight();
     /// assert!(w.re.abs() < 1e-15 && (w.im - 0.5 * (std::f64::consts::PI / 2.0).sqrt()).abs() < 1e-15);
@@ -311,7 +311,7 @@ impl SinusoidModel {
     }
 
     /// The correlation peak nearest zero lag and the phase it implies
-    /// (`φ = 360° τ_φ / τ_c`, ERRATA §8), or `None` when x and y share no
+    /// (`φ = 360° τ_φ / τ_c`, docs/methods.md §8), or `None` when x and y share no
     /// periodic content.
     ///
     /// ```
@@ -408,14 +408,14 @@ mod tests {
         let w = m.omega_c_rad_s();
         for tau in [-0.4, 0.0, 0.1, 0.77] {
             let r = |x, y| m.correlation(x, y, tau, LagConvention::Eq612);
-            // Eq. 6.13 as corrected in ERRATA §4. Tolerance: rounding of O(1) values.
+            // Eq. 6.13 as corrected in docs/methods.md §4. Tolerance: rounding of O(1) values.
             let fve = -(0.3 * 0.07 / 2.0) * (w * tau).sin();
             let fs = 2.5 * 1.2 + (0.3 * 0.4 / 2.0) * (w * tau).cos();
             let sve = -(0.4 * 0.07 / 2.0) * (w * tau).sin();
             assert!((r(M::Friction, M::VelocityError) - fve).abs() < 1e-14);
             assert!((r(M::Friction, M::Optical) - fs).abs() < 1e-14);
             assert!((r(M::Optical, M::VelocityError) - sve).abs() < 1e-14);
-            // ERRATA §4: the printed integrand v_e(t) s(t+τ) gives +(a_v a_s/2) sin.
+            // docs/methods.md §4: the printed integrand v_e(t) s(t+τ) gives +(a_v a_s/2) sin.
             let vs = (0.07 * 0.4 / 2.0) * (w * tau).sin();
             assert!((r(M::VelocityError, M::Optical) - vs).abs() < 1e-14);
         }
@@ -424,7 +424,7 @@ mod tests {
     #[test]
     fn cross_spectrum_sign_follows_conj_x_times_y() {
         // Fourier coefficient at +ω_c of x is X1 = (p − jq)/2; the line weight
-        // of S_xy at +ω_c must be √(2π) conj(X1) Y1 (unitary convention, ERRATA §4).
+        // of S_xy at +ω_c must be √(2π) conj(X1) Y1 (unitary convention, docs/methods.md §4).
         let m = model();
         let k = (2.0 * PI).sqrt();
         for x in M::ALL {

@@ -1,7 +1,7 @@
 //! The stage as a PD position loop (thesis §6.1, Eqs. 6.1–6.6, checked in
-//! ERRATA §3), the numerical differentiators of Fig. 28 (ERRATA §2), and the
+//! docs/methods.md §3), the numerical differentiators of Fig. 28 (docs/methods.md §2), and the
 //! velocity response to a Gaussian friction pulse train (Eq. 6.29 corrected
-//! in ERRATA §7).
+//! in docs/methods.md §7).
 //!
 //! Units are SI inside this module: mass in kg, position in m, force in N.
 //! With `k = K K_P` (N/m, a stiffness) and `c = K K_D` (N·s/m, a damping):
@@ -13,7 +13,7 @@
 //! ω_n = √(k/m),  ζ = c / (2√(m k)),  zero of G_xr at k/c = ω_n / (2ζ)
 //! ```
 //!
-//! Friction enters with a `+` sign (ERRATA §3). The loop is type 2: a ramp
+//! Friction enters with a `+` sign (docs/methods.md §3). The loop is type 2: a ramp
 //! reference is tracked with no steady error and constant friction leaves a
 //! position offset `F_c / k` but no velocity error.
 
@@ -58,7 +58,7 @@ pub struct LoopFeatures {
     pub damping_ratio: f64,
     /// Zero of `G_xr` at `K_P / K_D = ω_n / (2ζ)`, rad/s.
     pub g_xr_zero_rad_s: f64,
-    /// Peak of `|G_xr|` at `ω_n √(√(1+8ζ²) − 1) / (2ζ)`, rad/s (ERRATA §3).
+    /// Peak of `|G_xr|` at `ω_n √(√(1+8ζ²) − 1) / (2ζ)`, rad/s (docs/methods.md §3).
     pub g_xr_peak_rad_s: f64,
     /// `|G_xr|` at its peak (always > 1).
     pub g_xr_peak_gain: f64,
@@ -68,7 +68,7 @@ pub struct LoopFeatures {
     pub g_xf_peak_rad_s: Option<f64>,
     /// `|G_xf|` at its peak, m/N (`1/k` when there is no resonant peak, at ω = 0).
     pub g_xf_peak_m_per_n: f64,
-    /// Peak of `|G_vf|`, exactly at `ω_n`, rad/s (ERRATA §3).
+    /// Peak of `|G_vf|`, exactly at `ω_n`, rad/s (docs/methods.md §3).
     pub g_vf_peak_rad_s: f64,
     /// `|G_vf|` at its peak `= 1 / (K K_D)`, (m/s)/N.
     pub g_vf_peak_m_s_per_n: f64,
@@ -311,7 +311,7 @@ fn unwrap_deg(prev: f64, cur: f64) -> f64 {
 }
 
 /// Frequency responses of three numerical differentiators relative to the
-/// ideal `jω`, at one frequency (thesis Fig. 28, ERRATA §2).
+/// ideal `jω`, at one frequency (thesis Fig. 28, docs/methods.md §2).
 ///
 /// ```text
 /// centred (Eq. 4.1, offline)  H = j sin(ωT)/T            gain ratio sin(ωT)/(ωT), phase +90°
@@ -432,7 +432,7 @@ pub struct HarmonicRow {
 pub struct VelocityResponse {
     /// Ball-pass frequency, Hz.
     pub f_c_hz: f64,
-    /// Harmonics 0..=N with `D_n = C_n G_vf(j n ω_c)` (ERRATA §7).
+    /// Harmonics 0..=N with `D_n = C_n G_vf(j n ω_c)` (docs/methods.md §7).
     pub harmonics: Vec<HarmonicRow>,
     /// Sample times over one period `[0, τ_c)`, s.
     pub time_s: Vec<f64>,
@@ -453,7 +453,7 @@ pub struct VelocityResponse {
 }
 
 /// Velocity (and position) of the loop over one period when the friction is
-/// the Gaussian train `friction` (thesis Eq. 6.29 as corrected in ERRATA §7):
+/// the Gaussian train `friction` (thesis Eq. 6.29 as corrected in docs/methods.md §7):
 ///
 /// ```text
 /// v(t) = Σ_n D_n exp(j n ω_c t),   D_n = C_n G_vf(j n ω_c),   D_{−n} = D_n*,   D_0 = 0
@@ -553,7 +553,7 @@ mod tests {
         assert!((b.stiffness_n_per_m / a.stiffness_n_per_m - 1.0).abs() < 1e-12);
         assert!((b.damping_n_s_per_m / a.damping_n_s_per_m - 1.0).abs() < 1e-12);
         assert!((f.omega_n_rad_s - (40.0 * 3.0e4 / 12.0f64).sqrt()).abs() < 1e-9);
-        // ERRATA §3: zero of G_xr at K_P/K_D = ω_n/(2ζ).
+        // docs/methods.md §3: zero of G_xr at K_P/K_D = ω_n/(2ζ).
         assert!((f.g_xr_zero_rad_s - 3.0e4 / 60.0).abs() < 1e-9);
         assert!((f.g_xr_zero_rad_s - f.omega_n_rad_s / (2.0 * f.damping_ratio)).abs() < 1e-9);
         assert!(PdLoop::from_gains(0.0, 1.0, 1.0, 1.0).is_err());
@@ -649,7 +649,7 @@ mod tests {
         let rows = difference_responses(1000.0, 500).unwrap();
         let at = |f: f64| rows.iter().find(|r| (r.f_hz - f).abs() < 1e-9).unwrap();
         let r = at(20.0);
-        // ERRATA §2 prints 0.99737 (5 decimals) and 93.6° (1 decimal).
+        // docs/methods.md §2 prints 0.99737 (5 decimals) and 93.6° (1 decimal).
         assert!((r.centred_gain_ratio - 0.99737).abs() < 5e-6);
         assert!((r.centred_phase_deg - 90.0).abs() < 1e-12);
         assert!((r.forward_phase_deg - 93.6).abs() < 0.05);
@@ -661,7 +661,7 @@ mod tests {
         assert!((ny.forward_phase_deg - 180.0).abs() < 1e-9);
         for r in &rows {
             let wt = 2.0 * PI * r.f_hz / 1000.0;
-            // Closed forms of ERRATA §2; rounding only.
+            // Closed forms of docs/methods.md §2; rounding only.
             assert!((r.forward_gain_ratio - (wt / 2.0).sin() / (wt / 2.0)).abs() < 1e-12);
             assert!((r.forward_phase_deg - (90.0 + 180.0 * r.f_hz / 1000.0)).abs() < 1e-9);
             assert!((r.causal_centred_phase_deg - (90.0 - 360.0 * r.f_hz / 1000.0)).abs() < 1e-9);
@@ -728,7 +728,7 @@ mod tests {
 
     #[test]
     fn velocity_response_matches_time_domain_simulation() {
-        // ERRATA §7 test case: ω_n = 15 ω_c, ζ = 0.05, r = 0.155.
+        // docs/methods.md §7 test case: ω_n = 15 ω_c, ζ = 0.05, r = 0.155.
         let tc = 0.90123;
         let stage = PdLoop::from_natural(3.0, 15.0 / tc, 0.05).unwrap();
         let friction = GaussianTrain::new(tc, 0.155, 0.8, 2.0, 0.3 * tc).unwrap();
@@ -754,9 +754,9 @@ mod tests {
             .zip(&ode)
             .fold(0.0f64, |a, (v, o)| a.max((v - o * 1e3).abs()));
         // RK4 with h ω_n = 15·2π/40000 ≈ 2.4e-3 has global error ~ (h ω_n)^4 ≈ 3e-11
-        // relative; the series is truncated below 1e-16. ERRATA §7 reports 2e-10.
+        // relative; the series is truncated below 1e-16. docs/methods.md §7 reports 2e-10.
         assert!(err / peak < 2e-10, "relative error {}", err / peak);
-        // The printed magnitude-only form is badly wrong (ERRATA §7: 162 % of
+        // The printed magnitude-only form is badly wrong (docs/methods.md §7: 162 % of
         // peak for a pulse at t0 = 0; here it is off by more than the peak).
         assert!(resp.magnitude_only_error_of_peak > 1.0);
         assert_eq!(resp.harmonics[0].d_abs_mm_s, 0.0);
@@ -769,7 +769,7 @@ mod tests {
         let friction = GaussianTrain::new(tc, 0.155, 1.0, 0.0, 0.0).unwrap();
         let resp =
             velocity_response(&stage, &friction, &VelocityResponseSettings::default()).unwrap();
-        // ERRATA §7 prints 162 % (three digits: ±0.5 %).
+        // docs/methods.md §7 prints 162 % (three digits: ±0.5 %).
         assert!(
             (resp.magnitude_only_error_of_peak - 1.62).abs() < 0.005,
             "{}",

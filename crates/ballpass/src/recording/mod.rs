@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 pub mod inspect;
 pub mod io;
 pub mod profile;
+pub mod segment;
 
 pub use io::{
     load, load_all, write_csv, write_mat, ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit,

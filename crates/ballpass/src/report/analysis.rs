@@ -1,17 +1,34 @@
-//! The figure set and summary of an [`Analysis`] as a [`Report`] (thesis
-//! Figs. 54–65): raw signals, each correlation full range and zoomed with
-//! dashed lines at multiples of `tau_c`, full-range and high-resolution
-//! auto-spectra with `f_c` and its harmonics marked, and coherence.
+//! The report of an [`Analysis`] (thesis Figs. 54–65): the signals, each
+//! correlation full range and zoomed with dashed lines at multiples of
+//! `tau_c`, the full-range spectra of the unfiltered signals on log–log
+//! axes, the high-resolution spectra of the low-passed ones with `f_c` and
+//! its harmonics marked, and the coherence; each figure in the section
+//! whose text discusses it, with the table it was drawn from linked.
 //!
 //! Everything is drawn from the analysis' own numbers (nothing is
-//! recomputed); the raw-signal figure needs the first recording.
+//! recomputed); the signals figure needs the first recording.
 
-use crate::analysis::{pair_name, Analysis, Signal};
+use crate::analysis::export::{correlation_column, psd_column};
+use crate::analysis::{Analysis, CorrNorm, Signal};
 use crate::error::Result;
 use crate::recording::{Channel, Recording};
-use crate::report::kinds::{self, SpectrumView, Trace};
-use crate::report::{Axis, Block, Figure, Level, Report, Section, Verdict};
+use crate::report::kinds::{self, fmt_pm, fmt_sig, SpectrumView, Trace};
+use crate::report::{Axis, Block, Figure, Level, Report, Section, Table, Verdict};
 
+/// Where the report's data files are and how its figure ids start.
+#[derive(Debug, Clone, Default)]
+pub struct AnalysisLinks {
+    /// Folder of `analysis.json` and the CSV tables relative to the report's
+    /// folder, ending in `/` (empty when they are beside it).
+    pub tables_dir: String,
+    /// The recording the signals figure shows, as a link (a path relative
+    /// to the report's folder or absolute), when it is a file.
+    pub recording: Option<String>,
+    /// Prefix of the figure ids (when several parts share one report).
+    pub id_prefix: String,
+}
+
+/// Unit of a signal squared per hertz: `N²/Hz`, `(mm/s)²/Hz`.
 fn unit2(s: Signal) -> String {
     let u = s.unit();
     if u.contains('/') {
@@ -21,45 +38,102 @@ fn unit2(s: Signal) -> String {
     }
 }
 
+/// Unit of the product of two signals: `N·V`, `N·mm/s`, `V²`.
+fn product_unit(x: Signal, y: Signal) -> String {
+    if x == y {
+        let u = x.unit();
+        return if u.contains('/') {
+            format!("({u})²")
+        } else {
+            format!("{u}²")
+        };
+    }
+    format!("{}·{}", x.unit(), y.unit())
+}
+
+/// The pair in words: `friction` or `friction and optical`.
+fn pair_words(x: Signal, y: Signal) -> String {
+    if x == y {
+        x.words().to_string()
+    } else {
+        format!("{} and {}", x.words(), y.words())
+    }
+}
+
+/// Text from the analysis in the report's words: series names
+/// (`friction__optical`, `velocity_error`) and symbols (`tau_c`) as a
+/// reader writes them.
+pub fn humanize(text: &str) -> String {
+    let mut t = text.to_string();
+    for (x, y) in crate::analysis::CROSS_PAIRS {
+        t = t.replace(&crate::analysis::pair_name(x, y), &pair_words(x, y));
+    }
+    t.replace("velocity_error", "velocity error")
+        .replace("tau_c", "τc")
+        .replace("tau_p", "τp")
+}
+
 /// Builds the report of `a`; `raw` (the first record) adds the signals figure.
 ///
 /// # Errors
 /// [`crate::Error::Report`] if the settings cannot be tabulated.
-pub fn report(a: &Analysis, raw: Option<&Recording>) -> Result<Report> {
+pub fn report(a: &Analysis, raw: Option<&Recording>, links: &AnalysisLinks) -> Result<Report> {
+    let mut r = Report::new(format!(
+        "ballpass analyze: {} mm/s",
+        a.prediction.velocity_mm_s
+    ));
+    for s in sections(a, raw, links)? {
+        r = r.with_section(s);
+    }
+    Ok(r)
+}
+
+/// The sections of the report of `a`, figures in place (see [`report`]).
+///
+/// # Errors
+/// [`crate::Error::Report`] if the settings cannot be tabulated.
+pub fn sections(
+    a: &Analysis,
+    raw: Option<&Recording>,
+    links: &AnalysisLinks,
+) -> Result<Vec<Section>> {
+    let id = |s: &str| format!("{}{s}", links.id_prefix);
+    let table = |f: &str| format!("{}{f}", links.tables_dir);
     let p = &a.prediction;
     let tau = a.measured_period.period_s.unwrap_or(p.tau_c_s);
     let f_c = 1.0 / tau;
     let k = a.settings.harmonics;
+    let n_rec = a.inputs.len();
+
+    // Summary
     let mut kv = vec![
         ("f_c predicted".to_string(), format!("{:.4} Hz", p.f_c_hz)),
         (
             "f_c measured".to_string(),
             a.measured_period
                 .f_c_hz
-                .map(|f| format!("{f:.4} Hz ({})", a.measured_period.choice))
+                .map(|f| format!("{f:.4} Hz ({})", humanize(&a.measured_period.choice)))
                 .unwrap_or_else(|| "not measured".into()),
         ),
         (
             "records".to_string(),
-            format!(
-                "{} × {:.2} s at {} Hz",
-                a.inputs.len(),
-                a.duration_analysed_s,
-                a.fs_hz
-            ),
+            format!("{n_rec} × {:.2} s at {} Hz", a.duration_analysed_s, a.fs_hz),
         ),
     ];
-    for ph in &a.phases {
-        kv.push((ph.pair.clone(), ph.words.clone()));
-    }
     if let Some(v) = &a.velocity_error {
-        kv.push((
-            "velocity error std".into(),
-            format!(
-                "{:.1} µm/s (floor {:.1})",
+        let value = match v.std_spread_um_s {
+            Some(sd) => format!(
+                "{} µm/s (mean of {} records ± their spread; encoder quantisation floor {:.1} µm/s)",
+                fmt_pm(v.std_um_s, sd, 3),
+                v.records,
+                v.quantisation_floor_um_s
+            ),
+            None => format!(
+                "{:.1} µm/s (encoder quantisation floor {:.1} µm/s)",
                 v.std_um_s, v.quantisation_floor_um_s
             ),
-        ));
+        };
+        kv.push(("velocity-error std".into(), value));
     }
     let level = if a.verdict.signals_showing_f_c.is_empty() {
         Level::Warn
@@ -70,15 +144,17 @@ pub fn report(a: &Analysis, raw: Option<&Recording>) -> Result<Report> {
         .with(Block::Verdicts(vec![Verdict::new(
             level,
             "ball-pass frequency",
-            &a.verdict.text,
+            humanize(&a.verdict.text),
         )]))
         .with(Block::KeyValues(kv));
     if !a.warnings.is_empty() {
-        summary = summary.with(Block::Warnings(a.warnings.clone()));
+        summary = summary.with(Block::Warnings(
+            a.warnings.iter().map(|w| humanize(w)).collect(),
+        ));
     }
-    let mut r = Report::new(format!("ballpass analyze: {} mm/s", p.velocity_mm_s))
-        .with_section(summary)
-        .with_section(Section::new("Settings").with(Block::settings(&a.settings)?));
+    let mut out = vec![summary];
+
+    // Signals
     if let Some(rec) = raw {
         let t: Vec<f64> = (0..rec.len()).map(|i| rec.time_s(i)).collect();
         let traces: Vec<Trace<'_>> = Channel::ALL
@@ -95,83 +171,376 @@ pub fn report(a: &Analysis, raw: Option<&Recording>) -> Result<Report> {
                 })
             })
             .collect();
-        r = r.with_figure(kinds::time_series_stack(
-            "signals",
-            &format!("Signals of {}", rec.source_name()),
+        let mut fig = kinds::time_series_stack(
+            &id("signals"),
+            &format!(
+                "Signals of {}",
+                crate::report::passage::short_name(&rec.source_name())
+            ),
             &t,
             &traces,
-        ));
+        )
+        .with_caption(
+            "As loaded, before the velocity error is formed and before any filtering (thesis Fig. 54).",
+        );
+        if let Some(path) = &links.recording {
+            fig = fig.with_data(path.clone(), "the recording");
+        }
+        let text = if n_rec > 1 {
+            format!(
+                "{{fig:{}}} shows the first of the {n_rec} records; the analysis averages the \
+                 correlations and spectra of all of them.",
+                id("signals")
+            )
+        } else {
+            format!("{{fig:{}}} shows the record as loaded.", id("signals"))
+        };
+        out.push(
+            Section::new("Signals")
+                .with(Block::Paragraph(text))
+                .with_figure(fig),
+        );
     }
+
+    // Correlations
     let c = &a.correlations;
+    let norm = a.settings.corr_norm;
+    let norm_words = match norm {
+        CorrNorm::Coeff => "normalised to 1 at zero lag for an autocorrelation (coefficient)",
+        CorrNorm::Biased => "divided by the record length (biased)",
+        CorrNorm::Unbiased => "divided by the number of overlapping samples (unbiased)",
+        CorrNorm::None => "not normalised (sums of products)",
+    };
+    let mut corr = Section::new("Correlations").with(Block::Paragraph(format!(
+        "Correlations R(x, y)[m] = Σ x[n+m]·y[n] of the low-passed, detrended signals (thesis \
+         Eq. 7.1; a peak at a negative lag means y lags x), {norm_words}, averaged over the \
+         records. The measured period τc = {} s comes from the {} autocorrelation{}. The dashed \
+         lines of each zoom mark multiples of that period.",
+        fmt_sig(tau, 5),
+        a.measured_period
+            .from_signal
+            .map_or("(none: predicted period used)", |s| s.words()),
+        a.measured_period
+            .from_signal
+            .map(|s| format!(" ({{fig:{}}})", id(&format!("corr_{}", s.name()))))
+            .unwrap_or_default(),
+    )));
+    let list = |auto: bool| {
+        c.series
+            .iter()
+            .filter(|((x, y), _)| (x == y) == auto)
+            .map(|((x, y), _)| {
+                format!(
+                    "{} ({{fig:{}}})",
+                    pair_words(*x, *y),
+                    id(&format!("corr_{}", crate::analysis::pair_name(*x, *y)))
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let autos = list(true);
+    let crosses = list(false);
+    corr = corr.with(Block::Paragraph(if crosses.is_empty() {
+        format!("The autocorrelations: {autos}.")
+    } else {
+        format!("The autocorrelations: {autos}; the cross-correlations: {crosses}.")
+    }));
+    if !a.phases.is_empty() {
+        let mut t = Table::new(["pair", "figure", "lag (s)", "phase (deg)", "in words"]);
+        for ph in &a.phases {
+            t = t.with_row([
+                pair_words(ph.x, ph.y),
+                format!(
+                    "{{fig:{}}}",
+                    id(&format!("corr_{}", crate::analysis::pair_name(ph.x, ph.y)))
+                ),
+                format!("{:+.3}", ph.lag_s).replace('-', "−"),
+                format!("{:+.0}", ph.phase_deg).replace('-', "−"),
+                humanize(&ph.words),
+            ]);
+        }
+        corr = corr
+            .with(Block::Paragraph(
+                "Phases from the cross-correlation peak nearest zero lag, 360°·lag/τc:".into(),
+            ))
+            .with(Block::Table(t));
+    }
     for ((x, y), v) in &c.series {
-        let name = pair_name(*x, *y);
+        let name = crate::analysis::pair_name(*x, *y);
         let title = if x == y {
             format!("Autocorrelation of {}", x.words())
         } else {
-            format!("Cross-correlation {} × {} (Eq. 7.1)", x.words(), y.words())
+            format!("Cross-correlation of {} (Eq. 7.1)", pair_words(*x, *y))
         };
-        r = r.with_figure(kinds::correlation(
-            &format!("corr_{name}"),
-            &title,
-            &c.lag_s,
-            v,
-            Axis::linear(format!("R {name}"), ""),
-            Some(tau),
-            3.0,
-        ));
+        // the pair is in the title; the axis says what R is
+        let (label, unit) = match norm {
+            CorrNorm::Coeff => ("R (normalised)".to_string(), String::new()),
+            _ => ("R".to_string(), product_unit(*x, *y)),
+        };
+        corr = corr.with_figure(
+            kinds::correlation(
+                &id(&format!("corr_{name}")),
+                &title,
+                &c.lag_s,
+                v,
+                Axis::linear(label, unit),
+                Some(tau),
+                3.0,
+            )
+            .with_caption(format!(
+                "Averaged over {n_rec} record{}; (b) within ±3 τc.",
+                if n_rec == 1 { "" } else { "s" }
+            ))
+            .with_data(
+                table("correlations.csv"),
+                format!("lag_s, {}", correlation_column(*x, *y, norm)),
+            ),
+        );
     }
-    for (id, title, s, range) in [
-        (
-            "spectra",
-            "Auto-spectra, full range (Welch)",
-            &a.spectra,
-            None,
+    out.push(corr);
+
+    // Spectra
+    let view_full = SpectrumView {
+        f_c_hz: Some(f_c),
+        n_harmonics: k,
+        range_hz: None,
+        unfiltered: true,
+    };
+    let view_hires = SpectrumView {
+        f_c_hz: Some(f_c),
+        n_harmonics: k,
+        range_hz: Some((0.0, (k as f64 + 1.0) * f_c)),
+        unfiltered: false,
+    };
+    let lp = a
+        .settings
+        .lowpass_hz
+        .map_or("without a low-pass".to_string(), |f| {
+            format!("low-passed at {} Hz", fmt_sig(f, 3))
+        });
+    let u = &a.spectra_unfiltered;
+    let h = &a.spectra_hires;
+    let mut spectra = Section::new("Spectra").with(Block::Paragraph(format!(
+        "{} shows the full range of the auto-spectra of the signals as recorded (before the \
+         low-pass and the detrend, as the thesis' Fig. 62), on logarithmic axes so that both \
+         the ball-pass harmonics near {} Hz and the white-noise floor at high frequencies read; \
+         {} shows their cross-spectra (Fig. 64). The signals {lp} and detrended are resolved \
+         finely around f_c in {}{}, with k·f_c marked (Figs. 63, 65), and their coherence in {}.",
+        if u.auto.is_empty() {
+            "No figure".to_string()
+        } else {
+            format!("{{fig:{}}}", id("spectra"))
+        },
+        fmt_sig(f_c, 3),
+        if u.cross.is_empty() {
+            "no figure".to_string()
+        } else {
+            format!("{{fig:{}}}", id("cross_spectra"))
+        },
+        format_args!("{{fig:{}}}", id("spectra_hires")),
+        if h.cross.is_empty() {
+            String::new()
+        } else {
+            format!(" and {{fig:{}}}", id("cross_spectra_hires"))
+        },
+        if h.cross.is_empty() {
+            "no figure".to_string()
+        } else {
+            format!("{{fig:{}}}", id("coherence"))
+        },
+    )));
+    let harm = harmonics_table(a);
+    if !harm.rows.is_empty() {
+        spectra = spectra
+            .with(Block::Paragraph(format!(
+                "Each harmonic's PSD against the local floor of its spectrum ({} confidence; \
+                 the floor is the median over ±1.5 f_c without the bins at harmonics):",
+                fmt_percent(a.settings.confidence)
+            )))
+            .with(Block::Table(harm));
+    }
+    let info = |s: &crate::analysis::Spectra| {
+        format!(
+            "Welch ({}), {}-sample segments, {} records, resolution {} Hz; dashed lines at k·f_c, f_c = {} Hz.",
+            s.info.window,
+            s.info.nperseg,
+            s.info.n_records,
+            fmt_sig(s.info.resolution_hz, 3),
+            fmt_sig(f_c, 5)
+        )
+    };
+    let full = SpectrumFigure {
+        spectra: u,
+        view: view_full,
+        log_frequency: true,
+        caption: info(u),
+        table: table("spectra_unfiltered.csv"),
+    };
+    let hires = SpectrumFigure {
+        spectra: h,
+        view: view_hires,
+        log_frequency: false,
+        caption: format!("{}, {lp}. {}", h.info.method, info(h)),
+        table: table("spectra_hires.csv"),
+    };
+    for fig in [
+        full.auto(id("spectra"), "Auto-spectra, full range, unfiltered"),
+        full.cross(
+            id("cross_spectra"),
+            "Cross-spectra magnitude, full range, unfiltered",
         ),
-        (
-            "spectra_hires",
-            "Auto-spectra, high resolution",
-            &a.spectra_hires,
-            Some((0.0, (k as f64 + 1.0) * f_c)),
+        hires.auto(id("spectra_hires"), "Auto-spectra, high resolution"),
+        hires.cross(
+            id("cross_spectra_hires"),
+            "Cross-spectra magnitude, high resolution",
         ),
-    ] {
-        let view = SpectrumView {
-            f_c_hz: Some(f_c),
-            n_harmonics: k,
-            range_hz: range,
-        };
-        let mut fig = Figure::new(id, title).with_caption(format!(
-            "{}, {}-sample segments, resolution {:.4} Hz; dashed lines at k·f_c, f_c = {:.4} Hz",
-            s.info.method, s.info.nperseg, s.info.resolution_hz, f_c
-        ));
-        for (sig, psd) in &s.auto {
+    ]
+    .into_iter()
+    .flatten()
+    {
+        spectra = spectra.with_figure(fig);
+    }
+    if !h.cross.is_empty() {
+        let mut fig = Figure::new(id("coherence"), "Coherence, high resolution")
+            .with_caption(format!(
+                "Magnitude-squared coherence |Pxy|²/(Pxx·Pyy) of the averaged spectra; {}",
+                info(h)
+            ))
+            .with_data(table("spectra_hires.csv"), "freq_hz, coh_*");
+        for cr in &h.cross {
             fig = fig.with_panel(
-                kinds::spectrum_panel(
-                    &s.freq_hz,
-                    psd,
-                    sig.name(),
-                    Axis::log(format!("PSD {}", sig.words()), unit2(*sig)),
-                    view,
+                kinds::coherence_panel(
+                    &h.freq_hz,
+                    &cr.coherence,
+                    &pair_words(cr.x, cr.y),
+                    view_hires,
                 )
-                .titled(sig.words()),
+                .titled(pair_words(cr.x, cr.y)),
             );
         }
-        r = r.with_figure(fig);
+        spectra = spectra.with_figure(fig.interactive());
     }
-    let s = &a.spectra_hires;
-    if !s.cross.is_empty() {
-        let view = SpectrumView {
-            f_c_hz: Some(f_c),
-            n_harmonics: k,
-            range_hz: Some((0.0, (k as f64 + 1.0) * f_c)),
-        };
-        let mut fig = Figure::new("coherence", "Coherence, high resolution");
+    out.push(spectra);
+
+    let mut settings = Section::new("Settings and method").with(Block::settings(&a.settings)?);
+    if !a.method_notes.is_empty() {
+        settings = settings.with(Block::Paragraph(format!(
+            "Method: {}.",
+            humanize(&a.method_notes.join("; "))
+        )));
+    }
+    settings = settings.with(Block::Paragraph(format!(
+        "All numbers behind the figures: {}, {}, {}, {} and {} (column names end in their \
+         units; see the user guide).",
+        table("analysis.json"),
+        table("correlations.csv"),
+        table("spectra_unfiltered.csv"),
+        table("spectra.csv"),
+        table("spectra_hires.csv")
+    )));
+    out.push(settings);
+    Ok(out)
+}
+
+/// The auto- and cross-spectrum figures of one [`crate::analysis::Spectra`].
+struct SpectrumFigure<'a> {
+    spectra: &'a crate::analysis::Spectra,
+    view: SpectrumView,
+    /// Log–log axes over the full range (else linear frequency).
+    log_frequency: bool,
+    caption: String,
+    table: String,
+}
+
+impl SpectrumFigure<'_> {
+    fn panel(&self, values: &[f64], name: &str, y: Axis) -> crate::report::Panel {
+        let f = &self.spectra.freq_hz;
+        if self.log_frequency {
+            kinds::spectrum_panel_loglog(f, values, name, y, self.view)
+        } else {
+            kinds::spectrum_panel(f, values, name, y, self.view)
+        }
+        .titled(name)
+    }
+
+    /// One panel per auto-spectrum; `None` without any.
+    fn auto(&self, id: String, title: &str) -> Option<Figure> {
+        let s = self.spectra;
+        if s.auto.is_empty() {
+            return None;
+        }
+        let columns: Vec<String> = s.auto.iter().map(|(x, _)| psd_column(*x)).collect();
+        let mut fig = Figure::new(id, title)
+            .with_caption(self.caption.clone())
+            .with_data(
+                self.table.clone(),
+                format!("freq_hz, {}", columns.join(", ")),
+            );
+        for (sig, psd) in &s.auto {
+            fig = fig.with_panel(self.panel(
+                psd,
+                sig.words(),
+                Axis::log(format!("PSD of {}", sig.words()), unit2(*sig)),
+            ));
+        }
+        Some(fig.interactive())
+    }
+
+    /// One panel per cross pair, the magnitude |P_xy|; `None` without any.
+    fn cross(&self, id: String, title: &str) -> Option<Figure> {
+        let s = self.spectra;
+        if s.cross.is_empty() {
+            return None;
+        }
+        let mut fig = Figure::new(id, title)
+            .with_caption(self.caption.clone())
+            .with_data(self.table.clone(), "freq_hz, csd_*_re, csd_*_im");
         for cr in &s.cross {
-            let name = pair_name(cr.x, cr.y);
-            fig = fig.with_panel(
-                kinds::coherence_panel(&s.freq_hz, &cr.coherence, &name, view).titled(name.clone()),
-            );
+            let mag: Vec<f64> = cr.pxy.iter().map(|z| z.norm()).collect();
+            fig = fig.with_panel(self.panel(
+                &mag,
+                &pair_words(cr.x, cr.y),
+                Axis::log("|CSD|", format!("{}/Hz", product_unit(cr.x, cr.y))),
+            ));
         }
-        r = r.with_figure(fig);
+        Some(fig.interactive())
     }
-    Ok(r)
+}
+
+fn fmt_percent(p: f64) -> String {
+    format!("{} %", fmt_sig(100.0 * p, 3))
+}
+
+/// Harmonics of each signal: PSD against its floor, at the measured `f_c`
+/// where there is one.
+fn harmonics_table(a: &Analysis) -> Table {
+    let mut t = Table::new([
+        "signal",
+        "k",
+        "k·f_c (Hz)",
+        "PSD / floor (dB)",
+        "threshold (dB)",
+        "above the floor",
+    ]);
+    for r in &a.harmonics {
+        let Some(v) = r.measured.as_ref().or(r.predicted.as_ref()) else {
+            continue;
+        };
+        let db =
+            |x: Option<f64>| x.map_or("–".to_string(), |d| format!("{d:+.1}").replace('-', "−"));
+        t = t.with_row([
+            r.signal.words().to_string(),
+            r.k.to_string(),
+            fmt_sig(v.f_hz, 4),
+            db(v.ratio_db),
+            db(v.threshold_db),
+            match v.significant {
+                Some(true) => "yes".to_string(),
+                Some(false) => "no".to_string(),
+                None => "–".to_string(),
+            },
+        ]);
+    }
+    t
 }

@@ -4,18 +4,27 @@ use crate::campaign::diagnose::{Condition, Diagnosis};
 use crate::campaign::sweep::Sweep;
 use crate::error::Result;
 use crate::recording::{Channel, Recording};
-use crate::report::kinds::{self, fmt_sig, PowerLaw, SpectrumView};
+use crate::report::kinds::{self, fmt_pm, fmt_sig, Overlaid, PowerLaw, SpectrumView};
 use crate::report::{
-    Axis, Block, Figure, Level, Panel, Section, Series, SeriesStyle, Table, Verdict,
+    Axis, Block, Figure, Level, Panel, Rgb, Section, Series, SeriesStyle, Table, Verdict,
 };
 
-/// What a campaign report shows: summary sections, then figures.
+/// What a campaign report shows: sections with their figures in place, and
+/// figures without a section (none today; kept for callers that add some).
 #[derive(Debug, Clone, Default)]
 pub struct ReportParts {
-    /// Summary sections.
+    /// Sections, figures placed next to their text.
     pub sections: Vec<Section>,
-    /// Figures.
+    /// Figures shown after the sections.
     pub figures: Vec<Figure>,
+}
+
+/// A link to a recording file: its absolute path (the report may live in
+/// another folder than the one the path was given relative to).
+pub(crate) fn recording_link(rec: &Recording) -> Option<String> {
+    let p = rec.meta.source.as_ref()?;
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.clone());
+    Some(abs.display().to_string())
 }
 
 fn mean_std_cols(rows: &[(f64, Option<crate::stats::MeanStd>)]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -33,12 +42,15 @@ fn mean_std_cols(rows: &[(f64, Option<crate::stats::MeanStd>)]) -> (Vec<f64>, Ve
 }
 
 /// Sections and figures of a velocity sweep. `prefix` keeps figure ids
-/// unique when several parts share a report.
+/// unique when several parts share a report; `tables_dir` is the folder of
+/// `sweep.csv` relative to the report, ending in `/` (empty when beside it).
 ///
 /// # Errors
 /// [`crate::Error::Report`] if the settings cannot be tabulated.
-pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
+pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<ReportParts> {
     let mut parts = ReportParts::default();
+    let sweep_csv = format!("{tables_dir}sweep.csv");
+    let mut figures: Vec<Figure> = Vec::new();
     let mut table = Table::new([
         "v (mm/s)",
         "records",
@@ -50,12 +62,12 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
         "τp/τc",
     ]);
     let ms = |m: Option<crate::stats::MeanStd>, sig: usize| {
-        m.map(|m| format!("{} ± {}", fmt_sig(m.mean, sig), fmt_sig(m.std, 2)))
+        m.map(|m| fmt_pm(m.mean, m.std, sig))
             .unwrap_or_else(|| "–".into())
     };
     for r in &sweep.velocities {
         table = table.with_row([
-            fmt_sig(r.velocity_mm_s, 3),
+            format!("{}", r.velocity_mm_s),
             r.records.to_string(),
             fmt_sig(r.f_c_predicted_hz, 5),
             ms(r.f_c_measured_hz, 5),
@@ -65,11 +77,22 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
             ms(r.tau_ratio, 3),
         ]);
     }
-    parts.sections.push(
-        Section::new("Velocity sweep")
-            .with(Block::Paragraph(sweep.findings.join(". ") + "."))
-            .with(Block::Table(table)),
-    );
+    let mut section = Section::new("Velocity sweep")
+        .with(Block::Paragraph(
+            sweep
+                .findings
+                .iter()
+                .map(|f| capitalised(f))
+                .collect::<Vec<_>>()
+                .join(". ")
+                + ".",
+        ))
+        .with(Block::Table(table))
+        .with(Block::Paragraph(
+            "Each value is the mean over the repeats at that velocity ± their sample standard \
+             deviation."
+                .into(),
+        ));
 
     let ve: Vec<(f64, Option<crate::stats::MeanStd>)> = sweep
         .velocities
@@ -113,9 +136,15 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
                 p.legend = Some(true);
             }
         }
-        parts.figures.push(fig.with_caption(
-            "Mean over repeats with ± one standard deviation; dashed: the PD-loop response |G_vf(j2πf_c)| fitted to the means.",
-        ));
+        figures.push(
+            fig.with_caption(
+                "Mean over repeats with ± one standard deviation; dashed: the PD-loop response |G_vf(j2πf_c)| fitted to the means.",
+            )
+            .with_data(
+                sweep_csv.clone(),
+                "velocity_mm_s, velocity_error_std_um_s, velocity_error_std_spread_um_s",
+            ),
+        );
     }
 
     let tc: Vec<_> = sweep
@@ -137,10 +166,9 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
                 f.as_ref()
                     .map(|f| {
                         format!(
-                            "fit: {} v^({} ± {})",
+                            "fit: {} v^({})",
                             fmt_sig(f.coefficient, 3),
-                            fmt_sig(f.slope, 4),
-                            fmt_sig(f.slope_ci95, 2)
+                            fmt_pm(f.slope, f.slope_ci95, 4)
                         )
                     })
                     .unwrap_or_default()
@@ -156,7 +184,7 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
                 });
             }
         }
-        parts.figures.push(
+        figures.push(
             kinds::loglog_fit(
                 &format!("{prefix}tau_vs_velocity"),
                 "Ball-pass period τc and pulse width τp against velocity (thesis Fig. 52)",
@@ -166,7 +194,8 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
                 &[("τc", &mc, &sc), ("τp", &mp, &sp)],
                 &fits,
             )
-            .with_caption("Both inversely proportional to velocity when the fitted exponent is −1 within its 95 % interval."),
+            .with_caption("Mean over repeats ± one standard deviation; dashed: power laws fitted on log–log axes, exponent ± its 95 % interval. Both are inversely proportional to velocity when the exponent is −1.")
+            .with_data(sweep_csv.clone(), "velocity_mm_s, tau_c_s, tau_c_spread_s, tau_p_s, tau_p_spread_s"),
         );
     }
     let ra: Vec<_> = sweep
@@ -176,15 +205,24 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
         .collect();
     let (xr, mr, sr) = mean_std_cols(&ra);
     if !xr.is_empty() {
-        parts.figures.push(kinds::ratio_with_mean(
-            &format!("{prefix}tau_ratio"),
-            "Ratio τp / τc against velocity (thesis Fig. 53; thesis mean 0.155)",
-            Axis::linear("Tracking velocity", "mm/s"),
-            Axis::linear("τp / τc", ""),
-            &xr,
-            &mr,
-            &sr,
-        ));
+        figures.push(
+            kinds::ratio_with_mean(
+                &format!("{prefix}tau_ratio"),
+                "Ratio τp / τc against velocity (thesis Fig. 53; thesis mean 0.155)",
+                Axis::linear("Tracking velocity", "mm/s"),
+                Axis::linear("τp / τc", ""),
+                &xr,
+                &mr,
+                &sr,
+            )
+            .with_caption(
+                "Mean over repeats ± one standard deviation; dashed: the mean over the velocities.",
+            )
+            .with_data(
+                sweep_csv.clone(),
+                "velocity_mm_s, tau_ratio, tau_ratio_spread",
+            ),
+        );
     }
     let fc: Vec<_> = sweep
         .velocities
@@ -217,15 +255,64 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
             ));
         }
         p.legend = Some(true);
-        parts.figures.push(
+        figures.push(
             Figure::new(
                 format!("{prefix}f_c_vs_velocity"),
                 "Measured ball-pass frequency against velocity",
             )
+            .with_caption("Mean over repeats ± one standard deviation; dashed: the catalog prediction; solid: f_c = v/(2 d_avg) fitted through the origin.")
+            .with_data(sweep_csv, "velocity_mm_s, f_c_predicted_hz, f_c_measured_hz, f_c_measured_std_hz")
             .with_panel(p),
         );
     }
+    if !figures.is_empty() {
+        let refs: Vec<String> = figures
+            .iter()
+            .map(|f| format!("{{fig:{}}}", f.id))
+            .collect();
+        section = section.with(Block::Paragraph(format!(
+            "Against velocity: {}.",
+            figure_list(&figures, &refs)
+        )));
+    }
+    for f in figures {
+        section = section.with_figure(f);
+    }
+    parts.sections.push(section);
     Ok(parts)
+}
+
+/// A sentence with its first letter in capitals, unless it starts with a
+/// symbol (τc stays τc, not Τc).
+fn capitalised(s: &str) -> String {
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) if f.is_ascii_lowercase() => f.to_uppercase().chain(c).collect(),
+        Some(f) => std::iter::once(f).chain(c).collect(),
+        None => String::new(),
+    }
+}
+
+/// "the velocity-error std (Figure 1), τc and τp (Figure 2), ..." from the
+/// figures' ids.
+fn figure_list(figures: &[Figure], refs: &[String]) -> String {
+    figures
+        .iter()
+        .zip(refs)
+        .map(|(f, r)| {
+            let what = if f.id.ends_with("velocity_error_std") {
+                "the velocity-error standard deviation"
+            } else if f.id.ends_with("tau_vs_velocity") {
+                "the ball-pass period τc and pulse width τp"
+            } else if f.id.ends_with("tau_ratio") {
+                "their ratio τp/τc"
+            } else {
+                "the measured ball-pass frequency"
+            };
+            format!("{what} in {r}")
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// A raw friction trace shown in a diagnosis report.
@@ -233,10 +320,14 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str) -> Result<ReportParts> {
 pub struct FrictionTrace {
     /// Legend/panel title (bearing and verdict).
     pub name: String,
+    /// The bearing's verdict (sets the colour: bad is red).
+    pub verdict: Condition,
     /// Sample times, s.
     pub t_s: Vec<f64>,
     /// Friction force, N.
     pub friction_n: Vec<f64>,
+    /// The recording file, absolute, when it came from one.
+    pub source: Option<String>,
 }
 
 /// The friction of the best and the worst bearing (thesis Fig. 66): the
@@ -257,17 +348,31 @@ pub fn friction_examples(
             let f = rec.channel(Channel::Friction)?;
             Some(FrictionTrace {
                 name: format!("{} ({})", b.bearing, b.verdict.name()),
+                verdict: b.verdict,
                 t_s: (0..f.len()).map(|i| rec.time_s(i)).collect(),
                 friction_n: f.to_vec(),
+                source: recording_link(&rec),
             })
         })
         .collect()
 }
 
+/// The colour of a bearing in the fleet figures: bad red, suspect orange,
+/// good ones from [`Rgb::CALM`] (never red or orange), by `good_index`.
+fn verdict_color(v: Condition, good_index: usize) -> Rgb {
+    match v {
+        Condition::Bad => Rgb::RED,
+        Condition::Suspect => Rgb::ORANGE,
+        Condition::Good => Rgb::calm(good_index),
+    }
+}
+
 /// Sections and figures of a bearing diagnosis.
 ///
-/// `friction_examples`: optional raw friction traces
-/// of the best and worst bearing (thesis Fig. 66).
+/// `friction_examples`: optional raw friction traces of the best and worst
+/// bearing (thesis Fig. 66). `prefix` keeps figure ids unique when several
+/// parts share a report; `tables_dir` is the folder of the diagnosis tables
+/// relative to the report, ending in `/` (empty when beside it).
 ///
 /// # Errors
 /// [`crate::Error::Report`] if the settings cannot be tabulated.
@@ -276,6 +381,7 @@ pub fn diagnosis_parts(
     f_c_hz: Option<f64>,
     friction_examples: &[FrictionTrace],
     prefix: &str,
+    tables_dir: &str,
 ) -> Result<ReportParts> {
     let mut parts = ReportParts::default();
     let verdicts: Vec<Verdict> = d
@@ -299,10 +405,10 @@ pub fn diagnosis_parts(
         "bearing",
         "verdict",
         "records",
-        "low band × median",
-        "spikes / record",
-        "at ball-pass multiples",
-        "f_c line (dB)",
+        "low-band power / batch median",
+        "spikes per record",
+        "spikes at ball-pass multiples",
+        "f_c line above floor (dB)",
     ]);
     for b in &d.bearings {
         table = table.with_row([
@@ -320,78 +426,201 @@ pub fn diagnosis_parts(
             b.harmonics
                 .first()
                 .and_then(|h| h.ratio_db)
-                .map(|r| fmt_sig(r, 3))
+                .map(|r| format!("{r:+.1}").replace('-', "−"))
                 .unwrap_or_else(|| "–".into()),
         ]);
     }
-    let mut section = Section::new("Bearing diagnosis")
-        .with(Block::Verdicts(verdicts))
-        .with(Block::Table(table));
-    if !d.warnings.is_empty() {
-        section = section.with(Block::Warnings(d.warnings.clone()));
-    }
-    parts.sections.push(section);
-    parts
-        .sections
-        .push(Section::new("Diagnosis thresholds").with(Block::settings(&d.settings)?));
-
+    let id = |s: &str| format!("{prefix}{s}");
+    let mut figures: Vec<Figure> = Vec::new();
     if !d.freq_hz.is_empty() {
         let names: Vec<String> = d
             .bearings
             .iter()
             .map(|b| format!("{} ({})", b.bearing, b.verdict.name()))
             .collect();
-        let spectra: Vec<(&str, &[f64])> = names
+        let mut good = 0;
+        let spectra: Vec<Overlaid<'_>> = d
+            .bearings
             .iter()
-            .map(String::as_str)
-            .zip(d.friction_psd.iter().map(Vec::as_slice))
+            .zip(&names)
+            .zip(&d.friction_psd)
+            .map(|((b, name), psd)| {
+                let color = verdict_color(b.verdict, good);
+                if b.verdict == Condition::Good {
+                    good += 1;
+                }
+                Overlaid {
+                    name,
+                    values: psd,
+                    color,
+                    highlight: b.verdict == Condition::Bad,
+                }
+            })
             .collect();
-        let worst = d.bearings.iter().position(|b| b.verdict == Condition::Bad);
+        let spectra_csv = format!("{tables_dir}friction_spectra.csv");
         let y = Axis::log("Friction PSD", "N²/Hz");
-        parts.figures.push(kinds::overlay_spectra(
-            &format!("{prefix}fleet_spectra"),
-            "Friction auto-spectra of the bearings, averaged over repeats (thesis Fig. 67)",
-            &d.freq_hz,
-            &spectra,
-            y.clone(),
-            worst,
-            SpectrumView {
-                f_c_hz: None,
-                n_harmonics: 0,
-                range_hz: None,
-            },
-        ));
-        parts.figures.push(kinds::overlay_spectra(
-            &format!("{prefix}fleet_spectra_low"),
-            "Friction auto-spectra below the low-band edge with f_c and harmonics (thesis Fig. 68)",
-            &d.freq_hz,
-            &spectra,
-            y,
-            worst,
-            SpectrumView {
-                f_c_hz,
-                n_harmonics: 5,
-                range_hz: Some((0.0, d.settings.low_band_hz)),
-            },
-        ));
+        // up to 1.5 times the highest frequency where a spectrum still
+        // stands above the axis' floor (the low-passed spectra fall below
+        // it within a few times the cut-off)
+        let first = d.freq_hz.iter().copied().find(|f| *f > 0.0);
+        let psds: Vec<&[f64]> = d.friction_psd.iter().map(Vec::as_slice).collect();
+        let floor =
+            kinds::log_range(&d.freq_hz, &psds, None, kinds::LOG_DECADES_FILTERED).map(|r| r.0);
+        let last = floor.and_then(|lo| {
+            d.freq_hz
+                .iter()
+                .enumerate()
+                .rfind(|(i, _)| psds.iter().any(|p| p.get(*i).is_some_and(|v| *v >= lo)))
+                .map(|(_, f)| *f)
+        });
+        let nyquist = d.freq_hz.last().copied();
+        let last = match (last, nyquist) {
+            (Some(l), Some(n)) => Some((1.5 * l).min(n)),
+            (None, n) => n,
+            (l, None) => l,
+        };
+        let x_full = match (first, last) {
+            (Some(a), Some(b)) if b > a => Axis::log("Frequency", "Hz").with_range(a, b),
+            _ => Axis::log("Frequency", "Hz"),
+        };
+        figures.push(
+            kinds::overlay_spectra(
+                &id("fleet_spectra"),
+                "Friction auto-spectra of the bearings, averaged over repeats (thesis Fig. 67)",
+                &d.freq_hz,
+                &spectra,
+                x_full,
+                y.clone(),
+                SpectrumView {
+                    f_c_hz,
+                    n_harmonics: 5,
+                    range_hz: None,
+                    unfiltered: false,
+                },
+            )
+            .with_caption(format!(
+                "On log–log axes; the signals are low-passed as analysed, so the spectra fall \
+                 off above the low-pass: they are shown down to {} decades below their peak \
+                 and up to 1.5 times the frequency where they reach that floor. Bad in red, \
+                 suspect in orange; dashed lines at k·f_c.",
+                kinds::LOG_DECADES_FILTERED
+            ))
+            .with_data(
+                spectra_csv.clone(),
+                "freq_hz, psd_friction_<bearing>_n2_per_hz",
+            ),
+        );
+        figures.push(
+            kinds::overlay_spectra(
+                &id("fleet_spectra_low"),
+                "Friction auto-spectra below the low-band edge with f_c and harmonics (thesis Fig. 68)",
+                &d.freq_hz,
+                &spectra,
+                Axis::linear("Frequency", "Hz"),
+                y,
+                SpectrumView {
+                    f_c_hz,
+                    n_harmonics: 5,
+                    range_hz: Some((0.0, d.settings.low_band_hz)),
+                    unfiltered: false,
+                },
+            )
+            .with_caption(format!(
+                "0 to {} Hz, the band whose power the verdicts compare; dashed lines at k·f_c.",
+                fmt_sig(d.settings.low_band_hz, 3)
+            ))
+            .with_data(spectra_csv, "freq_hz, psd_friction_<bearing>_n2_per_hz"),
+        );
     }
     if !friction_examples.is_empty() {
         let mut fig = Figure::new(
-            format!("{prefix}friction_examples"),
+            id("friction_examples"),
             "Friction force of the best and the worst bearing (thesis Fig. 66)",
-        );
+        )
+        .with_caption("The first recording of each, as loaded.")
+        .interactive();
+        let mut good = 0;
         for tr in friction_examples {
+            let color = verdict_color(tr.verdict, good);
+            if tr.verdict == Condition::Good {
+                good += 1;
+            }
             let mut p = Panel::new(Axis::linear("Time", "s"), Axis::linear("Friction", "N"))
                 .titled(tr.name.clone());
-            p.series.push(Series::line(
-                tr.name.clone(),
-                tr.t_s.clone(),
-                tr.friction_n.clone(),
-            ));
+            p.series.push(
+                Series::line(tr.name.clone(), tr.t_s.clone(), tr.friction_n.clone())
+                    .with_color(color),
+            );
             p.legend = Some(false);
             fig = fig.with_panel(p);
+            if let Some(src) = &tr.source {
+                fig = fig.with_data(src.clone(), tr.name.clone());
+            }
         }
-        parts.figures.push(fig);
+        figures.push(fig);
     }
+    let mut section = Section::new("Bearing diagnosis").with(Block::Verdicts(verdicts));
+    if !figures.is_empty() {
+        let refs: Vec<String> = figures
+            .iter()
+            .map(|f| format!("{{fig:{}}}", f.id))
+            .collect();
+        let what = |f: &Figure| {
+            if f.id.ends_with("fleet_spectra") {
+                "the bearings' friction spectra over the full range"
+            } else if f.id.ends_with("fleet_spectra_low") {
+                "the low band the verdicts compare"
+            } else {
+                "the friction of the best and the worst bearing"
+            }
+        };
+        section = section.with(Block::Paragraph(format!(
+            "Bad bearings are drawn in red, suspect ones in orange. See {}.",
+            figures
+                .iter()
+                .zip(&refs)
+                .map(|(f, r)| format!("{} in {r}", what(f)))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )));
+    }
+    section = section
+        .with(Block::Table(table))
+        .with(Block::Paragraph(format!(
+            "A sticking spike stands more than {} robust σ above the friction's slowly \
+             varying baseline; the robust σ is 1.4826 × the median absolute deviation of the \
+             friction about that baseline: the ordinary noise level, which rare spikes do not \
+             inflate. \"Spikes at ball-pass multiples\" is the fraction of intervals between \
+             spikes within ±{} τc of a whole number of periods (random spikes give about {}). \
+             Every number per bearing is in {tables_dir}diagnosis.csv and per record in \
+             {tables_dir}records.csv.",
+            fmt_sig(d.settings.sticking.spike_factor, 3),
+            fmt_sig(d.settings.sticking.timing_tolerance_periods, 2),
+            fmt_sig(2.0 * d.settings.sticking.timing_tolerance_periods, 2),
+        )));
+    if !d.warnings.is_empty() {
+        section = section.with(Block::Warnings(d.warnings.clone()));
+    }
+    for f in figures {
+        section = section.with_figure(f);
+    }
+    parts.sections.push(section);
+    parts
+        .sections
+        .push(Section::new("Diagnosis thresholds").with(Block::settings(&d.settings)?));
     Ok(parts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::capitalised;
+
+    /// Findings start with a capital, but a symbol keeps its case (a
+    /// capital τ reads as a T).
+    #[test]
+    fn sentences_are_capitalised_but_not_symbols() {
+        assert_eq!(capitalised("the velocity error"), "The velocity error");
+        assert_eq!(capitalised("τc ∝ v^(−1)"), "τc ∝ v^(−1)");
+        assert_eq!(capitalised(""), "");
+    }
 }

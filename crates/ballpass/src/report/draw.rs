@@ -20,29 +20,68 @@ use super::prepare::{
     prepare, Frame, LegendSample, Prepared, PreparedMarker, PreparedPanel, Shape,
 };
 use super::spec::{Figure, MarkerStyle, Rgb};
+use super::text::{self, CrispText, FONT_TTF, PLOTTERS_SIZE_PER_EM};
 use crate::error::{Error, Result};
-
-/// The embedded font (DejaVu Sans, Bitstream Vera licence, see
-/// `assets/fonts/DejaVuSans-LICENSE.txt`).
-static FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Font family name written into the SVG and under which the embedded font
 /// is registered with `plotters`.
 const FAMILY: &str = "DejaVu Sans, Bitstream Vera Sans, Verdana, sans-serif";
 
-/// Registers the embedded font once per process.
+/// Registers the embedded font once per process (the SVG text is measured
+/// with it) and checks that our own text layout can parse it.
 fn ensure_font() -> Result<()> {
     static REGISTERED: OnceLock<std::result::Result<(), String>> = OnceLock::new();
     REGISTERED
         .get_or_init(|| {
             plotters::style::register_font(FAMILY, FontStyle::Normal, FONT_TTF)
-                .map_err(|_| "the embedded DejaVu Sans font could not be parsed".to_string())
+                .map_err(|_| "the embedded DejaVu Sans font could not be parsed".to_string())?;
+            text::font()
+                .map(|_| ())
+                .ok_or_else(|| "the embedded DejaVu Sans font could not be parsed".to_string())
         })
         .clone()
         .map_err(|reason| Error::Report {
             what: "font".into(),
             reason,
         })
+}
+
+/// Text sizes, px of an em at scale 1 (the SVG's `font-size`). A 900 px
+/// figure printed 17 cm wide puts a 16 px tick label at 8.5 pt, above the
+/// 7–8 pt journals ask of figure text.
+pub(crate) const TICK_PX: f64 = 16.0;
+const AXIS_TITLE_PX: f64 = 17.0;
+const FIGURE_TITLE_PX: f64 = 20.0;
+const PANEL_TITLE_PX: f64 = 16.0;
+const LEGEND_PX: f64 = 15.0;
+const MARKER_PX: f64 = 14.0;
+
+/// Panel layout, px at scale 1: strips above the plot for the panel title
+/// and the legend (so a legend never covers data), the axis label areas and
+/// the margins around the plot.
+const PANEL_TITLE_STRIP: f64 = 26.0;
+const LEGEND_ROW: f64 = 24.0;
+const LEGEND_SAMPLE: f64 = 26.0;
+const LEGEND_GAP: f64 = 6.0;
+const LEGEND_SPACING: f64 = 22.0;
+const MARGIN_TOP: f64 = 10.0;
+const MARGIN_RIGHT: f64 = 26.0;
+const MARGIN_LEFT: f64 = 8.0;
+const MARGIN_BOTTOM: f64 = 4.0;
+const X_LABEL_AREA: f64 = 60.0;
+const Y_LABEL_AREA: f64 = 106.0;
+/// Tick label bands beside the plot that the interactive layer redraws:
+/// the x tick labels lie within this height under the plot, the y tick
+/// labels within this width left of it (the axis titles are further out).
+pub(crate) const X_TICK_BAND: f64 = 32.0;
+pub(crate) const Y_TICK_BAND: f64 = 78.0;
+
+/// Where one panel's plot lies in the image (SVG user units), for the
+/// interactive layer of the HTML report.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PanelGeometry {
+    /// Left, top, right, bottom of the plot area, px.
+    pub plot: [i32; 4],
 }
 
 /// An SVG image of a figure and the notes made while drawing it.
@@ -54,10 +93,12 @@ pub struct Rendered {
     /// values on a log axis, error bars cut at a log axis). The report lists
     /// these under "Drawing notes".
     pub warnings: Vec<String>,
+    /// Each panel's plot area, for the interactive layer.
+    pub(crate) geometry: Vec<PanelGeometry>,
 }
 
 /// Height of the figure title strip, px at scale 1.
-const TITLE_PX: f64 = 36.0;
+const TITLE_PX: f64 = 38.0;
 
 fn size(fig: &Figure, p: &Prepared, scale: u32) -> (u32, u32) {
     let title = if p.title.is_empty() { 0.0 } else { TITLE_PX };
@@ -80,14 +121,16 @@ pub fn render_svg(fig: &Figure) -> Result<Rendered> {
     let p = prepare(fig, fig.width_px as usize)?;
     let (w, h) = size(fig, &p, 1);
     let mut svg = String::new();
+    let geometry;
     {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
-        draw(&root, &p, 1.0, false).map_err(|e| draw_err(fig, e))?;
+        geometry = draw(&root, &p, 1.0, false).map_err(|e| draw_err(fig, e))?;
         root.present().map_err(|e| draw_err(fig, e))?;
     }
     Ok(Rendered {
         svg,
         warnings: p.warnings,
+        geometry,
     })
 }
 
@@ -109,7 +152,10 @@ pub fn render_png(fig: &Figure, scale: u32) -> Result<Vec<u8>> {
     let (w, h) = size(fig, &p, scale);
     let mut rgb = vec![0u8; w as usize * h as usize * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        let root = CrispText {
+            inner: BitMapBackend::with_buffer(&mut rgb, (w, h)),
+        }
+        .into_drawing_area();
         draw(&root, &p, scale as f64, true).map_err(|e| draw_err(fig, e))?;
         root.present().map_err(|e| draw_err(fig, e))?;
     }
@@ -140,12 +186,14 @@ fn rgb(c: Rgb) -> RGBColor {
     RGBColor(c.0, c.1, c.2)
 }
 
-fn font(px: f64) -> TextStyle<'static> {
-    TextStyle::from((FAMILY, px)).color(&BLACK)
+/// A text style whose em is `em_px` pixels (`plotters` sizes text by
+/// 1.24 em, see [`PLOTTERS_SIZE_PER_EM`]).
+fn font(em_px: f64) -> TextStyle<'static> {
+    TextStyle::from((FAMILY, em_px * PLOTTERS_SIZE_PER_EM)).color(&BLACK)
 }
 
-type DrawResult<DB> =
-    std::result::Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+type DrawResult<DB, T = ()> =
+    std::result::Result<T, DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
 /// `bitmap`: the target rasterises thick polylines itself (see `draw_panel`).
 fn draw<DB: DrawingBackend>(
@@ -153,23 +201,129 @@ fn draw<DB: DrawingBackend>(
     p: &Prepared,
     s: f64,
     bitmap: bool,
-) -> DrawResult<DB> {
+) -> DrawResult<DB, Vec<PanelGeometry>> {
     root.fill(&WHITE)?;
     let body = if p.title.is_empty() {
         root.clone()
     } else {
         let (top, rest) = root.split_vertically((TITLE_PX * s) as u32);
         let (w, h) = top.dim_in_pixel();
+        let (title, em) = fit_text(&p.title, FIGURE_TITLE_PX * s, f64::from(w) - 24.0 * s, s);
         top.draw(&Text::new(
-            p.title.clone(),
+            title,
             ((w / 2) as i32, (h / 2) as i32 + (3.0 * s) as i32),
-            font(20.0 * s).pos(Pos::new(HPos::Center, VPos::Center)),
+            font(em).pos(Pos::new(HPos::Center, VPos::Center)),
         ))?;
         rest
     };
     let areas = body.split_evenly((p.panels.len(), 1));
+    let mut geometry = Vec::with_capacity(p.panels.len());
     for (area, panel) in areas.iter().zip(&p.panels) {
-        draw_panel(area, panel, s, bitmap)?;
+        geometry.push(draw_panel(area, panel, s, bitmap)?);
+    }
+    Ok(geometry)
+}
+
+/// A title that fits `max_px`: drawn smaller down to 13 px, then cut in the
+/// middle with an ellipsis (a long file path keeps its start and its name).
+fn fit_text(text: &str, em: f64, max_px: f64, s: f64) -> (String, f64) {
+    let w = text::text_width(text, em);
+    if w <= max_px {
+        return (text.to_string(), em);
+    }
+    let small = (em * max_px / w).max(13.0 * s).min(em);
+    if text::text_width(text, small) <= max_px {
+        return (text.to_string(), small);
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let mut keep = chars.len();
+    while keep > 2 {
+        keep -= 1;
+        let head: String = chars[..keep / 2].iter().collect();
+        let tail: String = chars[chars.len() - (keep - keep / 2)..].iter().collect();
+        let t = format!("{head}…{tail}");
+        if text::text_width(&t, small) <= max_px {
+            return (t, small);
+        }
+    }
+    ("…".into(), small)
+}
+
+/// One legend entry laid out: which series, and its width in px.
+struct LegendEntry<'a> {
+    series: &'a super::prepare::PreparedSeries,
+    width: f64,
+}
+
+/// The legend entries of a panel in rows that fit `avail` px, in declared
+/// order; empty when the panel shows no legend.
+fn legend_rows<'a>(p: &'a PreparedPanel, avail: f64, s: f64) -> Vec<Vec<LegendEntry<'a>>> {
+    if !p.legend {
+        return Vec::new();
+    }
+    let mut named: Vec<&super::prepare::PreparedSeries> =
+        p.series.iter().filter(|x| !x.name.is_empty()).collect();
+    named.sort_by_key(|x| x.index);
+    let mut rows: Vec<Vec<LegendEntry<'a>>> = Vec::new();
+    let mut used = 0.0;
+    for series in named {
+        let width =
+            (LEGEND_SAMPLE + LEGEND_GAP) * s + text::text_width(&series.name, LEGEND_PX * s);
+        let start_new = rows.is_empty() || used + width > avail;
+        if start_new {
+            rows.push(Vec::new());
+            used = 0.0;
+        }
+        used += width + LEGEND_SPACING * s;
+        rows.last_mut()
+            .expect("a row was pushed")
+            .push(LegendEntry { series, width });
+    }
+    rows
+}
+
+/// Draws the legend rows in the strip `area`, starting at `x0` (the left
+/// edge of the plot).
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    rows: &[Vec<LegendEntry<'_>>],
+    x0: f64,
+    s: f64,
+) -> DrawResult<DB> {
+    for (r, row) in rows.iter().enumerate() {
+        let y = ((r as f64 + 0.5) * LEGEND_ROW * s).round() as i32;
+        let mut x = x0;
+        for e in row {
+            let color = rgb(e.series.color);
+            let style = color.stroke_width(((e.series.stroke_px * s).round() as u32).max(1));
+            let (a, b) = (x.round() as i32, (x + LEGEND_SAMPLE * s).round() as i32);
+            match e.series.legend {
+                LegendSample::Line => area.draw(&PathElement::new(vec![(a, y), (b, y)], style))?,
+                LegendSample::Dashed => {
+                    let dash = (6.0 * s) as i32;
+                    let gap = (4.0 * s) as i32;
+                    let mut u = a;
+                    while u < b {
+                        area.draw(&PathElement::new(
+                            vec![(u, y), ((u + dash).min(b), y)],
+                            style,
+                        ))?;
+                        u += dash + gap;
+                    }
+                }
+                LegendSample::Point => area.draw(&Circle::new(
+                    ((a + b) / 2, y),
+                    (3.5 * s).round() as i32,
+                    color.filled(),
+                ))?,
+            }
+            area.draw(&Text::new(
+                e.series.name.clone(),
+                (((LEGEND_SAMPLE + LEGEND_GAP) * s + x).round() as i32, y),
+                font(LEGEND_PX * s).pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+            x += e.width + LEGEND_SPACING * s;
+        }
     }
     Ok(())
 }
@@ -228,20 +382,39 @@ fn draw_panel<DB: DrawingBackend>(
     p: &PreparedPanel,
     s: f64,
     bitmap: bool,
-) -> DrawResult<DB> {
+) -> DrawResult<DB, PanelGeometry> {
+    let (w, _) = area.dim_in_pixel();
+    let plot_x0 = (MARGIN_LEFT + Y_LABEL_AREA) * s;
+    let plot_x1 = f64::from(w) - MARGIN_RIGHT * s;
+    let mut rest = area.clone();
+    if !p.title.is_empty() {
+        let (top, below) = rest.split_vertically((PANEL_TITLE_STRIP * s) as u32);
+        let (_, h) = top.dim_in_pixel();
+        let (title, em) = fit_text(&p.title, PANEL_TITLE_PX * s, plot_x1 - plot_x0, s);
+        top.draw(&Text::new(
+            title,
+            (((plot_x0 + plot_x1) / 2.0) as i32, (h as f64 * 0.6) as i32),
+            font(em).pos(Pos::new(HPos::Center, VPos::Center)),
+        ))?;
+        rest = below;
+    }
+    let rows = legend_rows(p, plot_x1 - plot_x0, s);
+    if !rows.is_empty() {
+        let (strip, below) =
+            rest.split_vertically((rows.len() as f64 * LEGEND_ROW * s + 4.0 * s) as u32);
+        draw_legend(&strip, &rows, plot_x0, s)?;
+        rest = below;
+    }
     let x_key: Vec<f64> = p.x.ticks.major.iter().map(|t| t.0).collect();
     let y_key: Vec<f64> = p.y.ticks.major.iter().map(|t| t.0).collect();
-    let mut builder = ChartBuilder::on(area);
+    let mut builder = ChartBuilder::on(&rest);
     builder
-        .margin_top((8.0 * s) as u32)
-        .margin_right((24.0 * s) as u32)
-        .margin_left((6.0 * s) as u32)
-        .margin_bottom((4.0 * s) as u32)
-        .x_label_area_size((46.0 * s) as u32)
-        .y_label_area_size((78.0 * s) as u32);
-    if !p.title.is_empty() {
-        builder.caption(&p.title, font(15.0 * s));
-    }
+        .margin_top((MARGIN_TOP * s) as u32)
+        .margin_right((MARGIN_RIGHT * s) as u32)
+        .margin_left((MARGIN_LEFT * s) as u32)
+        .margin_bottom((MARGIN_BOTTOM * s) as u32)
+        .x_label_area_size((X_LABEL_AREA * s) as u32)
+        .y_label_area_size((Y_LABEL_AREA * s) as u32);
     let mut chart = builder.build_cartesian_2d(
         AxisCoord {
             lo: p.x.lo,
@@ -267,13 +440,17 @@ fn draw_panel<DB: DrawingBackend>(
         .x_labels(100)
         .y_labels(100)
         .max_light_lines(100)
-        .label_style(font(13.0 * s))
-        .axis_desc_style(font(14.0 * s))
+        .label_style(font(TICK_PX * s))
+        .axis_desc_style(font(AXIS_TITLE_PX * s))
         .bold_line_style(RGBColor(215, 215, 215).stroke_width((1.0 * s) as u32))
         .light_line_style(RGBColor(238, 238, 238).stroke_width((1.0 * s) as u32))
         .axis_style(BLACK.stroke_width((1.0 * s).max(1.0) as u32))
         .set_all_tick_mark_size((5.0 * s) as u32)
         .draw()?;
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    let geometry = PanelGeometry {
+        plot: [xr.start, yr.start, xr.end, yr.end],
+    };
 
     // frame around the plotting area
     chart.draw_series(std::iter::once(Rectangle::new(
@@ -281,46 +458,34 @@ fn draw_panel<DB: DrawingBackend>(
         BLACK.stroke_width((1.0 * s).max(1.0) as u32),
     )))?;
 
-    for m in &p.vlines {
-        draw_marker(&mut chart, m, [(m.at, p.y.lo), (m.at, p.y.hi)], s)?;
-    }
-    for m in &p.hlines {
-        draw_marker(&mut chart, m, [(p.x.lo, m.at), (p.x.hi, m.at)], s)?;
-    }
-
-    // legend entries in declared order, whatever the drawing order
-    let mut by_index: Vec<&super::prepare::PreparedSeries> = p.series.iter().collect();
-    by_index.sort_by_key(|s| s.index);
-    for series in by_index {
-        if p.legend && !series.name.is_empty() {
-            let color = rgb(series.color);
-            let line_style = color.stroke_width(((series.stroke_px * s).round() as u32).max(1));
-            let r = (3.0 * s).round() as i32;
-            let anno = chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?;
-            anno.label(series.name.clone());
-            let len = (22.0 * s) as i32;
-            let (dash, gap) = ((6.0 * s) as i32, (3.0 * s) as i32);
-            match series.legend {
-                LegendSample::Line => {
-                    anno.legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + len, y)], line_style)
-                    });
-                }
-                LegendSample::Dashed => {
-                    anno.legend(move |(x, y)| {
-                        plotters::element::DashedPathElement::new(
-                            vec![(x, y), (x + len, y)],
-                            dash,
-                            gap,
-                            line_style,
-                        )
-                    });
-                }
-                LegendSample::Point => {
-                    anno.legend(move |(x, y)| Circle::new((x + len / 2, y), r, color.filled()));
-                }
+    // A vertical marker's label is kept when it starts after the previous
+    // kept label and either fits before the next marker line or leads a
+    // crowd of lines (the first of 1.1 Hz harmonics on a 0–500 Hz axis):
+    // the rest of a crowd stays unlabelled.
+    let mut order: Vec<&PreparedMarker> = p.vlines.iter().collect();
+    order.sort_by(|a, b| a.at.total_cmp(&b.at));
+    let px: Vec<f64> = order
+        .iter()
+        .map(|m| f64::from(chart.backend_coord(&(m.at, p.y.hi)).0))
+        .collect();
+    let mut last_right = f64::NEG_INFINITY;
+    for (i, m) in order.iter().enumerate() {
+        let mut m = (*m).clone();
+        if !m.label.is_empty() {
+            let w = text::text_width(&m.label, MARKER_PX * s) + 8.0 * s;
+            let next = px.get(i + 1).copied().unwrap_or(f64::from(xr.end));
+            let room_right = next - px[i] >= w || i + 1 == px.len();
+            let leads = i == 0 || px[i] - px[i - 1] >= w;
+            if !(room_right || leads) || px[i] < last_right {
+                m.label.clear();
+            } else {
+                last_right = px[i] + w;
             }
         }
+        draw_marker(&mut chart, &m, [(m.at, p.y.lo), (m.at, p.y.hi)], s, xr.end)?;
+    }
+    for m in &p.hlines {
+        draw_marker(&mut chart, m, [(p.x.lo, m.at), (p.x.hi, m.at)], s, xr.end)?;
     }
 
     for series in &p.series {
@@ -395,18 +560,7 @@ fn draw_panel<DB: DrawingBackend>(
         }
     }
 
-    if p.legend && p.series.iter().any(|s| !s.name.is_empty()) {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .margin((6.0 * s) as u32)
-            .legend_area_size((28.0 * s) as u32)
-            .label_font(font(12.0 * s))
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK.mix(0.4))
-            .draw()?;
-    }
-    Ok(())
+    Ok(geometry)
 }
 
 /// The strokes whose ends fall on different pixels (a zero-length thick
@@ -420,11 +574,15 @@ fn pixel_strokes<DB: DrawingBackend>(
         .collect()
 }
 
+/// Draws a marker line and its label: a vertical line's label to the
+/// right of its top end, or to the left when it would run past the plot's
+/// right edge `right_px`; a horizontal line's above its right end.
 fn draw_marker<DB: DrawingBackend, X, Y>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
     m: &PreparedMarker,
     ends: [(f64, f64); 2],
     s: f64,
+    right_px: i32,
 ) -> DrawResult<DB>
 where
     X: plotters::coord::ranged1d::Ranged<ValueType = f64>,
@@ -448,29 +606,168 @@ where
     }
     if !m.label.is_empty() {
         let vertical = ends[0].0 == ends[1].0;
-        let (anchor, offset, pos) = if vertical {
-            // top end, text right of the line
-            (
-                ends[1],
-                ((4.0 * s) as i32, (3.0 * s) as i32),
-                Pos::new(HPos::Left, VPos::Top),
-            )
-        } else {
-            // right end, text above the line
-            (
-                ends[1],
-                ((-4.0 * s) as i32, (-3.0 * s) as i32),
-                Pos::new(HPos::Right, VPos::Bottom),
-            )
-        };
+        let width = text::text_width(&m.label, MARKER_PX * s);
+        let x_px = chart.backend_coord(&ends[1]).0;
+        let (anchor, offset, pos) =
+            if vertical && f64::from(x_px) + 4.0 * s + width > f64::from(right_px) {
+                // top end, text left of the line (it would leave the plot)
+                (
+                    ends[1],
+                    ((-4.0 * s) as i32, (3.0 * s) as i32),
+                    Pos::new(HPos::Right, VPos::Top),
+                )
+            } else if vertical {
+                // top end, text right of the line
+                (
+                    ends[1],
+                    ((4.0 * s) as i32, (3.0 * s) as i32),
+                    Pos::new(HPos::Left, VPos::Top),
+                )
+            } else {
+                // right end, text above the line
+                (
+                    ends[1],
+                    ((-4.0 * s) as i32, (-3.0 * s) as i32),
+                    Pos::new(HPos::Right, VPos::Bottom),
+                )
+            };
         chart.draw_series(std::iter::once(
             EmptyElement::at(anchor)
                 + Text::new(
                     m.label.clone(),
                     offset,
-                    font(12.0 * s).color(&color).pos(pos),
+                    font(MARKER_PX * s).color(&color).pos(pos),
                 ),
         ))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::{Axis, Panel, Series};
+
+    /// Text elements of an SVG: (text, x, y, font-size).
+    fn texts(svg: &str) -> Vec<(String, f64, f64, f64)> {
+        let doc = roxmltree::Document::parse(svg).unwrap();
+        doc.descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .map(|n| {
+                let num = |a: &str| n.attribute(a).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+                (
+                    n.text().unwrap_or("").trim().to_string(),
+                    num("x"),
+                    num("y"),
+                    num("font-size"),
+                )
+            })
+            .collect()
+    }
+
+    /// Regression: legends were drawn inside the plot, over the data (the
+    /// demo's Figs. 11, 12, 23, 25). They sit in a strip above the plot.
+    #[test]
+    fn legends_are_above_the_plot_not_on_the_data() {
+        let x: Vec<f64> = (0..100).map(f64::from).collect();
+        let fig = Figure::new("l", "Legend").with_panel(
+            Panel::new(Axis::linear("x", "s"), Axis::linear("y", "N"))
+                .with_series(Series::line("rising", x.clone(), x.clone()))
+                .with_series(Series::line("flat at the top", x.clone(), vec![99.0; 100]))
+                .titled("(a) panel"),
+        );
+        let r = render_svg(&fig).unwrap();
+        let top = f64::from(r.geometry[0].plot[1]);
+        let t = texts(&r.svg);
+        for name in ["rising", "flat at the top"] {
+            let (_, _, y, _) = t.iter().find(|x| x.0 == name).expect(name);
+            assert!(*y < top, "legend '{name}' at y = {y}, plot starts at {top}");
+        }
+        // and under the panel title
+        let (_, _, y_title, _) = t.iter().find(|x| x.0 == "(a) panel").unwrap();
+        let (_, _, y_legend, _) = t.iter().find(|x| x.0 == "rising").unwrap();
+        assert!(y_title < y_legend);
+    }
+
+    /// Regression: tick labels were 10.5 px (13 / 1.24), small in print.
+    /// At 900 px printed 17 cm wide, 16 px is 8.5 pt; no text is below 14 px.
+    #[test]
+    fn text_is_legible_at_print_size() {
+        let x: Vec<f64> = (0..100).map(f64::from).collect();
+        let fig = Figure::new("t", "Ticks").with_panel(
+            Panel::new(Axis::linear("Frequency", "Hz"), Axis::log("PSD", "N²/Hz"))
+                .with_series(Series::line(
+                    "p",
+                    x.clone(),
+                    x.iter().map(|v| 1.0 + v * v).collect(),
+                ))
+                .with_vlines(crate::report::Marker::harmonics(20.0, 3, "f_c")),
+        );
+        let t = texts(&render_svg(&fig).unwrap().svg);
+        let tick = t.iter().find(|x| x.0 == "20").expect("a tick label 20");
+        assert!((tick.3 - TICK_PX).abs() < 1e-9, "tick font-size {}", tick.3);
+        for (s, _, _, size) in &t {
+            assert!(*size >= 14.0 - 1e-9, "'{s}' at {size} px");
+        }
+    }
+
+    /// Labels of crowded markers are left out where they would run into the
+    /// next line (harmonics of 1.1 Hz on a 0–500 Hz axis); every line stays.
+    #[test]
+    fn crowded_marker_labels_are_thinned_but_all_lines_kept() {
+        let fig = Figure::new("c", "Crowded").with_panel(
+            Panel::new(Axis::linear("f", "Hz"), Axis::log("P", "N²/Hz"))
+                .with_series(Series::line("P", vec![0.1, 500.0], vec![1.0, 2.0]))
+                .with_vlines(crate::report::Marker::harmonics(1.1, 3, "f_c"))
+                .with_vlines([crate::report::Marker::red_dashed(100.0, "far")]),
+        );
+        let r = render_svg(&fig).unwrap();
+        let t: Vec<String> = texts(&r.svg).into_iter().map(|x| x.0).collect();
+        assert!(t.contains(&"far".to_string()), "{t:?}");
+        assert!(t.contains(&"f_c".to_string()), "the crowd's first: {t:?}");
+        for gone in ["2f_c", "3f_c"] {
+            assert!(!t.contains(&gone.to_string()), "{gone} in {t:?}");
+        }
+    }
+
+    /// Regression: long titles (a full file path) ran off the figure. They
+    /// are drawn smaller, then cut in the middle.
+    #[test]
+    fn long_titles_fit_the_figure() {
+        let long = format!(
+            "{}/v09_r1.csv: optical signal",
+            "/a/very/long/folder".repeat(8)
+        );
+        let (t, em) = fit_text(&long, 20.0, 850.0, 1.0);
+        assert!(text::text_width(&t, em) <= 850.0);
+        assert!(t.contains('…') && t.ends_with("optical signal"), "{t}");
+        let (t, em) = fit_text("short", 20.0, 850.0, 1.0);
+        assert_eq!((t.as_str(), em), ("short", 20.0));
+    }
+
+    /// A marker label near the right edge is drawn left of its line, inside
+    /// the plot (the "f_c" label was clipped).
+    #[test]
+    fn marker_labels_stay_inside_the_plot() {
+        let x: Vec<f64> = (0..=100).map(f64::from).collect();
+        let fig = Figure::new("m", "Markers").with_panel(
+            Panel::new(
+                Axis::linear("x", "Hz").with_range(0.0, 100.0),
+                Axis::linear("y", ""),
+            )
+            .with_series(Series::line("p", x.clone(), x))
+            .with_vlines([crate::report::Marker::red_dashed(99.5, "f_c")]),
+        );
+        let r = render_svg(&fig).unwrap();
+        let right = f64::from(r.geometry[0].plot[2]);
+        let t = texts(&r.svg);
+        let (_, x, _, size) = t.iter().find(|x| x.0 == "f_c").unwrap();
+        let w = text::text_width("f_c", *size);
+        // anchored at its right end ("end"), left of the line
+        assert!(r.svg.contains("text-anchor=\"end\""));
+        assert!(
+            *x <= right && x - w >= 0.0,
+            "label at {x}, plot ends at {right}"
+        );
+    }
 }

@@ -1,12 +1,12 @@
 //! The self-contained HTML report and the files written beside it.
 
-use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
 use super::draw::{render_png, render_svg};
+use super::page;
 use super::spec::Figure;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -25,7 +25,7 @@ pub enum Level {
 }
 
 impl Level {
-    fn badge(self) -> (&'static str, &'static str) {
+    pub(crate) fn badge(self) -> (&'static str, &'static str) {
         match self {
             Level::Pass => ("pass", "PASS"),
             Level::Warn => ("warn", "WARN"),
@@ -98,6 +98,9 @@ pub enum Block {
     /// The settings that produced the results, as name → value rows (see
     /// [`Block::settings`]).
     Settings(Vec<(String, String)>),
+    /// A figure, placed here next to the text that discusses it. Figures
+    /// are numbered in the order they appear in the report.
+    Figure(Box<Figure>),
 }
 
 impl Block {
@@ -158,13 +161,20 @@ fn scalar(v: &serde_json::Value) -> String {
     }
 }
 
-/// A titled part of the summary.
+/// A titled part of the report: text, tables and figures, then any
+/// subsections (a part of the demo report holds a command's sections).
+///
+/// Text may refer to a figure of the same report by its id as
+/// `{fig:<id>}`; the report writes it as a link "Figure N" (N in order of
+/// appearance). A reference to an id the report does not have is an error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Section {
     /// Heading ("Prediction vs measurement", "Verdicts", "Settings").
     pub heading: String,
     /// Content, in order.
     pub blocks: Vec<Block>,
+    /// Sections inside this one, after its blocks.
+    pub subsections: Vec<Section>,
 }
 
 impl Section {
@@ -173,6 +183,7 @@ impl Section {
         Section {
             heading: heading.into(),
             blocks: Vec::new(),
+            subsections: Vec::new(),
         }
     }
 
@@ -180,6 +191,42 @@ impl Section {
     pub fn with(mut self, block: Block) -> Self {
         self.blocks.push(block);
         self
+    }
+
+    /// The same section with a figure placed after its content so far.
+    pub fn with_figure(self, figure: Figure) -> Self {
+        self.with(Block::Figure(Box::new(figure)))
+    }
+
+    /// The same section with one more subsection.
+    pub fn with_subsection(mut self, section: Section) -> Self {
+        self.subsections.push(section);
+        self
+    }
+
+    /// Figures of this section and its subsections, in order.
+    fn collect_figures<'a>(&'a self, out: &mut Vec<&'a Figure>) {
+        for b in &self.blocks {
+            if let Block::Figure(f) = b {
+                out.push(f);
+            }
+        }
+        for s in &self.subsections {
+            s.collect_figures(out);
+        }
+    }
+
+    /// Tables of this section and its subsections.
+    fn count_tables(&self) -> usize {
+        self.blocks
+            .iter()
+            .filter(|b| matches!(b, Block::Table(_)))
+            .count()
+            + self
+                .subsections
+                .iter()
+                .map(Section::count_tables)
+                .sum::<usize>()
     }
 }
 
@@ -192,9 +239,10 @@ pub struct Report {
     pub command: String,
     /// ballpass version that produced it ([`crate::VERSION`] by default).
     pub version: String,
-    /// Summary sections, shown first, in order.
+    /// Sections, in order (with the figures placed in them).
     pub summary: Vec<Section>,
-    /// Figures, shown after the summary, in order; ids must be unique.
+    /// Figures not placed in a section, shown after the sections under
+    /// "Figures", in order. Ids must be unique over the whole report.
     pub figures: Vec<Figure>,
 }
 
@@ -222,10 +270,46 @@ impl Report {
         self
     }
 
-    /// The same report with one more figure.
+    /// The same report with one more figure after the sections (prefer
+    /// [`Section::with_figure`], which puts it next to its text).
     pub fn with_figure(mut self, figure: Figure) -> Self {
         self.figures.push(figure);
         self
+    }
+
+    /// Every figure in the order the report shows and numbers them: those
+    /// placed in sections, then the others.
+    pub fn all_figures(&self) -> Vec<&Figure> {
+        let mut out = Vec::new();
+        for s in &self.summary {
+            s.collect_figures(&mut out);
+        }
+        out.extend(self.figures.iter());
+        out
+    }
+
+    /// The figure with this id, wherever it is placed.
+    pub fn figure_mut(&mut self, id: &str) -> Option<&mut Figure> {
+        fn in_section<'a>(s: &'a mut Section, id: &str) -> Option<&'a mut Figure> {
+            for b in &mut s.blocks {
+                if let Block::Figure(f) = b {
+                    if f.id == id {
+                        return Some(f);
+                    }
+                }
+            }
+            s.subsections.iter_mut().find_map(|x| in_section(x, id))
+        }
+        if let Some(i) = self.figures.iter().position(|f| f.id == id) {
+            return self.figures.get_mut(i);
+        }
+        self.summary.iter_mut().find_map(|s| in_section(s, id))
+    }
+
+    /// How many tables (not counting key–value and settings lists) the
+    /// report shows.
+    pub fn table_count(&self) -> usize {
+        self.summary.iter().map(Section::count_tables).sum()
     }
 }
 
@@ -275,8 +359,8 @@ pub struct HtmlReport {
     pub warnings: Vec<String>,
 }
 
-/// Renders the report as one self-contained HTML document (inline SVG and
-/// CSS, no scripts, no external resources) without writing anything.
+/// Renders the report as one self-contained HTML document (inline SVG,
+/// CSS and script, nothing fetched) without writing anything.
 ///
 /// `png` adds links to `figures/<id>.png` under each figure.
 ///
@@ -285,20 +369,21 @@ pub struct HtmlReport {
 /// As [`write_report`], minus the I/O.
 pub fn render_html(report: &Report, png: bool) -> Result<HtmlReport> {
     check_report(report)?;
-    let svgs = report
-        .figures
+    let figures = report.all_figures();
+    let svgs = figures
         .iter()
-        .map(render_svg)
+        .map(|f| render_svg(f))
         .collect::<Result<Vec<_>>>()?;
     let mut warnings = Vec::new();
-    let html = html_document(report, &svgs, png, &mut warnings);
+    let html = page::document(report, &figures, &svgs, png, &mut warnings)?;
     Ok(HtmlReport { html, warnings })
 }
 
-/// Figure ids unique, table rows as wide as their header.
+/// Figure ids unique, table rows as wide as their header, every figure
+/// reference to a figure of the report.
 fn check_report(report: &Report) -> Result<()> {
     let mut seen = std::collections::HashSet::new();
-    for f in &report.figures {
+    for f in report.all_figures() {
         if !seen.insert(f.id.as_str()) {
             return Err(Error::Report {
                 what: format!("figure '{}'", f.id),
@@ -306,7 +391,7 @@ fn check_report(report: &Report) -> Result<()> {
             });
         }
     }
-    for s in &report.summary {
+    fn walk(s: &Section, ids: &std::collections::HashSet<&str>) -> Result<()> {
         for b in &s.blocks {
             if let Block::Table(t) = b {
                 if let Some((i, row)) = t
@@ -326,6 +411,24 @@ fn check_report(report: &Report) -> Result<()> {
                     });
                 }
             }
+            for text in page::block_texts(b) {
+                if let Some(id) = page::figure_refs(text).find(|id| !ids.contains(id)) {
+                    return Err(Error::Report {
+                        what: format!("section '{}'", s.heading),
+                        reason: format!("refers to figure '{id}', which the report does not have"),
+                    });
+                }
+            }
+        }
+        s.subsections.iter().try_for_each(|x| walk(x, ids))
+    }
+    report.summary.iter().try_for_each(|s| walk(s, &seen))?;
+    for f in report.all_figures() {
+        if let Some(id) = page::figure_refs(&f.caption).find(|id| !seen.contains(id)) {
+            return Err(Error::Report {
+                what: format!("figure '{}' caption", f.id),
+                reason: format!("refers to figure '{id}', which the report does not have"),
+            });
         }
     }
     Ok(())
@@ -355,14 +458,13 @@ pub fn write_report(report: &Report, dir: &Path, options: ReportOptions) -> Resu
             format!("{} is not in 1..=4", options.png_scale),
         ));
     }
-    let svgs = report
-        .figures
+    let figures = report.all_figures();
+    let svgs = figures
         .iter()
-        .map(render_svg)
+        .map(|f| render_svg(f))
         .collect::<Result<Vec<_>>>()?;
     let pngs = if options.png {
-        report
-            .figures
+        figures
             .iter()
             .map(|f| render_png(f, options.png_scale))
             .collect::<Result<Vec<_>>>()?
@@ -370,7 +472,7 @@ pub fn write_report(report: &Report, dir: &Path, options: ReportOptions) -> Resu
         Vec::new()
     };
     let mut warnings = Vec::new();
-    let html = html_document(report, &svgs, options.png, &mut warnings);
+    let html = page::document(report, &figures, &svgs, options.png, &mut warnings)?;
 
     let fig_dir = dir.join(FIGURES_DIR);
     fs::create_dir_all(&fig_dir).map_err(|source| Error::Io {
@@ -394,12 +496,12 @@ pub fn write_report(report: &Report, dir: &Path, options: ReportOptions) -> Resu
         pngs: Vec::new(),
         warnings,
     };
-    for (fig, r) in report.figures.iter().zip(&svgs) {
+    for (fig, r) in figures.iter().zip(&svgs) {
         let path = fig_dir.join(format!("{}.svg", fig.id));
         write_atomic(&path, r.svg.as_bytes())?;
         files.svgs.push(path);
     }
-    for (fig, png) in report.figures.iter().zip(&pngs) {
+    for (fig, png) in figures.iter().zip(&pngs) {
         let path = fig_dir.join(format!("{}.png", fig.id));
         write_atomic(&path, png)?;
         files.pngs.push(path);
@@ -422,218 +524,4 @@ pub fn escape_html(s: &str) -> String {
         }
     }
     out
-}
-
-const CSS: &str = r#"
-:root { --fg: #1b1f23; --muted: #57606a; --line: #d0d7de; --bg2: #f6f8fa; }
-* { box-sizing: border-box; }
-body { font-family: "DejaVu Sans", Verdana, "Segoe UI", Helvetica, Arial, sans-serif; color: var(--fg);
-       margin: 0 auto; max-width: 1000px; padding: 1.5rem; line-height: 1.45; }
-h1 { font-size: 1.6rem; margin: 0 0 .3rem; }
-h2 { font-size: 1.25rem; border-bottom: 1px solid var(--line); padding-bottom: .2rem; margin-top: 2rem; }
-h3 { font-size: 1.05rem; margin: 0 0 .4rem; }
-.meta { color: var(--muted); margin: 0; font-size: .9rem; }
-code { background: var(--bg2); padding: .05rem .3rem; border-radius: 3px; word-break: break-all; }
-table { border-collapse: collapse; margin: .5rem 0 1rem; font-size: .92rem; }
-th, td { border: 1px solid var(--line); padding: .25rem .6rem; text-align: left; vertical-align: top; }
-th { background: var(--bg2); }
-td.num { text-align: right; font-variant-numeric: tabular-nums; }
-table.kv th { font-weight: normal; color: var(--muted); }
-ul.verdicts { list-style: none; padding: 0; }
-ul.verdicts li { margin: .3rem 0; }
-.badge { display: inline-block; min-width: 3.6em; text-align: center; font-weight: bold; font-size: .8rem;
-         padding: .1rem .4rem; border-radius: 3px; color: #fff; margin-right: .5rem; }
-.badge.pass { background: #1a7f37; } .badge.warn { background: #9a6700; }
-.badge.fail { background: #cf222e; } .badge.info { background: #57606a; }
-.warnings { background: #fff8c5; border: 1px solid #d4a72c; border-radius: 4px; padding: .5rem 1rem .5rem 2rem; }
-details.settings summary { cursor: pointer; color: var(--muted); }
-nav ol { columns: 2; font-size: .92rem; }
-figure { margin: 2rem 0; page-break-inside: avoid; }
-figure svg { display: block; max-width: 100%; height: auto; border: 1px solid var(--line); }
-figcaption { color: var(--fg); font-size: .92rem; margin-top: .4rem; }
-figcaption .files { color: var(--muted); }
-.note { color: #9a6700; font-size: .88rem; }
-footer { color: var(--muted); font-size: .85rem; border-top: 1px solid var(--line); margin-top: 2rem; padding-top: .5rem; }
-"#;
-
-/// Whether a cell looks like a number (right-aligned).
-fn numeric(cell: &str) -> bool {
-    let t = cell.trim();
-    let head = t.split_whitespace().next().unwrap_or("");
-    !head.is_empty()
-        && head
-            .trim_start_matches(['−', '-', '+', '±'])
-            .parse::<f64>()
-            .is_ok()
-}
-
-fn html_document(
-    report: &Report,
-    svgs: &[super::Rendered],
-    png: bool,
-    warnings: &mut Vec<String>,
-) -> String {
-    let e = escape_html;
-    let mut h = String::with_capacity(64 * 1024 + svgs.iter().map(|s| s.svg.len()).sum::<usize>());
-    let _ = write!(
-        h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
-         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
-         <meta name=\"generator\" content=\"ballpass {v}\">\n<title>{t}</title>\n<style>{CSS}</style>\n</head>\n<body>\n\
-         <header>\n<h1>{t}</h1>\n<p class=\"meta\">ballpass {v}",
-        t = e(&report.title),
-        v = e(&report.version),
-    );
-    if !report.command.is_empty() {
-        let _ = write!(h, " · <code>{}</code>", e(&report.command));
-    }
-    h.push_str("</p>\n</header>\n<main>\n");
-
-    for section in &report.summary {
-        let _ = writeln!(h, "<section>\n<h2>{}</h2>", e(&section.heading));
-        for block in &section.blocks {
-            write_block(&mut h, block);
-        }
-        h.push_str("</section>\n");
-    }
-
-    if !report.figures.is_empty() {
-        h.push_str("<section>\n<h2>Figures</h2>\n<nav><ol>\n");
-        for f in &report.figures {
-            let _ = writeln!(
-                h,
-                "<li><a href=\"#fig-{}\">{}</a></li>",
-                e(&f.id),
-                e(&f.title)
-            );
-        }
-        h.push_str("</ol></nav>\n");
-        for (i, (f, r)) in report.figures.iter().zip(svgs).enumerate() {
-            let _ = writeln!(
-                h,
-                "<figure id=\"fig-{id}\">\n<h3>Figure {n}. {t}</h3>",
-                id = e(&f.id),
-                n = i + 1,
-                t = e(&f.title)
-            );
-            // inline the SVG; give it an accessible name
-            let svg = r.svg.trim_start();
-            match svg.strip_prefix("<svg") {
-                Some(rest) => {
-                    let _ = write!(h, "<svg role=\"img\" aria-label=\"{}\"{rest}", e(&f.title));
-                }
-                None => h.push_str(svg),
-            }
-            h.push_str("<figcaption>");
-            if !f.caption.is_empty() {
-                let _ = write!(h, "{} ", e(&f.caption));
-            }
-            let _ = write!(
-                h,
-                "<span class=\"files\">[<a href=\"{d}/{id}.svg\">SVG</a>",
-                d = FIGURES_DIR,
-                id = e(&f.id)
-            );
-            if png {
-                let _ = write!(
-                    h,
-                    " · <a href=\"{d}/{id}.png\">PNG</a>",
-                    d = FIGURES_DIR,
-                    id = e(&f.id)
-                );
-            }
-            h.push_str("]</span>");
-            for w in &r.warnings {
-                let _ = write!(h, "<br><span class=\"note\">Drawing note: {}</span>", e(w));
-                warnings.push(w.clone());
-            }
-            h.push_str("</figcaption>\n</figure>\n");
-        }
-        h.push_str("</section>\n");
-    }
-    let _ = write!(
-        h,
-        "</main>\n<footer>Written by ballpass {}. This file is self-contained: \
-         figures are inline SVG, no scripts, no network access.</footer>\n</body>\n</html>\n",
-        e(&report.version)
-    );
-    h
-}
-
-fn write_block(h: &mut String, block: &Block) {
-    let e = escape_html;
-    match block {
-        Block::Paragraph(p) => {
-            let _ = writeln!(h, "<p>{}</p>", e(p));
-        }
-        Block::KeyValues(rows) => {
-            h.push_str("<table class=\"kv\">\n");
-            for (k, v) in rows {
-                let class = if numeric(v) { " class=\"num\"" } else { "" };
-                let _ = writeln!(
-                    h,
-                    "<tr><th scope=\"row\">{}</th><td{class}>{}</td></tr>",
-                    e(k),
-                    e(v)
-                );
-            }
-            h.push_str("</table>\n");
-        }
-        Block::Table(t) => {
-            h.push_str("<table>\n<thead><tr>");
-            for c in &t.headers {
-                let _ = write!(h, "<th scope=\"col\">{}</th>", e(c));
-            }
-            h.push_str("</tr></thead>\n<tbody>\n");
-            for row in &t.rows {
-                h.push_str("<tr>");
-                for c in row {
-                    let class = if numeric(c) { " class=\"num\"" } else { "" };
-                    let _ = write!(h, "<td{class}>{}</td>", e(c));
-                }
-                h.push_str("</tr>\n");
-            }
-            h.push_str("</tbody>\n</table>\n");
-        }
-        Block::Verdicts(vs) => {
-            h.push_str("<ul class=\"verdicts\">\n");
-            for v in vs {
-                let (class, text) = v.level.badge();
-                let _ = writeln!(
-                    h,
-                    "<li><span class=\"badge {class}\">{text}</span><strong>{}</strong> — {}</li>",
-                    e(&v.subject),
-                    e(&v.text)
-                );
-            }
-            h.push_str("</ul>\n");
-        }
-        Block::Warnings(ws) => {
-            if ws.is_empty() {
-                h.push_str("<p>No warnings.</p>\n");
-            } else {
-                h.push_str("<ul class=\"warnings\">\n");
-                for w in ws {
-                    let _ = writeln!(h, "<li>{}</li>", e(w));
-                }
-                h.push_str("</ul>\n");
-            }
-        }
-        Block::Settings(rows) => {
-            let _ = writeln!(
-                h,
-                "<details class=\"settings\" open>\n<summary>{} settings</summary>\n<table class=\"kv\">",
-                rows.len()
-            );
-            for (k, v) in rows {
-                let _ = writeln!(
-                    h,
-                    "<tr><th scope=\"row\"><code>{}</code></th><td>{}</td></tr>",
-                    e(k),
-                    e(v)
-                );
-            }
-            h.push_str("</table>\n</details>\n");
-        }
-    }
 }

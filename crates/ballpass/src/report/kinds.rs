@@ -32,7 +32,7 @@ pub fn time_series_stack(id: &str, title: &str, t_s: &[f64], traces: &[Trace<'_>
         );
     }
     fig.panel_height_px = 220;
-    fig
+    fig.interactive()
 }
 
 /// A correlation over lag, with red dashed lines at the non-zero multiples of
@@ -89,7 +89,7 @@ pub fn correlation(
             ),
         );
     }
-    fig
+    fig.interactive()
 }
 
 /// What a spectrum panel marks and shows of the frequency axis.
@@ -101,9 +101,20 @@ pub struct SpectrumView {
     pub n_harmonics: usize,
     /// Visible frequency range, Hz; `None` shows all.
     pub range_hz: Option<(f64, f64)>,
+    /// Whether the spectra are of unfiltered signals (a log axis then
+    /// keeps more decades, see [`log_range`]).
+    pub unfiltered: bool,
 }
 
 impl SpectrumView {
+    fn max_decades(&self) -> f64 {
+        if self.unfiltered {
+            LOG_DECADES_UNFILTERED
+        } else {
+            LOG_DECADES_FILTERED
+        }
+    }
+
     fn apply(&self, mut panel: Panel) -> Panel {
         if let Some((a, b)) = self.range_hz {
             panel.x = panel.x.with_range(a, b);
@@ -117,15 +128,98 @@ impl SpectrumView {
 
 /// A spectrum (auto or cross, magnitude) on a log y axis with `f_c` and its
 /// harmonics marked (thesis Figs. 62–65). `y` is normally
-/// `Axis::log("PSD", "N²/Hz")`.
+/// `Axis::log("PSD", "N²/Hz")`; on a log axis its range is set by
+/// [`log_range`] (the DC bin of a detrended signal, ~1e-30, would
+/// otherwise stretch it over tens of decades).
 pub fn spectrum_panel(f_hz: &[f64], p: &[f64], name: &str, y: Axis, view: SpectrumView) -> Panel {
-    let mut panel = Panel::new(Axis::linear("Frequency", "Hz"), y).with_series(Series::line(
-        name,
-        f_hz.to_vec(),
-        p.to_vec(),
-    ));
+    spectrum_panel_on(Axis::linear("Frequency", "Hz"), f_hz, p, name, y, view)
+}
+
+/// A full-range spectrum on log–log axes from the first bin above 0 Hz to
+/// the last (thesis Figs. 62, 64: decades of frequency, so the harmonics
+/// of a 1 Hz `f_c` and the white-noise floor at hundreds of Hz both read).
+pub fn spectrum_panel_loglog(
+    f_hz: &[f64],
+    p: &[f64],
+    name: &str,
+    y: Axis,
+    view: SpectrumView,
+) -> Panel {
+    // the 0 Hz bin has no place on a log axis: left out, not a drawing note
+    let (f, v): (Vec<f64>, Vec<f64>) = f_hz
+        .iter()
+        .zip(p)
+        .filter(|(f, _)| **f > 0.0)
+        .map(|(f, v)| (*f, *v))
+        .unzip();
+    let x = Axis::log("Frequency", "Hz");
+    let x = match (f.first(), f.last()) {
+        (Some(&a), Some(&b)) if b > a => x.with_range(a, b),
+        _ => x,
+    };
+    spectrum_panel_on(x, &f, &v, name, y, view)
+}
+
+fn spectrum_panel_on(
+    x: Axis,
+    f_hz: &[f64],
+    p: &[f64],
+    name: &str,
+    mut y: Axis,
+    view: SpectrumView,
+) -> Panel {
+    if y.scale == super::Scale::Log && y.range.is_none() {
+        let range = view.range_hz.or(x.range);
+        if let Some((lo, hi)) = log_range(f_hz, &[p], range, view.max_decades()) {
+            y = y.with_range(lo, hi);
+        }
+    }
+    let mut panel = Panel::new(x, y).with_series(Series::line(name, f_hz.to_vec(), p.to_vec()));
     panel.legend = Some(false);
     view.apply(panel)
+}
+
+/// Decades a log axis of low-passed spectra spans at most below its
+/// highest value: the filter's stop band (down to 1e-25 of the peak) is cut.
+pub const LOG_DECADES_FILTERED: f64 = 8.0;
+
+/// Decades a log axis of unfiltered spectra spans at most below its highest
+/// value: room for a quiet sensor's white-noise floor (the simulator's lies
+/// about 11 decades below the friction peak).
+pub const LOG_DECADES_UNFILTERED: f64 = 14.0;
+
+/// A log-axis range for spectra: from half the 1st percentile of the
+/// positive values in the frequency range (bins above 0 Hz), but at most
+/// `max_decades` below the largest value, to twice the largest. A
+/// low-passed spectrum's stop band and a detrended signal's DC bin fall
+/// below it and are cut rather than stretching the axis; the noise floor of
+/// an unfiltered one stays inside. `None` when there is no positive value.
+pub fn log_range(
+    f_hz: &[f64],
+    spectra: &[&[f64]],
+    range_hz: Option<(f64, f64)>,
+    max_decades: f64,
+) -> Option<(f64, f64)> {
+    let (a, b) = range_hz.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    let mut v: Vec<f64> = spectra
+        .iter()
+        .flat_map(|p| {
+            f_hz.iter()
+                .zip(p.iter())
+                .filter(move |(f, x)| {
+                    **f > 0.0 && **f >= a && **f <= b && x.is_finite() && **x > 0.0
+                })
+                .map(|(_, x)| *x)
+        })
+        .collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let max = v[v.len() - 1];
+    let p01 = v[(v.len() - 1) / 100];
+    let lo = (0.5 * p01).max(max * 10f64.powf(-max_decades));
+    Some((lo, 2.0 * max))
 }
 
 /// Magnitude-squared coherence, y fixed to 0..1, with `f_c` and harmonics marked.
@@ -134,27 +228,59 @@ pub fn coherence_panel(f_hz: &[f64], coh: &[f64], name: &str, view: SpectrumView
     spectrum_panel(f_hz, coh, name, y, view)
 }
 
-/// Several spectra overlaid with a legend; `highlight` (an index into
-/// `spectra`) is drawn thick and on top (the bad bearing of thesis Figs. 67–68).
+/// One spectrum of an overlay: legend name, values, colour, and whether it
+/// is drawn thick and on top (the bad bearing of thesis Figs. 67–68).
+#[derive(Debug, Clone, Copy)]
+pub struct Overlaid<'a> {
+    /// Legend text.
+    pub name: &'a str,
+    /// Values, one per frequency.
+    pub values: &'a [f64],
+    /// Colour (red for a bad item, see [`Rgb::CALM`] for good ones).
+    pub color: Rgb,
+    /// Drawn thick and on top.
+    pub highlight: bool,
+}
+
+/// Several spectra overlaid with a legend, on the frequency axis `x`
+/// (linear, or log for a full range); a log `y` gets its range from
+/// [`log_range`] over all of them.
 pub fn overlay_spectra(
     id: &str,
     title: &str,
     f_hz: &[f64],
-    spectra: &[(&str, &[f64])],
-    y: Axis,
-    highlight: Option<usize>,
+    spectra: &[Overlaid<'_>],
+    x: Axis,
+    mut y: Axis,
     view: SpectrumView,
 ) -> Figure {
-    let mut panel = Panel::new(Axis::linear("Frequency", "Hz"), y);
-    for (i, (name, p)) in spectra.iter().enumerate() {
-        let mut s = Series::line(*name, f_hz.to_vec(), p.to_vec());
-        if highlight == Some(i) {
+    if y.scale == super::Scale::Log && y.range.is_none() {
+        let values: Vec<&[f64]> = spectra.iter().map(|s| s.values).collect();
+        if let Some((lo, hi)) =
+            log_range(f_hz, &values, view.range_hz.or(x.range), view.max_decades())
+        {
+            y = y.with_range(lo, hi);
+        }
+    }
+    let log_x = x.scale == super::Scale::Log;
+    let mut panel = Panel::new(x, y);
+    for o in spectra {
+        let (f, v): (Vec<f64>, Vec<f64>) = f_hz
+            .iter()
+            .zip(o.values)
+            .filter(|(f, _)| !log_x || **f > 0.0)
+            .map(|(f, v)| (*f, *v))
+            .unzip();
+        let mut s = Series::line(o.name, f, v).with_color(o.color);
+        if o.highlight {
             s = s.highlighted();
         }
         panel.series.push(s);
     }
     panel.legend = Some(true);
-    Figure::new(id, title).with_panel(view.apply(panel))
+    Figure::new(id, title)
+        .with_panel(view.apply(panel))
+        .interactive()
 }
 
 /// A measured pulse signal with fitted model curves overlaid as dashed lines
@@ -327,6 +453,52 @@ pub fn ratio_with_mean(
     Figure::new(id, title).with_panel(p)
 }
 
+/// A value and its uncertainty in the report's one notation, `m ± u`: the
+/// uncertainty to two significant digits, the value rounded to the same
+/// decimal place (`0.15463 ± 0.00284` → `0.1546 ± 0.0028`). A zero or
+/// non-finite uncertainty leaves the value to `sig` significant digits
+/// and writes the uncertainty as is.
+pub fn fmt_pm(value: f64, uncertainty: f64, sig: usize) -> String {
+    if !(uncertainty.is_finite() && uncertainty > 0.0 && value.is_finite()) {
+        return format!("{} ± {}", fmt_sig(value, sig), fmt_sig(uncertainty, 2));
+    }
+    let mag_u = uncertainty.log10().floor() as i32;
+    let mag_v = if value == 0.0 {
+        mag_u
+    } else {
+        value.abs().log10().floor() as i32
+    };
+    if (-4..6).contains(&mag_v) {
+        let decimals = 1 - mag_u;
+        if decimals >= 0 {
+            let d = decimals.min(15) as usize;
+            return format!("{} ± {uncertainty:.d$}", minus(&format!("{value:.d$}")));
+        }
+        // an uncertainty of tens or more: round both to its second digit
+        let q = 10f64.powi(-decimals);
+        return format!(
+            "{} ± {:.0}",
+            minus(&format!("{:.0}", (value / q).round() * q)),
+            (uncertainty / q).round() * q
+        );
+    }
+    // very large or small values: the value's power of ten outside,
+    // the uncertainty still to two significant digits
+    let e = 10f64.powi(mag_v);
+    let d = (mag_v - mag_u + 1).clamp(0, 15) as usize;
+    format!(
+        "({} ± {:.d$})e{}",
+        minus(&format!("{:.d$}", value / e)),
+        uncertainty / e,
+        minus(&mag_v.to_string())
+    )
+}
+
+/// Text with a typographic minus sign.
+fn minus(s: &str) -> String {
+    s.replacen('-', "−", 1)
+}
+
 /// `v` with `sig` significant digits (integer digits are never dropped:
 /// `1234.4` → `1234`), in scientific notation below 1e-4 and from 1e6 on.
 pub fn fmt_sig(v: f64, sig: usize) -> String {
@@ -351,6 +523,47 @@ mod tests {
         assert_eq!(fmt_sig(1.110, 3), "1.11");
         assert_eq!(fmt_sig(1234.4, 3), "1234");
         assert_eq!(fmt_sig(2.5e-7, 2), "2.5e-7");
+    }
+
+    #[test]
+    fn plus_minus_rounds_the_value_to_the_uncertainty() {
+        assert_eq!(fmt_pm(0.15463, 0.00284, 4), "0.1546 ± 0.0028");
+        assert_eq!(fmt_pm(97.83, 4.12, 3), "97.8 ± 4.1");
+        assert_eq!(fmt_pm(-154.2, 12.7, 3), "−154 ± 13");
+        assert_eq!(fmt_pm(4.05598, 0.00071, 5), "4.05598 ± 0.00071");
+        assert_eq!(fmt_pm(1234.0, 56.0, 3), "1234 ± 56");
+        assert_eq!(fmt_pm(12345.0, 678.0, 3), "12350 ± 680");
+        assert_eq!(fmt_pm(3.2e-7, 4.5e-8, 3), "(3.20 ± 0.45)e−7");
+        // a tiny uncertainty on an ordinary value stays in plain decimals
+        assert_eq!(fmt_pm(1.232887, 0.0000391, 5), "1.232887 ± 0.000039");
+        assert_eq!(fmt_pm(0.9, 0.0, 3), "0.900 ± 0");
+    }
+
+    #[test]
+    fn log_range_cuts_the_dc_bin_and_the_stop_band() {
+        let f: Vec<f64> = (0..1000).map(f64::from).collect();
+        // a peak of 1, a floor of 1e-3, a stop band falling to 1e-30
+        let p: Vec<f64> = f
+            .iter()
+            .map(|&x| {
+                if x == 0.0 {
+                    1e-32
+                } else if x == 10.0 {
+                    1.0
+                } else if x < 100.0 {
+                    1e-3
+                } else {
+                    1e-3 * 10f64.powf(-(x - 100.0) / 30.0)
+                }
+            })
+            .collect();
+        let (lo, hi) = log_range(&f, &[&p], None, LOG_DECADES_FILTERED).unwrap();
+        assert_eq!(hi, 2.0);
+        // eight decades below the peak (powf rounding: a relative 1e-12)
+        assert!((lo / 1e-8 - 1.0).abs() < 1e-12, "{lo}");
+        // an unfiltered spectrum: the floor stays inside, with room
+        let (lo, _) = log_range(&f[..100], &[&p[..100]], None, LOG_DECADES_FILTERED).unwrap();
+        assert!((lo / 0.5e-3 - 1.0).abs() < 1e-12, "{lo}");
     }
 
     #[test]

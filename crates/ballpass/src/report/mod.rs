@@ -2,11 +2,25 @@
 //!
 //! Commands describe *what* to show as data — a [`Figure`] of stacked
 //! [`Panel`]s with [`Axis`]es, [`Series`] and [`Marker`]s, and a [`Report`]
-//! with a summary of [`Section`]s — and this module decides *how* it looks.
-//! [`render_svg`] and [`render_png`] draw one figure; [`write_report`] writes
-//! `report.html` (inline SVG and CSS, no network, no JavaScript) and each
-//! figure as `figures/<id>.svg` (and `.png` on request), every file written
-//! to a temporary name and renamed into place.
+//! of [`Section`]s holding text, tables and figures — and this module
+//! decides *how* it looks. [`render_svg`] and [`render_png`] draw one
+//! figure; [`write_report`] writes `report.html` and each figure as
+//! `figures/<id>.svg` (and `.png` on request), every file written to a
+//! temporary name and renamed into place.
+//!
+//! The page (see `page`) opens with a contents list; each figure stands in
+//! the section whose text discusses it, numbered in order, and text refers
+//! to it as `{fig:<id>}`, written "Figure N" with a link. Under each figure
+//! are its caption and links to the data files behind it
+//! ([`Figure::with_data`]). The page is one file: figures are inline SVG,
+//! the CSS is inline, and figures marked [`Figure::interactive`] carry
+//! their data as inline JSON for an inline script (`live.js`) that zooms,
+//! pans and reads values under the cursor; nothing is fetched, and with
+//! scripts off the page shows the same static figures.
+//!
+//! Legends stand in a strip above the plot, never over the data; marker
+//! labels that would run into the next line or out of the plot are left out
+//! or moved; titles too long for the figure are drawn smaller, then cut.
 //!
 //! Long series are thinned for *display* only (M4 decimation per pixel
 //! column, see `prepare`); exported data is never altered.
@@ -26,7 +40,9 @@
 //!
 //! Text is drawn with the embedded DejaVu Sans (`assets/fonts/`, Bitstream
 //! Vera licence) through `ab_glyph`: no fontconfig or system fonts, so PNGs
-//! look the same on every machine.
+//! look the same on every machine. PNG text is laid out glyph by glyph at
+//! sub-pixel positions (see `text`); sizes are chosen for print (16 px tick
+//! labels on a 900 px figure: 8.5 pt at 17 cm).
 //!
 //! # Example
 //!
@@ -54,6 +70,7 @@
 //!     )])))
 //!     .with_figure(fig);
 //! let page = report::render_html(&report, false)?;
+//! // no figure is marked interactive: a page without any script
 //! assert!(page.html.contains("PASS") && !page.html.contains("<script"));
 //! # Ok::<(), ballpass::Error>(())
 //! ```
@@ -63,10 +80,13 @@ pub mod campaign;
 mod draw;
 mod html;
 pub mod kinds;
+mod live;
 pub mod model;
+mod page;
 pub mod passage;
 mod prepare;
 mod spec;
+mod text;
 mod ticks;
 
 pub use draw::{render_png, render_svg, Rendered};
@@ -75,6 +95,6 @@ pub use html::{
     ReportOptions, Section, Table, Verdict, FIGURES_DIR, REPORT_FILE,
 };
 pub use spec::{
-    Axis, Figure, Marker, MarkerStyle, Panel, Rgb, Scale, Series, SeriesStyle,
+    Axis, DataFile, Figure, Marker, MarkerStyle, Panel, Rgb, Scale, Series, SeriesStyle,
     DEFAULT_PANEL_HEIGHT_PX, DEFAULT_WIDTH_PX,
 };

@@ -4,7 +4,7 @@
 //! the synthesised pulse trains and the model correlations.
 
 use super::kinds::{bode, fmt_sig};
-use super::spec::{Axis, Figure, Marker, Panel, Rgb, Series, SeriesStyle};
+use super::spec::{Axis, Figure, Marker, MarkerStyle, Panel, Rgb, Series, SeriesStyle};
 use crate::model::stage::{BodeRow, DifferenceRow, VelocityResponse};
 
 /// Bode plots of `G_xr`, `G_xf` and `G_vf` (ids `bode_g_xr`, `bode_g_xf`,
@@ -56,16 +56,17 @@ pub fn stage_bode_figures(rows: &[BodeRow], f_n_hz: f64, f_c_hz: Option<f64>) ->
 }
 
 /// Gain and phase of the centred and forward differences against the ideal
-/// differentiator (thesis Fig. 28), id `difference`.
+/// differentiator `jω` (thesis Fig. 28), id `difference`: the gain as a
+/// ratio to `ω`, the phase as the error against the ideal +90°.
 pub fn difference_figure(rows: &[DifferenceRow], fs_hz: f64) -> Figure {
     let f: Vec<f64> = rows.iter().map(|r| r.f_hz).collect();
     let col = |g: fn(&DifferenceRow) -> f64| rows.iter().map(g).collect::<Vec<f64>>();
     let x = Axis::linear("Frequency", "Hz");
-    let gain = Panel::new(x.clone(), Axis::linear("Gain / ideal", ""))
+    let gain = Panel::new(x.clone(), Axis::linear("Gain / ω", ""))
         .titled("gain relative to jω")
         .with_series(
             Series::line(
-                "centred (np.gradient)",
+                "centred (numpy.gradient)",
                 f.clone(),
                 col(|r| r.centred_gain_ratio),
             )
@@ -75,26 +76,35 @@ pub fn difference_figure(rows: &[DifferenceRow], fs_hz: f64) -> Figure {
             Series::line("forward", f.clone(), col(|r| r.forward_gain_ratio))
                 .with_color(Rgb::palette(1)),
         );
-    let mut phase = Panel::new(x, Axis::linear("Phase error", "deg"))
-        .titled("phase relative to jω")
+    let mut phase = Panel::new(x, Axis::linear("Phase − 90°", "deg"))
+        .titled("phase error relative to jω (ideal +90°)")
         .with_series(
             Series::line(
-                "centred (np.gradient)",
+                "centred (numpy.gradient)",
                 f.clone(),
-                col(|r| r.centred_phase_deg),
+                col(|r| r.centred_phase_deg - 90.0),
             )
             .with_color(Rgb::palette(0)),
         )
         .with_series(
-            Series::line("forward", f, col(|r| r.forward_phase_deg)).with_color(Rgb::palette(1)),
-        );
+            Series::line("forward", f, col(|r| r.forward_phase_deg - 90.0))
+                .with_color(Rgb::palette(1)),
+        )
+        .with_hlines([Marker {
+            at: 0.0,
+            label: String::new(),
+            style: MarkerStyle::GreySolid,
+        }]);
     phase.legend = Some(false);
     Figure::new(
         "difference",
         "Centred vs forward difference as differentiators (thesis Fig. 28)",
     )
     .with_caption(format!(
-        "F_s = {fs_hz} Hz, up to the Nyquist frequency. The centred difference has no phase error and loses gain; the forward difference leads by π f / F_s."
+        "F_s = {} Hz, up to the Nyquist frequency. The centred difference has no phase error \
+         (its phase is +90° exactly) and loses gain as sin(ωT)/(ωT); the forward difference \
+         leads by 180°·f/F_s and loses gain as sinc(ωT/2).",
+        fmt_sig(fs_hz, 4)
     ))
     .with_panel(gain)
     .with_panel(phase)
@@ -109,7 +119,7 @@ pub fn gaussian_coefficients_figure(
     sigma_ratio: f64,
 ) -> Figure {
     let mut p = Panel::new(Axis::linear("Harmonic n", ""), Axis::log("|C_n| / P", "")).with_series(
-        Series::line("|C_n|/P (ERRATA §6)", n.to_vec(), c_over_p.to_vec())
+        Series::line("|C_n|/P, corrected", n.to_vec(), c_over_p.to_vec())
             .with_style(SeriesStyle::Stem)
             .with_color(Rgb::palette(0)),
     );
@@ -126,7 +136,7 @@ pub fn gaussian_coefficients_figure(
         "Fourier coefficients of the Gaussian pulse train (thesis Fig. 49)",
     )
     .with_caption(format!(
-        "C_n = √(2π) P r exp(−2π² n² r²), r = σ/τc = {}; they fall by orders of magnitude within a few harmonics.",
+        "C_n = √(2π) P r exp(−2π² n² r²), r = σ/τc = {} (the thesis' Eq. 6.28 corrected, see the method notes); they fall by orders of magnitude within a few harmonics.",
         fmt_sig(sigma_ratio, 4)
     ))
     .with_panel(p)

@@ -2,8 +2,9 @@
 //! passages found, the pulses with the fitted Gaussian and rectangular trains
 //! (thesis Figs. 47–48), `τ_c` and `τ_p` per passage, and the summary.
 
+use super::campaign::recording_link;
 use super::html::{Block, Level, Section, Table, Verdict};
-use super::kinds::{fmt_sig, pulses_with_models};
+use super::kinds::{fmt_pm, fmt_sig, pulses_with_models};
 use super::spec::{Axis, Figure, Marker, Panel, Rgb, Series, SeriesStyle};
 use crate::analysis::passage::PassageAnalysis;
 use crate::error::Result;
@@ -12,12 +13,21 @@ use crate::recording::{Channel, Recording};
 /// Ball-pass periods of signal shown with the fitted models overlaid.
 pub const MODEL_WINDOW_PERIODS: f64 = 6.0;
 
+/// The name a report shows for a record: its file name without the folders
+/// (the full path is in the command line and the data links).
+pub(crate) fn short_name(source: &str) -> String {
+    std::path::Path::new(source)
+        .file_name()
+        .map_or_else(|| source.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
 /// One record's figures: `optical_<k>`, `pulses_<k>` (when fitted) and
 /// `widths_<k>`, `k` being the record's 1-based number in the report.
 ///
 /// # Errors
 /// [`crate::Error::MissingChannel`] when `rec` has no optical channel.
 pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result<Vec<Figure>> {
+    let name = short_name(&a.source);
     let x = rec.require(Channel::Optical, "the passage report")?;
     let fs = rec.fs_hz();
     let t0 = rec.meta.start_time_s;
@@ -62,7 +72,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
     figs.push(
         Figure::new(
             format!("optical_{k}"),
-            format!("{}: optical signal and the passages found", a.source),
+            format!("{name}: optical signal and the passages found"),
         )
         .with_caption(format!(
             "{} passages ({} inverted); dots at each passage's centre and height; prominence threshold {} V, noise {} V.",
@@ -71,7 +81,8 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
             fmt_sig(a.prominence_threshold_v, 3),
             fmt_sig(a.noise_v, 3)
         ))
-        .with_panel(panel),
+        .with_panel(panel)
+        .interactive(),
     );
 
     // Pulses with the fitted models over the first periods of the fit.
@@ -113,7 +124,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
             }
             let fig = pulses_with_models(
                 &format!("pulses_{k}"),
-                &format!("{}: pulses and the fitted pulse trains", a.source),
+                &format!("{name}: pulses and the fitted pulse trains"),
                 &tw,
                 &yw,
                 Axis::linear("Optical − baseline", "V"),
@@ -127,7 +138,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
                 f.from_s,
                 f.to_s
             ));
-            figs.push(fig);
+            figs.push(fig.interactive());
         }
     }
 
@@ -171,7 +182,7 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
         )]);
     let mut fig = Figure::new(
         format!("widths_{k}"),
-        format!("{}: period τc and width τp per passage", a.source),
+        format!("{name}: period τc and width τp per passage"),
     )
     .with_caption(format!(
         "τc: time to the next passage; τp: width at half prominence. τp/τc = {} ± {} (thesis 0.155).",
@@ -189,7 +200,68 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
 }
 
 fn pm(m: &crate::stats::MeanStd, sig: usize) -> String {
-    format!("{} ± {}", fmt_sig(m.mean, sig), fmt_sig(m.std, 2))
+    fmt_pm(m.mean, m.std, sig)
+}
+
+/// One record's sections with its figures placed in them: the passages
+/// (with the optical signal, the fitted pulses and the widths per passage),
+/// prediction vs measurement, the pulse-train fits and the conditions.
+/// `k` numbers the record's figures (`optical_<k>`, ...); `table` is the
+/// file holding the passages (relative to the report: `passages.csv`, or
+/// `passage/passage.json` in the demo); `id_prefix` starts the figure ids.
+///
+/// # Errors
+/// [`crate::Error::MissingChannel`] when `rec` has no optical channel.
+pub fn record_sections(
+    k: usize,
+    rec: &Recording,
+    a: &PassageAnalysis,
+    table: &str,
+    id_prefix: &str,
+) -> Result<Vec<Section>> {
+    let mut figures = passage_figures(k, rec, a)?;
+    let link = recording_link(rec);
+    for f in &mut figures {
+        f.id = format!("{id_prefix}{}", f.id);
+        if f.id.ends_with(&format!("optical_{k}")) || f.id.ends_with(&format!("pulses_{k}")) {
+            if let Some(l) = &link {
+                f.data.push(super::spec::DataFile {
+                    path: l.clone(),
+                    what: "the recording (optical_V)".into(),
+                });
+            }
+        }
+        f.data.push(super::spec::DataFile {
+            path: table.to_string(),
+            what: "every passage: time, τc, τp, amplitude".into(),
+        });
+    }
+    let mut sections = passage_sections(a);
+    let refs: Vec<String> = figures
+        .iter()
+        .map(|f| format!("{{fig:{}}}", f.id))
+        .collect();
+    let text = match refs.as_slice() {
+        [optical, pulses, widths] => format!(
+            "{optical} shows the optical signal with each passage found; {pulses} the first \
+             pulses with the fitted pulse trains; {widths} the period τc to the next passage \
+             and the width τp of each one."
+        ),
+        [optical, widths] => format!(
+            "{optical} shows the optical signal with each passage found; {widths} the period \
+             τc to the next passage and the width τp of each one (no pulse train was fitted)."
+        ),
+        _ => String::new(),
+    };
+    if let Some(first) = sections.first_mut() {
+        if !text.is_empty() {
+            first.blocks.push(Block::Paragraph(text));
+        }
+        for f in figures {
+            first.blocks.push(Block::Figure(Box::new(f)));
+        }
+    }
+    Ok(sections)
 }
 
 /// The summary sections of one record: measurements, prediction vs
@@ -227,7 +299,7 @@ pub fn passage_sections(a: &PassageAnalysis) -> Vec<Section> {
         kv.push((
             "ball spacing v τc / 2".into(),
             format!(
-                "{}–{} mm (std {} mm) against [{}, {}] mm; spread uses {}% of d_ext, {} outside",
+                "{}–{} mm (std {} mm) against the possible [{}, {}] mm (balls touching to all free space d_ext in one gap); the spread uses {} % of d_ext, {} outside",
                 fmt_sig(s.min_mm, 4),
                 fmt_sig(s.max_mm, 4),
                 fmt_sig(s.std_mm, 2),
@@ -238,8 +310,9 @@ pub fn passage_sections(a: &PassageAnalysis) -> Vec<Section> {
             ),
         ));
     }
-    let mut sections =
-        vec![Section::new(format!("{}: passages", a.source)).with(Block::KeyValues(kv))];
+    let mut sections = vec![
+        Section::new(format!("{}: passages", short_name(&a.source))).with(Block::KeyValues(kv))
+    ];
 
     let mut table = Table::new(["quantity", "predicted", "measured", "difference"]);
     let f_pred = a

@@ -17,6 +17,30 @@ impl Rgb {
     pub const RED: Rgb = Rgb(214, 39, 40);
     /// Mid grey.
     pub const GREY: Rgb = Rgb(127, 127, 127);
+    /// The orange of a suspect (worth a look) item.
+    pub const ORANGE: Rgb = Rgb(255, 127, 14);
+
+    /// Colours for items that are fine (good bearings): [`Rgb::PALETTE`]
+    /// without its red and orange, which mean bad and suspect.
+    pub const CALM: [Rgb; 7] = [
+        Rgb(31, 119, 180),
+        Rgb(44, 160, 44),
+        Rgb(148, 103, 189),
+        Rgb(23, 190, 207),
+        Rgb(140, 86, 75),
+        Rgb(127, 127, 127),
+        Rgb(188, 189, 34),
+    ];
+
+    /// Colour `i` of [`Rgb::CALM`], cycling.
+    pub fn calm(i: usize) -> Rgb {
+        Rgb::CALM[i % Rgb::CALM.len()]
+    }
+
+    /// `#rrggbb`.
+    pub fn hex(self) -> String {
+        format!("#{:02x}{:02x}{:02x}", self.0, self.1, self.2)
+    }
 
     /// The default series colours, in order (matplotlib's `tab10`).
     pub const PALETTE: [Rgb; 10] = [
@@ -310,8 +334,8 @@ pub struct Panel {
     pub vlines: Vec<Marker>,
     /// Horizontal lines at y positions.
     pub hlines: Vec<Marker>,
-    /// Show a legend of the named series; `None` shows one when two or more
-    /// series have names.
+    /// Show a legend of the named series (in a strip above the plot, never
+    /// over the data); `None` shows one when two or more series have names.
     pub legend: Option<bool>,
 }
 
@@ -365,6 +389,16 @@ pub const DEFAULT_WIDTH_PX: u32 = 900;
 /// Default height of one panel, px.
 pub const DEFAULT_PANEL_HEIGHT_PX: u32 = 300;
 
+/// A data file behind a figure, linked under it in the report.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DataFile {
+    /// Path relative to the report's folder (`analyze/spectra.csv`), or an
+    /// absolute path (an input recording).
+    pub path: String,
+    /// Which columns or part of it the figure shows, in a few words.
+    pub what: String,
+}
+
 /// A figure: panels stacked top to bottom under one title, with a caption.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Figure {
@@ -382,6 +416,13 @@ pub struct Figure {
     pub width_px: u32,
     /// Height of each panel, px.
     pub panel_height_px: u32,
+    /// The data files behind the figure, linked under it in the report.
+    pub data: Vec<DataFile>,
+    /// Whether the HTML report lets the reader zoom, pan and read values
+    /// off this figure (its line and point series are embedded, thinned to
+    /// a few thousand points per pixel row; the static SVG stays for
+    /// readers without scripts).
+    pub interactive: bool,
 }
 
 impl Figure {
@@ -394,7 +435,25 @@ impl Figure {
             panels: Vec::new(),
             width_px: DEFAULT_WIDTH_PX,
             panel_height_px: DEFAULT_PANEL_HEIGHT_PX,
+            data: Vec::new(),
+            interactive: false,
         }
+    }
+
+    /// The same figure with one more data file linked under it.
+    pub fn with_data(mut self, path: impl Into<String>, what: impl Into<String>) -> Self {
+        self.data.push(DataFile {
+            path: path.into(),
+            what: what.into(),
+        });
+        self
+    }
+
+    /// The same figure, zoomable in the HTML report (see
+    /// [`Figure::interactive`]).
+    pub fn interactive(mut self) -> Self {
+        self.interactive = true;
+        self
     }
 
     /// The same figure with a caption.

@@ -33,7 +33,7 @@ pub struct Circuit {
 impl Circuit {
     /// Draws a circuit: gaps `g_k = d_ext E_k / sum E` with `E_k` standard
     /// exponentials (a flat Dirichlet: the uniform-spacings split of `d_ext`,
-    /// so a single gap ranges over `0..d_ext`, ERRATA §1), and a uniform
+    /// so a single gap ranges over `0..d_ext`, docs/methods.md §1), and a uniform
     /// random position of the circuit.
     pub fn draw(geometry: &Geometry, rng: &mut Rng) -> Self {
         let n = geometry.balls_in_race as usize;

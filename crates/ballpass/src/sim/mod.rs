@@ -23,7 +23,7 @@
 //!   sigmas of their centres.
 //! - Friction opposes motion; the load cell reads `+f` (see [`stage`]).
 //! - Ball gaps are a uniform random split of `d_ext`, re-drawn per recording,
-//!   so passage intervals vary as ERRATA §1 describes while the long-run
+//!   so passage intervals vary as docs/methods.md §1 describes while the long-run
 //!   passage rate is exactly `v / (2 d_avg)`.
 //! - Pulse widths are set as FWHM / `tau_c` ratios (the thesis' `tau_p /
 //!   tau_c = 0.155`, width at half prominence) and are fixed lengths along
@@ -47,7 +47,7 @@
 //! | SR25W geometry | d = 4 mm, d_ext = 2 mm, N_B = 36 | thesis §1, §3.1 |
 //! | sampling, duration | 1 kHz, 30 s | thesis §7 |
 //! | optical pulse width | FWHM = 0.155 tau_c | thesis §6.4 (Fig. 53) |
-//! | optical lag behind friction | 0.39 s at 9 mm/s → sensor offset 1.755 mm | thesis §7.1 (ERRATA §8–9 for the sign) |
+//! | optical lag behind friction | 0.39 s at 9 mm/s → sensor offset 1.755 mm | thesis §7.1 (docs/methods.md §8–9 for the sign) |
 //! | anti-alias filters | 400 Hz (2nd-order Butterworth assumed) | thesis §5.3, §7 |
 //! | encoder | 0.1 µm | thesis §4 |
 //! | interference drift | period 5 s, pulses invert at crests | thesis §5.2 (Fig. 32) |
@@ -81,10 +81,12 @@ use crate::recording::{Channels, Metadata, Recording};
 
 pub mod balls;
 pub mod campaign;
+pub mod profile;
 pub mod rng;
 pub mod sensors;
 pub mod stage;
 
+pub use profile::{PlateauTruth, ProfilePlateau, SpeedProfile};
 pub use stage::{PdStage, StageSettings};
 
 use balls::Circuit;
@@ -322,6 +324,12 @@ pub struct SimSettings {
     pub encoder: EncoderSettings,
     /// Photodetector.
     pub optical: OpticalSettings,
+    /// A multi-speed run instead of one velocity (see [`profile`]): the
+    /// stage starts settled at the first plateau's velocity and
+    /// `velocity_mm_s` is not used for the motion. `None` (the default,
+    /// and absent from the JSON) for one constant velocity.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile: Option<SpeedProfile>,
 }
 
 impl Default for SimSettings {
@@ -343,6 +351,7 @@ impl Default for SimSettings {
             load_cell: LoadCellSettings::default(),
             encoder: EncoderSettings::default(),
             optical: OpticalSettings::default(),
+            profile: None,
         }
     }
 }
@@ -454,6 +463,23 @@ impl SimSettings {
                 ),
             ));
         }
+        if let Some(p) = &self.profile {
+            p.validate(10.0 * band)?;
+            if self.start != Start::Settled {
+                return Err(Error::setting(
+                    "start",
+                    "a speed profile starts settled at its first plateau; use start = settled",
+                ));
+            }
+            let passages =
+                p.max_speed_mm_s() * (self.duration_s + 100.0) / (2.0 * self.geometry.d_avg_mm());
+            if passages > 1e7 {
+                return Err(Error::setting(
+                    "profile",
+                    format!("makes up to {passages:.0} ball passages; at most 1e7"),
+                ));
+            }
+        }
         positive("acceleration", self.motion.acceleration_mm_s2)?;
         if let Some(d) = self.motion.trigger_distance_mm {
             non_negative("trigger distance", d)?;
@@ -549,7 +575,7 @@ pub struct Spike {
 /// the realised `f_c`, between the *recorded* channels (sensor filters
 /// included), wrapped into `(-tau_c/2, tau_c/2]`; a positive lag means the
 /// signal lags the friction force, and the phase is `-360 lag / tau_c`
-/// degrees (ERRATA §8 convention).
+/// degrees (docs/methods.md §8 convention).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Truth {
     /// `ballpass.truth/1`.
@@ -630,6 +656,13 @@ pub struct Truth {
     pub velocity_error_true_std_mm_s: f64,
     /// Phase of the interference drift at the first sample, rad (when enabled).
     pub interference_phase_rad: Option<f64>,
+    /// With a speed profile: each plateau's commanded interval and velocity
+    /// and the stage's mean velocity over it (absent otherwise). The
+    /// single-speed fields above then refer to the first plateau's speed,
+    /// `mean_velocity_mm_s` is the mean speed over the record, and the
+    /// passage times are first forward crossings only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plateaus: Vec<PlateauTruth>,
     /// All parameters.
     pub settings: SimSettings,
 }
@@ -844,7 +877,7 @@ const STREAM_INTERFERENCE: u64 = 7;
 /// use ballpass::sim::{simulate, SimSettings};
 /// let sim = simulate(&SimSettings { duration_s: 2.0, ..Default::default() })?;
 /// assert_eq!(sim.recording.len(), 2000); // 2 s at 1 kHz
-/// // SR25W at 9 mm/s: f_c = 9 / (2 * 4.05556) = 1.10959 Hz (ERRATA §1).
+/// // SR25W at 9 mm/s: f_c = 9 / (2 * 4.05556) = 1.10959 Hz (docs/methods.md §1).
 /// assert!((sim.truth.f_c_nominal_hz - 1.10959).abs() < 1e-5);
 /// # Ok::<(), ballpass::Error>(())
 /// ```
@@ -857,7 +890,8 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     settings.validate()?;
     let s = settings;
     let g = &s.geometry;
-    let v_mm_s = s.velocity_mm_s;
+    let profile = s.profile.as_ref();
+    let v_mm_s = profile.map_or(s.velocity_mm_s, |p| p.first_velocity_mm_s().abs());
     let v_m_s = v_mm_s * 1e-3;
     let dt = 1.0 / (s.fs_hz * f64::from(s.oversample));
     let os = s.oversample as usize;
@@ -878,8 +912,23 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         Start::Settled => settle,
         Start::FromRest => trigger / v_mm_s + v_mm_s / s.motion.acceleration_mm_s2,
     };
-    let travel_budget_mm = 1.2 * (v_mm_s * (pre_est_s + s.duration_s) + trigger) + 20.0;
-    let passages = circuit.passages(-length - 10.0, travel_budget_mm / 2.0 + length);
+    let passages = match profile {
+        None => {
+            let travel_budget_mm = 1.2 * (v_mm_s * (pre_est_s + s.duration_s) + trigger) + 20.0;
+            circuit.passages(-length - 10.0, travel_budget_mm / 2.0 + length)
+        }
+        Some(p) => {
+            // Ball travel (x - x_init) / 2 over the run, with the margin of
+            // the single-speed budget for the stage's lag and overshoot.
+            let (lo, hi) = p.position_range_mm(settle, s.duration_s);
+            let x_init = -p.first_velocity_mm_s() * settle;
+            let margin = 0.2 * (hi - lo) + 20.0;
+            circuit.passages(
+                (lo - x_init - margin) / 2.0 - length - 10.0,
+                (hi - x_init + margin) / 2.0 + length,
+            )
+        }
+    };
     let entries: Vec<f64> = passages.iter().map(|p| p.travel_mm).collect();
 
     // Spatial pulse widths: FWHM ratio * tau_c * v/2 = ratio * d_avg.
@@ -931,14 +980,22 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let t_acc = v_m_s / a_ref;
     let (k_pre_settled, x_ref0) = match s.start {
         Start::Settled => {
-            stage.set_state(-s.stage.steady_offset_m(fr.coulomb_n), 0.0);
+            // Friction opposes the motion: the stage lags behind it.
+            let sign = profile.map_or(1.0, |p| p.first_velocity_mm_s().signum());
+            stage.set_state(-sign * s.stage.steady_offset_m(fr.coulomb_n), 0.0);
             let k = (settle / dt).ceil() as usize;
             (Some(k), -(k as f64) * dt * v_m_s)
         }
         Start::FromRest => (None, 0.0),
     };
-    // Reference position and velocity at time t (from the simulation start).
-    let reference = |t: f64| -> (f64, f64) {
+    // Reference position and velocity at time t (from the simulation start);
+    // t never decreases between calls.
+    let mut sampler = profile.map(|p| p.sampler());
+    let t_record = k_pre_settled.unwrap_or(0) as f64 * dt;
+    let mut reference = |t: f64| -> (f64, f64) {
+        if let Some(sm) = sampler.as_mut() {
+            return sm.at(t - t_record);
+        }
         match s.start {
             Start::Settled => (x_ref0 + v_m_s * t, v_m_s),
             Start::FromRest => {
@@ -980,6 +1037,7 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let mut position_out = Vec::with_capacity(n_out);
     let mut optical_out = Vec::with_capacity(n_out);
     let mut ve_true = Vec::with_capacity(n_out);
+    let mut speed_sum = 0.0;
     let q_mm = s.encoder.resolution_um * 1e-3;
     let v_band_min = fr.zero_velocity_band_mm_s * 1e-3;
 
@@ -1048,7 +1106,8 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
             friction_out.push(lcl.output());
             optical_out.push(ol.output());
             position_out.push(quantize(x * 1e3, q_mm));
-            ve_true.push((xdot - v_m_s) * 1e3);
+            ve_true.push((xdot - if profile.is_some() { rdot } else { v_m_s }) * 1e3);
+            speed_sum += xdot.abs() * 1e3;
         }
         lcl.step(lc_hp_out);
         ol.step(opt_hp_out);
@@ -1099,7 +1158,10 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         .for_each(|y| *y += opt.noise_v * rng_on.normal());
 
     // Realised quantities.
-    let mean_v = v_mm_s + ve_true.iter().sum::<f64>() / n_out as f64;
+    let mean_v = match profile {
+        None => v_mm_s + ve_true.iter().sum::<f64>() / n_out as f64,
+        Some(_) => speed_sum / n_out as f64,
+    };
     if mean_v.is_nan() || mean_v <= 0.0 {
         return Err(Error::setting(
             "friction",
@@ -1137,6 +1199,7 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         .map(|d| d * s.fs_hz - v_mm_s)
         .collect();
 
+    let plateaus = profile.map_or_else(Vec::new, |p| plateau_truth(p, &position_out, s));
     let truth = Truth {
         schema: TRUTH_SCHEMA.into(),
         version: crate::VERSION.into(),
@@ -1178,17 +1241,18 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         interference_phase_rad: opt.interference_drift.then(|| {
             (interf_w * record_start_time_s + interf_phase0).rem_euclid(std::f64::consts::TAU)
         }),
+        plateaus,
         settings: s.clone(),
     };
 
     let meta = Metadata {
-        velocity_mm_s: Some(v_mm_s),
+        // A multi-speed run has no one velocity.
+        velocity_mm_s: profile.is_none().then_some(v_mm_s),
         bearing: Some(s.bearing.clone()),
-        test_id: Some(
-            s.test_id
-                .clone()
-                .unwrap_or_else(|| format!("sim-v{v_mm_s}-s{}", s.seed)),
-        ),
+        test_id: Some(s.test_id.clone().unwrap_or_else(|| match profile {
+            None => format!("sim-v{v_mm_s}-s{}", s.seed),
+            Some(_) => format!("sim-profile-s{}", s.seed),
+        })),
         source: None,
         start_time_s: 0.0,
         notes: Vec::new(),
@@ -1203,4 +1267,24 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         meta,
     )?;
     Ok(Simulation { recording, truth })
+}
+
+/// The truth of each plateau of a profile: commanded interval and velocity,
+/// and the stage's mean velocity over it from the recorded encoder.
+fn plateau_truth(p: &SpeedProfile, position: &[f64], s: &SimSettings) -> Vec<PlateauTruth> {
+    let n = position.len();
+    p.intervals(s.duration_s)
+        .into_iter()
+        .filter_map(|(a, b, v)| {
+            let i0 = ((a * s.fs_hz).ceil() as usize).min(n);
+            let i1 = ((b * s.fs_hz).ceil() as usize).min(n);
+            (i1 > i0 + 1).then(|| PlateauTruth {
+                start_s: a,
+                end_s: b,
+                velocity_mm_s: v,
+                mean_velocity_mm_s: (position[i1 - 1] - position[i0]) * s.fs_hz
+                    / (i1 - 1 - i0) as f64,
+            })
+        })
+        .collect()
 }

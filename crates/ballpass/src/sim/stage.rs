@@ -12,7 +12,7 @@
 //! so the velocity error `y' = x' - V` responds to the friction force with
 //! `-G_vf(s)`, `G_vf(s) = s / (m s^2 + K K_D s + K K_P)` (Eq. 6.6), and a
 //! constant friction `F_c` leaves the stage `F_c / (K K_P)` behind the
-//! reference with no velocity error (ERRATA §3). The thesis' Eq. 6.6 is
+//! reference with no velocity error (docs/methods.md §3). The thesis' Eq. 6.6 is
 //! written for friction entering with `+`; the load cell of the bench reads
 //! the force the rail exerts on the truck, which is `+f_f`.
 
@@ -71,7 +71,7 @@ impl StageSettings {
         (self.kkp_n_per_m / self.mass_kg).sqrt()
     }
 
-    /// Damping ratio `zeta = K K_D / (2 sqrt(m K K_P))` (ERRATA §3).
+    /// Damping ratio `zeta = K K_D / (2 sqrt(m K K_P))` (docs/methods.md §3).
     pub fn damping_ratio(&self) -> f64 {
         self.kkd_n_s_per_m / (2.0 * (self.mass_kg * self.kkp_n_per_m).sqrt())
     }
@@ -310,7 +310,7 @@ mod tests {
     }
 
     /// A constant friction settles to y = -F_c / (K K_P) with zero velocity
-    /// error (ERRATA §3). After 60 s (30 time constants 1/(zeta wn)) the
+    /// error (docs/methods.md §3). After 60 s (30 time constants 1/(zeta wn)) the
     /// transient is below e^-30; tolerance 1e-9 relative.
     #[test]
     fn constant_friction_gives_offset_and_no_velocity_error() {

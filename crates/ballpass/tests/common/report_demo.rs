@@ -9,8 +9,8 @@
 
 use std::f64::consts::PI;
 
-use ballpass::report::kinds::{self, PowerLaw, SpectrumView, Trace};
-use ballpass::report::{Axis, Figure, Marker, Panel};
+use ballpass::report::kinds::{self, Overlaid, PowerLaw, SpectrumView, Trace};
+use ballpass::report::{Axis, Figure, Marker, Panel, Rgb};
 
 /// Tracking velocity of the demo test, mm/s.
 pub const V_MM_S: f64 = 9.0;
@@ -170,14 +170,23 @@ pub fn figures() -> Vec<Figure> {
         .enumerate()
         .map(|(i, s)| (format!("bearing {}", i + 1), s.as_slice()))
         .collect();
-    let fleet_named: Vec<(&str, &[f64])> =
-        fleet_refs.iter().map(|(n, s)| (n.as_str(), *s)).collect();
+    let fleet_named: Vec<Overlaid<'_>> = fleet_refs
+        .iter()
+        .enumerate()
+        .map(|(i, (n, s))| Overlaid {
+            name: n.as_str(),
+            values: s,
+            color: if i == 3 { Rgb::RED } else { Rgb::calm(i) },
+            highlight: i == 3,
+        })
+        .collect();
 
     let psd = || Axis::log("PSD", "N²/Hz");
     let full = SpectrumView {
         f_c_hz: Some(F_C_HZ),
         n_harmonics: 3,
         range_hz: None,
+        unfiltered: false,
     };
     let zoom = SpectrumView {
         range_hz: Some((0.0, 10.0)),
@@ -285,8 +294,8 @@ pub fn figures() -> Vec<Figure> {
             "Friction spectra of five bearings at 20 mm/s",
             &f,
             &fleet_named,
+            Axis::linear("Frequency", "Hz"),
             psd(),
-            Some(3),
             zoom,
         ),
         Figure::new("markers", "Marker styles").with_panel(
