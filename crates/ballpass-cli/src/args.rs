@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use ballpass::bearing::{self, Geometry};
 use ballpass::recording::profile::{parse_delimiter, GeometryOverride};
-use ballpass::recording::{Format, LoadOptions, Profile};
+use ballpass::recording::{Format, LoadOptions, Profile, TimeUnit};
 use ballpass::report::{write_report, Report, ReportFiles, ReportOptions};
 use clap::{Args, ValueEnum};
 
@@ -81,8 +81,12 @@ pub enum FormatArg {
     Csv,
     /// Tab-separated text.
     Tsv,
-    /// MATLAB MAT-file (v5/v7).
+    /// MATLAB MAT-file (v5/v7, or v7.3 HDF5: told apart by the contents).
     Mat,
+    /// NI TDMS (LabVIEW, DAQmx).
+    Tdms,
+    /// ASAM MDF 4 (.mf4).
+    Mf4,
 }
 
 impl From<FormatArg> for Format {
@@ -91,6 +95,8 @@ impl From<FormatArg> for Format {
             FormatArg::Csv => Format::Csv,
             FormatArg::Tsv => Format::Tsv,
             FormatArg::Mat => Format::Mat,
+            FormatArg::Tdms => Format::Tdms,
+            FormatArg::Mf4 => Format::Mf4,
         }
     }
 }
@@ -203,9 +209,86 @@ pub struct LoadArgs {
     pub min_periods: Option<f64>,
     #[command(flatten)]
     pub bearing: BearingArgs,
+    #[command(flatten)]
+    pub dialect: Box<DialectArgs>,
     /// `--window` (records.rs).
     #[command(flatten)]
     pub window: crate::records::WindowArgs,
+}
+
+/// File dialects and gaps: the flags of `LoadArgs` for recordings as labs
+/// write them (text dialects, a rate stored in a MAT struct, gaps).
+#[derive(Debug, Clone, Args)]
+pub struct DialectArgs {
+    /// MAT variable or struct field holding the sampling rate, Hz (e.g. bearing.sr).
+    #[arg(long, value_name = "PATH", help_heading = "Input")]
+    pub fs_from: Option<String>,
+    /// Unit of the time column [default: what the file states (units row,
+    /// `time_ms`, `t [ms]`), else s].
+    #[arg(long, value_enum, value_name = "UNIT", help_heading = "Input")]
+    pub time_unit: Option<TimeUnitArg>,
+    /// Text files write numbers with a decimal comma (1,5) [default: detected].
+    #[arg(long, help_heading = "Input")]
+    pub decimal_comma: bool,
+    /// Lines before the header of text files [default: found, at most 200].
+    #[arg(long, value_name = "N", help_heading = "Input")]
+    pub skip_lines: Option<usize>,
+    /// Fill gaps (missing samples, NaN, empty cells) up to this long by
+    /// linear interpolation, s [default: a gap is an error].
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        allow_hyphen_values = true,
+        help_heading = "Input"
+    )]
+    pub fill_gaps: Option<f64>,
+    /// Split records at gaps that are not filled; each piece is a recording
+    /// of its own (a repeat, for analyze).
+    #[arg(long, help_heading = "Input")]
+    pub split_gaps: bool,
+}
+
+/// Unit of a time column on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TimeUnitArg {
+    /// Seconds.
+    S,
+    /// Milliseconds.
+    Ms,
+    /// Microseconds.
+    Us,
+}
+
+impl From<TimeUnitArg> for TimeUnit {
+    fn from(u: TimeUnitArg) -> Self {
+        match u {
+            TimeUnitArg::S => TimeUnit::S,
+            TimeUnitArg::Ms => TimeUnit::Ms,
+            TimeUnitArg::Us => TimeUnit::Us,
+        }
+    }
+}
+
+impl DialectArgs {
+    /// Sets what these flags give on top of `o`.
+    fn apply(&self, o: &mut LoadOptions) {
+        if self.fs_from.is_some() {
+            o.fs_from = self.fs_from.clone();
+        }
+        if let Some(u) = self.time_unit {
+            o.time_unit = Some(u.into());
+        }
+        if self.decimal_comma {
+            o.decimal_comma = Some(true);
+        }
+        if self.skip_lines.is_some() {
+            o.skip_lines = self.skip_lines;
+        }
+        if self.fill_gaps.is_some() {
+            o.gaps.fill_max_s = self.fill_gaps;
+        }
+        o.gaps.split |= self.split_gaps;
+    }
 }
 
 impl LoadArgs {
@@ -278,6 +361,7 @@ impl LoadArgs {
         if let Some(m) = self.min_periods {
             o.min_periods = m;
         }
+        self.dialect.apply(&mut o);
         let fallback = match (&o.bearing, o.geometry) {
             (Some(name), Some(g)) => Some((name.clone(), g)),
             _ => None,

@@ -40,7 +40,7 @@ enum Command {
     /// Signal and stage models of thesis chapter 6, with its formulas corrected (docs/methods.md), as tables.
     Model(cmd::model::ModelArgs),
     /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
-    Passage(cmd::passage::PassageArgs),
+    Passage(Box<cmd::passage::PassageArgs>),
     /// Simulate a bench recording with the built-in testbed simulator (writes NAME.truth.json beside it).
     Simulate(cmd::simulate::SimulateArgs),
     /// Simulate the thesis' test campaign: velocity sweep and bearing diagnosis, with a manifest.

@@ -39,6 +39,34 @@ impl WindowArgs {
             None => Ok(rec),
         }
     }
+
+    /// The pieces of one file (split at its gaps) cut to the window: pieces
+    /// wholly outside it are left out; an error when none reaches into it,
+    /// or when one that does holds too few samples.
+    pub fn apply_pieces(&self, pieces: Vec<Recording>) -> Result<Vec<Recording>> {
+        let Some(w) = self.parsed()? else {
+            return Ok(pieces);
+        };
+        if pieces.len() == 1 {
+            return Ok(vec![segment::window(&pieces[0], &w)?]);
+        }
+        let inside = |r: &Recording| {
+            let (t0, t1) = (r.meta.start_time_s, r.time_s(r.len()));
+            w.start_s.is_none_or(|s| s < t1) && w.end_s.is_none_or(|e| e > t0)
+        };
+        let Some(first) = pieces.first() else {
+            return Ok(pieces);
+        };
+        if !pieces.iter().any(inside) {
+            // The window's own message, for the first piece.
+            return Ok(vec![segment::window(first, &w)?]);
+        }
+        pieces
+            .iter()
+            .filter(|r| inside(r))
+            .map(|r| Ok(segment::window(r, &w)?))
+            .collect()
+    }
 }
 
 /// `--force-velocity`, for the commands that analyse at a velocity.
@@ -80,24 +108,26 @@ pub struct Segmented {
     pub plateaus: Vec<Plateau>,
 }
 
-/// Loads `paths` in parallel and applies the window; the first failure in
-/// argument order is the one reported.
+/// Loads `paths` in parallel (each file one record, or its pieces with
+/// `--split-gaps`) and applies the window; the first failure in argument
+/// order is the one reported.
 pub fn load_all(
     paths: &[PathBuf],
     opts: &LoadOptions,
     window: &WindowArgs,
 ) -> Result<Vec<Recording>> {
     window.parsed()?;
-    paths
+    let per_file = paths
         .par_iter()
         .map(|p| {
-            let rec = ballpass::recording::load(p, opts)
+            let pieces = ballpass::recording::load_all(p, opts)
                 .with_context(|| format!("loading {}", p.display()))?;
-            window.apply(rec)
+            window.apply_pieces(pieces)
         })
         .collect::<Vec<_>>()
         .into_iter()
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    Ok(per_file.into_iter().flatten().collect())
 }
 
 /// Each record's plateaus and the plateaus as records.
@@ -229,4 +259,67 @@ pub fn check_memory(recs: &[Recording], report: bool, hint: &str) -> Result<()> 
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ballpass::recording::{Channels, Metadata};
+
+    /// A piece of `n` samples at 100 Hz starting at `t0` s.
+    fn piece(t0: f64, n: usize) -> Recording {
+        Recording::new(
+            100.0,
+            Channels {
+                friction_n: Some((0..n).map(|i| i as f64).collect()),
+                ..Channels::default()
+            },
+            Metadata {
+                start_time_s: t0,
+                ..Metadata::default()
+            },
+        )
+        .unwrap()
+    }
+
+    fn window(w: &str) -> WindowArgs {
+        WindowArgs {
+            window: Some(w.into()),
+        }
+    }
+
+    #[test]
+    fn pieces_outside_the_window_are_left_out() {
+        // Pieces 0–1 s, 2–3 s, 4–5 s; the window 2.5:4.5 reaches into the
+        // last two.
+        let pieces = vec![piece(0.0, 100), piece(2.0, 100), piece(4.0, 100)];
+        let kept = window("2.5:4.5").apply_pieces(pieces).unwrap();
+        assert_eq!(kept.len(), 2);
+        assert_eq!(kept[0].len(), 50);
+        assert!((kept[0].meta.start_time_s - 2.5).abs() < 1e-9);
+        assert_eq!(kept[1].len(), 50);
+        assert!((kept[1].meta.start_time_s - 4.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_window_past_every_piece_is_an_error() {
+        let pieces = vec![piece(0.0, 100), piece(2.0, 100)];
+        let e = window("7:8").apply_pieces(pieces).unwrap_err().to_string();
+        assert!(e.contains("the window"), "{e}");
+    }
+
+    #[test]
+    fn a_piece_cut_too_short_by_the_window_is_an_error() {
+        // 5 samples of the second piece are inside 2.95:3.5: fewer than
+        // Recording::MIN_SAMPLES.
+        let pieces = vec![piece(0.0, 100), piece(2.0, 100)];
+        assert!(window("2.95:3.5").apply_pieces(pieces).is_err());
+    }
+
+    #[test]
+    fn without_a_window_the_pieces_are_kept() {
+        let pieces = vec![piece(0.0, 100), piece(2.0, 100)];
+        let none = WindowArgs { window: None };
+        assert_eq!(none.apply_pieces(pieces).unwrap().len(), 2);
+    }
 }

@@ -13,7 +13,7 @@ pub type Result<T> = std::result::Result<T, Error>;
 #[non_exhaustive]
 pub enum Error {
     /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", shown_path(path))]
     Io {
         /// The file.
         path: PathBuf,
@@ -21,7 +21,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// A text file has a bad cell or row.
-    #[error("{}:{line}{}: {reason}", path.display(), column.as_ref().map(|c| format!(" column '{c}'")).unwrap_or_default())]
+    #[error("{}:{line}{}: {reason}", shown_path(path), column.as_ref().map(|c| format!(" column '{}'", excerpt(c))).unwrap_or_default())]
     Parse {
         /// The file.
         path: PathBuf,
@@ -33,7 +33,7 @@ pub enum Error {
         reason: String,
     },
     /// A file is not of the format its name or contents claim.
-    #[error("{}: {reason}", path.display())]
+    #[error("{}: {reason}", shown_path(path))]
     Format {
         /// The file.
         path: PathBuf,
@@ -127,4 +127,73 @@ impl Error {
             source,
         }
     }
+}
+
+/// Longest excerpt of file or user text that a message quotes, in characters.
+pub const EXCERPT_CHARS: usize = 60;
+
+/// Text from a file or a user, made safe to quote in a one-line message:
+/// control and direction-changing characters escaped (`\n`, `\r`, `\t`,
+/// `\x1b`, `\u{202e}`, ...), and at most [`EXCERPT_CHARS`] characters kept,
+/// the rest summarised as `… (N characters)`.
+///
+/// ```
+/// use ballpass::error::excerpt;
+/// assert_eq!(excerpt("1.5\r\n\x1b[31m"), "1.5\\r\\n\\x1b[31m");
+/// let long = "x".repeat(1_000_000);
+/// assert!(excerpt(&long).ends_with("… (1000000 characters)"));
+/// ```
+pub fn excerpt(s: &str) -> String {
+    excerpt_within(s, EXCERPT_CHARS)
+}
+
+/// Longest path a message shows, in characters.
+pub const PATH_CHARS: usize = 400;
+
+/// A path as a message shows it: [`excerpt_within`] [`PATH_CHARS`].
+pub fn shown_path(path: &std::path::Path) -> String {
+    excerpt_within(&path.display().to_string(), PATH_CHARS)
+}
+
+/// [`excerpt`] keeping at most `max_chars` characters.
+pub fn excerpt_within(s: &str, max_chars: usize) -> String {
+    let mut out = String::new();
+    for (kept, c) in s.chars().enumerate() {
+        if kept == max_chars {
+            out.push_str(&format!("… ({} characters)", s.chars().count()));
+            return out;
+        }
+        match c {
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x80 && c.is_control() => {
+                out.push_str(&format!("\\x{:02x}", c as u32));
+            }
+            c if c.is_control()
+                || matches!(c, '\u{200b}'..='\u{200f}' | '\u{2028}'..='\u{202e}' | '\u{2066}'..='\u{2069}' | '\u{feff}') =>
+            {
+                out.push_str(&format!("\\u{{{:x}}}", c as u32));
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// [`excerpt`] of bytes that may not be UTF-8 (invalid sequences shown as `\u{fffd}`).
+pub fn excerpt_bytes(b: &[u8]) -> String {
+    // Only the first characters are shown: decode a bounded prefix, then count.
+    let head = &b[..b.len().min(4 * EXCERPT_CHARS + 4)];
+    let text = String::from_utf8_lossy(head);
+    let mut shown = excerpt(&text);
+    if head.len() < b.len() && !shown.contains('…') {
+        shown.push_str(&format!("… ({} bytes)", b.len()));
+    } else if head.len() < b.len() {
+        if let Some(p) = shown.find("… (") {
+            shown.truncate(p);
+            shown.push_str(&format!("… ({} bytes)", b.len()));
+        }
+    }
+    shown
 }

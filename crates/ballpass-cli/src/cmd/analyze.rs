@@ -46,11 +46,11 @@ enum WindowArg {
 /// Arguments of `ballpass analyze`.
 #[derive(Debug, Args)]
 pub struct AnalyzeArgs {
-    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7);
-    /// several files are repeats at one velocity and are averaged. The
-    /// velocity is --velocity, else the files' (profile, metadata), else
-    /// measured from the encoder; with --segment, each speed's plateaus are
-    /// analysed into DIR/v<speed>/.
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF
+    /// .mf4; several files (or the pieces of --split-gaps) are repeats at one
+    /// velocity and are averaged. The velocity is --velocity, else the
+    /// files' (profile, metadata), else measured from the encoder; with
+    /// --segment, each speed's plateaus are analysed into DIR/v<speed>/.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
     #[command(flatten)]

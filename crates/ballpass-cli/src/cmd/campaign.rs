@@ -32,7 +32,7 @@ use crate::{output, text};
 pub struct CampaignArgs {
     /// A manifest CSV (path, bearing, velocity_mm_s, repeat[, condition, notes]),
     /// or a folder of recordings together with --pattern. Recordings may be
-    /// CSV/TSV or MATLAB .mat (v5/v7).
+    /// CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF .mf4.
     source: PathBuf,
     /// File-name pattern inside the folder: `*` matches anything, `{velocity}`,
     /// `{repeat}`, `{bearing}` capture fields (e.g. `v{velocity}_r{repeat}.csv`).

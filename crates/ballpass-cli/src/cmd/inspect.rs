@@ -5,7 +5,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Result};
-use ballpass::recording::inspect::{inspect, InspectSettings, Inspection, Severity};
+use ballpass::recording::inspect::{inspect, inspect_file, InspectSettings, Inspection, Severity};
+use ballpass::recording::io::contents;
 use ballpass::recording::load;
 use ballpass::recording::segment::{self, Plateau, SegmentSettings, Window};
 use clap::Args;
@@ -18,7 +19,10 @@ use crate::{output, text};
 /// Arguments of `ballpass inspect`.
 #[derive(Debug, Args)]
 pub struct InspectArgs {
-    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7).
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF
+    /// .mf4. Each is listed (columns, variables and struct fields, groups and
+    /// channels: the names to give as --*-col) and, when its channels are
+    /// found, inspected; gaps are reported, not refused.
     #[arg(required = true, value_name = "FILE")]
     files: Vec<PathBuf>,
     #[command(flatten)]
@@ -30,9 +34,22 @@ pub struct InspectArgs {
     segment: SegmentArgs,
 }
 
+/// Most items of a file listed.
+const CONTENTS_LIMIT: usize = 500;
+
+/// One thing a file holds.
+#[derive(Serialize)]
+struct Item {
+    name: String,
+    what: String,
+}
+
 #[derive(Serialize)]
 struct FileReport {
     path: PathBuf,
+    /// What the file holds (its listing), when it can be read at all.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    contents: Vec<Item>,
     #[serde(skip_serializing_if = "Option::is_none")]
     inspection: Option<Inspection>,
     /// With --segment: the constant-velocity plateaus from the encoder.
@@ -60,16 +77,31 @@ pub fn run(a: &InspectArgs) -> Result<()> {
     let mut first_error = None;
     let window = a.load.window.parsed()?;
     for path in &a.files {
+        let listing = || -> Vec<Item> {
+            contents(path, &opts, CONTENTS_LIMIT)
+                .unwrap_or_default()
+                .into_iter()
+                .map(|(name, what)| Item { name, what })
+                .collect()
+        };
         let one = || -> Result<FileReport> {
-            let rec = a.load.window.apply(load(path, &opts)?)?;
-            let plateaus = if a.segment.segment {
-                Some(segment::plateaus(&rec, &SegmentSettings::default())?)
+            // The file as it is, gaps reported rather than refused; with a
+            // window or plateaus, the record as the analyses load it.
+            let (inspection, plateaus) = if window.is_none() && !a.segment.segment {
+                (inspect_file(path, &opts, &settings)?, None)
             } else {
-                None
+                let rec = a.load.window.apply(load(path, &opts)?)?;
+                let plateaus = if a.segment.segment {
+                    Some(segment::plateaus(&rec, &SegmentSettings::default())?)
+                } else {
+                    None
+                };
+                (inspect(&rec, opts.geometry.as_ref(), &settings), plateaus)
             };
             Ok(FileReport {
                 path: path.clone(),
-                inspection: Some(inspect(&rec, opts.geometry.as_ref(), &settings)),
+                contents: listing(),
+                inspection: Some(inspection),
                 plateaus,
                 error: None,
             })
@@ -84,6 +116,7 @@ pub fn run(a: &InspectArgs) -> Result<()> {
                 first_error.get_or_insert_with(|| msg.clone());
                 reports.push(FileReport {
                     path: path.clone(),
+                    contents: listing(),
                     inspection: None,
                     plateaus: None,
                     error: Some(msg),
@@ -104,13 +137,26 @@ pub fn run(a: &InspectArgs) -> Result<()> {
         writeln!(out)?;
     } else {
         for (k, r) in reports.iter().enumerate() {
-            if let Some(i) = &r.inspection {
-                if k > 0 {
-                    writeln!(out)?;
-                }
-                print_text(&mut out, i)?;
-                if let Some(p) = &r.plateaus {
-                    print_plateaus(&mut out, p)?;
+            if k > 0 && (r.inspection.is_some() || !r.contents.is_empty()) {
+                writeln!(out)?;
+            }
+            match &r.inspection {
+                Some(i) => print_text(&mut out, i)?,
+                None if !r.contents.is_empty() => writeln!(out, "{}", text::path(&r.path))?,
+                None => {}
+            }
+            if let Some(p) = &r.plateaus {
+                print_plateaus(&mut out, p)?;
+            }
+            if !r.contents.is_empty() {
+                writeln!(out, "  holds:")?;
+                for it in &r.contents {
+                    writeln!(
+                        out,
+                        "    {:<40} {}",
+                        text::line(&it.name),
+                        text::line(&it.what)
+                    )?;
                 }
             }
         }
@@ -180,6 +226,31 @@ fn print_text(out: &mut impl Write, i: &Inspection) -> std::io::Result<()> {
     }
     if !i.missing.is_empty() {
         writeln!(out, "  missing: {}", i.missing.join(", "))?;
+    }
+    for n in &i.notes {
+        writeln!(out, "  read: {n}")?;
+    }
+    if i.gap_count > 0 {
+        writeln!(out, "  gaps: {} ({} samples)", i.gap_count, i.gap_samples)?;
+        for g in i.gaps.iter().take(20) {
+            writeln!(
+                out,
+                "    t = {:.6} s: {} sample(s) ({:.6} s) at {}: {}",
+                g.start_time_s,
+                g.len,
+                g.duration_s,
+                g.place,
+                g.channels.join(", ")
+            )?;
+        }
+        if i.gap_count > 20 {
+            writeln!(
+                out,
+                "    ... and {} more (--json lists {})",
+                i.gap_count - 20,
+                i.gaps.len()
+            )?;
+        }
     }
     for f in &i.findings {
         let sev = match f.severity {

@@ -8,7 +8,7 @@ use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSetti
 use ballpass::analysis::passage_table::{PassageFailure, PassageOutput};
 use ballpass::analysis::preflight::{check, check_channels, PreflightSettings, VelocitySource};
 use ballpass::bearing::Geometry;
-use ballpass::recording::io::load;
+use ballpass::recording::io::load_all;
 use ballpass::recording::{Channel, Recording};
 use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
@@ -21,7 +21,7 @@ use crate::text;
 /// Arguments of `ballpass passage`.
 #[derive(Debug, Args)]
 pub struct PassageArgs {
-    /// Recording files: CSV/TSV with a header row, or MATLAB .mat (v5/v7).
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF .mf4.
     /// The velocity is --velocity, else the profile's or the file's; without
     /// one the period is found from the pulses and nothing is predicted.
     #[arg(required = true, value_name = "REC")]
@@ -69,12 +69,14 @@ pub fn run(a: &PassageArgs) -> Result<()> {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
     for path in &a.records {
-        let loaded = load(path, &opts)
+        // One recording per file, or its pieces with --split-gaps; each cut
+        // to the window, then taken apart into plateaus with --segment.
+        let loaded = load_all(path, &opts)
             .map_err(anyhow::Error::from)
-            .and_then(|rec| a.load.window.apply(rec));
+            .and_then(|pieces| a.load.window.apply_pieces(pieces));
         let parts = match loaded {
-            Ok(rec) if a.segment.segment => {
-                records::segment_all(std::slice::from_ref(&rec)).map(|(found, parts)| {
+            Ok(pieces) if a.segment.segment => {
+                records::segment_all(&pieces).map(|(found, parts)| {
                     for f in &found {
                         notes.push(format!(
                             "{}: {} plateau(s) from the encoder",
@@ -85,7 +87,7 @@ pub fn run(a: &PassageArgs) -> Result<()> {
                     parts
                 })
             }
-            Ok(rec) => Ok(vec![rec]),
+            Ok(pieces) => Ok(pieces),
             Err(e) => Err(e),
         };
         let parts = match parts {

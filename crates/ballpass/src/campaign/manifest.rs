@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::pattern::{Field, Pattern};
-use crate::error::{Error, Result};
+use crate::error::{excerpt, Error, Result};
 
 /// One recording of a campaign.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -109,10 +109,28 @@ const REQUIRED: [&str; 4] = ["path", "bearing", "velocity_mm_s", "repeat"];
 /// a duplicate (bearing, velocity, repeat); [`Error::Format`] for a manifest
 /// without entries.
 pub fn read_manifest(path: &Path) -> Result<Manifest> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
     })?;
+    let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        line: 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count(),
+        column: None,
+        reason: "text that is not UTF-8; a manifest is CSV text".into(),
+    })?;
+    parse_manifest(path, &text)
+}
+
+/// Parses manifest text; `path` names it in messages and relative paths in
+/// it are relative to its folder.
+///
+/// # Errors
+/// As [`read_manifest`].
+pub fn parse_manifest(path: &Path, text: &str) -> Result<Manifest> {
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let parse_err = |line: usize, column: Option<&str>, reason: String| Error::Parse {
         path: path.to_path_buf(),
@@ -184,14 +202,17 @@ pub fn read_manifest(path: &Path) -> Result<Manifest> {
                 parse_err(
                     line,
                     Some("velocity_mm_s"),
-                    format!("'{}' is not a positive number of mm/s", cells[iv].trim()),
+                    format!(
+                        "'{}' is not a positive number of mm/s",
+                        excerpt(cells[iv].trim())
+                    ),
                 )
             })?;
         let repeat: u32 = cells[ir].trim().parse().map_err(|_| {
             parse_err(
                 line,
                 Some("repeat"),
-                format!("'{}' is not a whole number", cells[ir].trim()),
+                format!("'{}' is not a whole number", excerpt(cells[ir].trim())),
             )
         })?;
         let opt = |i: Option<usize>| {
@@ -203,7 +224,10 @@ pub fn read_manifest(path: &Path) -> Result<Manifest> {
             return Err(parse_err(
                 line,
                 None,
-                format!("bearing {bearing}, {velocity_mm_s} mm/s, repeat {repeat} already listed on line {prev}"),
+                format!(
+                    "bearing {}, {velocity_mm_s} mm/s, repeat {repeat} already listed on line {prev}",
+                    excerpt(&bearing)
+                ),
             ));
         }
         let rel = PathBuf::from(p);

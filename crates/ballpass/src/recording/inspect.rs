@@ -19,11 +19,25 @@
 //! With a position channel, the mean stage velocity is the slope of the same
 //! fit; it is compared with the stated tracking velocity (`velocity_ratio`).
 //! With velocity and geometry known, the number of ball-pass periods spanned.
+//!
+//! [`inspect_file`] reads a file as it is, without refusing what analyses
+//! refuse: it reports gaps (time stamps missing from the uniform grid,
+//! samples without a finite value) with their positions, and values beyond
+//! ±[`Recording::MAX_ABS`]; the statistics skip them.
+//!
+//! The statistics stay finite wherever their true value is (a channel of
+//! values near 1e308 has a finite mean and deviation): the samples are
+//! scaled by a power of two near their largest magnitude before any sum,
+//! and the sums are compensated (Neumaier), so no intermediate overflows.
+
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::io::{Gap, LoadOptions, Prepared};
 use super::{Channel, Recording};
 use crate::bearing::Geometry;
+use crate::error::Result;
 
 /// Thresholds of the checks of [`inspect`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -141,17 +155,171 @@ pub struct Inspection {
     pub channels: Vec<ChannelSummary>,
     /// Channels absent (analyses that need them will refuse).
     pub missing: Vec<String>,
-    /// Clipping, dropouts, drift, velocity mismatch.
+    /// Clipping, dropouts, drift, velocity mismatch, gaps, values out of range.
     pub findings: Vec<Finding>,
+    /// Gaps, in time order (at most [`MAX_GAPS_LISTED`]; `gap_count` has them all).
+    pub gaps: Vec<Gap>,
+    /// Number of gaps.
+    pub gap_count: usize,
+    /// Samples in all gaps.
+    pub gap_samples: usize,
+    /// What loading did to the numbers (units converted, lines skipped).
+    pub notes: Vec<String>,
+}
+
+/// Most gaps an [`Inspection`] lists one by one.
+pub const MAX_GAPS_LISTED: usize = 100;
+
+/// What [`inspect_view`] looks at: channels on a uniform grid, perhaps with gaps.
+struct View<'a> {
+    source: String,
+    test_id: Option<String>,
+    fs_hz: f64,
+    start_time_s: f64,
+    /// Samples on the grid, missing ones included.
+    grid_len: usize,
+    channels: Vec<(Channel, &'a [f64])>,
+    /// Grid sample of each value, when samples are missing.
+    grid: Option<&'a [usize]>,
+    velocity_mm_s: Option<f64>,
+    bearing: Option<String>,
+}
+
+impl View<'_> {
+    fn pos(&self, i: usize) -> usize {
+        self.grid.map_or(i, |g| g[i])
+    }
+    fn time_s(&self, i: usize) -> f64 {
+        self.start_time_s + self.pos(i) as f64 / self.fs_hz
+    }
+    fn duration_s(&self) -> f64 {
+        self.grid_len as f64 / self.fs_hz
+    }
+}
+
+/// Inspects a recording file as it is, gaps and all (see the module doc).
+///
+/// # Errors
+/// As [`super::load`] for a file that cannot be read or placed on a time
+/// base (a bad cell, a time column that is not uniform); never for gaps or
+/// values out of range.
+pub fn inspect_file(path: &Path, opts: &LoadOptions, s: &InspectSettings) -> Result<Inspection> {
+    opts.validate()?;
+    let bytes = std::fs::read(path).map_err(|source| crate::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    inspect_bytes(path, &bytes, opts, s)
+}
+
+/// [`inspect_file`] of a file in memory; `path` names it and gives the
+/// format when none is set.
+///
+/// # Errors
+/// As [`inspect_file`].
+pub fn inspect_bytes(
+    path: &Path,
+    bytes: &[u8],
+    opts: &LoadOptions,
+    s: &InspectSettings,
+) -> Result<Inspection> {
+    let p = super::io::prepare_for_inspection(path, bytes, opts)?;
+    Ok(inspect_prepared(path, &p, opts, s))
+}
+
+fn inspect_prepared(
+    path: &Path,
+    p: &Prepared,
+    opts: &LoadOptions,
+    s: &InspectSettings,
+) -> Inspection {
+    let view = View {
+        source: crate::error::shown_path(path),
+        test_id: opts
+            .test_id
+            .clone()
+            .or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned())),
+        fs_hz: p.fs_hz,
+        start_time_s: p.start_time_s,
+        grid_len: p.grid_len,
+        channels: p.channels.iter().map(|(c, v)| (*c, v.as_slice())).collect(),
+        grid: p.grid.as_deref(),
+        velocity_mm_s: opts.velocity_mm_s,
+        bearing: opts.bearing.clone(),
+    };
+    let mut out = inspect_view(&view, opts.geometry.as_ref(), s);
+    if p.grid_len < Recording::MIN_SAMPLES {
+        out.findings.push(Finding {
+            severity: Severity::Warning,
+            channel: None,
+            message: format!(
+                "only {} samples; analyses need at least {}",
+                p.grid_len,
+                Recording::MIN_SAMPLES
+            ),
+        });
+    }
+    out.gap_count = p.gaps.len();
+    out.gap_samples = p.gaps.iter().map(|g| g.len).sum();
+    out.gaps = p.gaps.iter().take(MAX_GAPS_LISTED).cloned().collect();
+    out.notes = p.notes.clone();
+    if let Some(first) = p.gaps.first() {
+        out.findings.push(Finding {
+            severity: Severity::Warning,
+            channel: None,
+            message: format!(
+                "{} gap(s), {} sample(s) missing or without a value (the first: {} sample(s) \
+                 at t = {:.6} s, {}, {}); analyses refuse them unless told to fill or split",
+                p.gaps.len(),
+                out.gap_samples,
+                first.len,
+                first.start_time_s,
+                first.place,
+                first.channels.join(", ")
+            ),
+        });
+    }
+    if let (n, Some((c, g, x))) = p.out_of_range {
+        out.findings.push(Finding {
+            severity: Severity::Warning,
+            channel: Some(c.column_name().into()),
+            message: format!(
+                "{n} value(s) beyond ±{:e} (the first: {x:e} at t = {:.6} s); analyses refuse them",
+                Recording::MAX_ABS,
+                p.start_time_s + g as f64 / p.fs_hz
+            ),
+        });
+    }
+    out
 }
 
 /// Inspects a recording (see the module doc for what is checked).
 pub fn inspect(rec: &Recording, geometry: Option<&Geometry>, s: &InspectSettings) -> Inspection {
+    let view = View {
+        source: rec.source_name(),
+        test_id: rec.meta.test_id.clone(),
+        fs_hz: rec.fs_hz(),
+        start_time_s: rec.meta.start_time_s,
+        grid_len: rec.len(),
+        channels: rec
+            .channels()
+            .into_iter()
+            .filter_map(|c| rec.channel(c).map(|v| (c, v)))
+            .collect(),
+        grid: None,
+        velocity_mm_s: rec.meta.velocity_mm_s,
+        bearing: rec.meta.bearing.clone(),
+    };
+    let mut out = inspect_view(&view, geometry, s);
+    out.notes = rec.meta.notes.clone();
+    out
+}
+
+fn inspect_view(rec: &View<'_>, geometry: Option<&Geometry>, s: &InspectSettings) -> Inspection {
     let mut findings = Vec::new();
     let mut channels = Vec::new();
     let mut position_velocity_mm_s = None;
-    for c in rec.channels() {
-        let x = rec.channel(c).unwrap_or_default();
+    for &(c, x) in &rec.channels {
         let sum = summarise(rec, c, x, s);
         let name = c.column_name().to_string();
         if let Some(run) = &sum.longest_clip {
@@ -203,7 +371,7 @@ pub fn inspect(rec: &Recording, geometry: Option<&Geometry>, s: &InspectSettings
         }
         channels.push(sum);
     }
-    let v = rec.meta.velocity_mm_s;
+    let v = rec.velocity_mm_s;
     if let (Some(v), Some(pv)) = (v, position_velocity_mm_s) {
         if (pv.abs() - v).abs() > s.velocity_ratio * v {
             findings.push(Finding {
@@ -237,55 +405,94 @@ pub fn inspect(rec: &Recording, geometry: Option<&Geometry>, s: &InspectSettings
     }
     let missing = Channel::ALL
         .into_iter()
-        .filter(|&c| rec.channel(c).is_none())
+        .filter(|&c| rec.channels.iter().all(|(d, _)| *d != c))
         .map(|c| c.column_name().to_string())
         .collect();
     Inspection {
-        source: rec.source_name(),
-        test_id: rec.meta.test_id.clone(),
-        samples: rec.len(),
-        fs_hz: rec.fs_hz(),
+        source: rec.source.clone(),
+        test_id: rec.test_id.clone(),
+        samples: rec.grid_len,
+        fs_hz: rec.fs_hz,
         duration_s: rec.duration_s(),
-        start_time_s: rec.meta.start_time_s,
+        start_time_s: rec.start_time_s,
         velocity_mm_s: v,
-        bearing: rec.meta.bearing.clone(),
+        bearing: rec.bearing.clone(),
         position_velocity_mm_s,
         tau_c_s,
         periods,
         channels,
         missing,
         findings,
+        gaps: Vec::new(),
+        gap_count: 0,
+        gap_samples: 0,
+        notes: Vec::new(),
     }
 }
 
-fn summarise(rec: &Recording, c: Channel, x: &[f64], s: &InspectSettings) -> ChannelSummary {
-    let n = x.len() as f64;
-    let min = x.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let mean = x.iter().sum::<f64>() / n;
-    let std = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
-    // Least-squares line against t = i / fs (centred, so the sums stay small).
-    let tm = (n - 1.0) / 2.0;
-    let sxx: f64 = (0..x.len()).map(|i| (i as f64 - tm).powi(2)).sum();
-    let sxy: f64 = x
+/// Neumaier-compensated sum.
+fn sum(values: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut c) = (0.0_f64, 0.0_f64);
+    for x in values {
+        let t = s + x;
+        c += if s.abs() >= x.abs() {
+            (s - t) + x
+        } else {
+            (x - t) + s
+        };
+        s = t;
+    }
+    s + c
+}
+
+/// A power of two near the largest magnitude of `x` (at most it), so that
+/// `x / scale` lies within ±2 and its squares neither overflow nor vanish.
+fn scale_of(largest: f64) -> f64 {
+    if largest >= f64::MIN_POSITIVE && largest.is_finite() {
+        f64::from_bits(largest.to_bits() & 0x7FF0_0000_0000_0000)
+    } else {
+        f64::MIN_POSITIVE
+    }
+}
+
+fn summarise(rec: &View<'_>, c: Channel, x: &[f64], s: &InspectSettings) -> ChannelSummary {
+    let ok = |v: &f64| v.is_finite();
+    let valid: Vec<(f64, f64)> = x
         .iter()
         .enumerate()
-        .map(|(i, v)| (i as f64 - tm) * (v - mean))
-        .sum();
-    let slope_per_sample = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    let resid = (x
+        .filter(|(_, v)| ok(v))
+        .map(|(i, &v)| (rec.pos(i) as f64, v))
+        .collect();
+    let n = valid.len() as f64;
+    let min = valid.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let max = valid.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    let k = scale_of(min.abs().max(max.abs()));
+    // Moments of y = x / k, then scaled back.
+    let my = sum(valid.iter().map(|p| p.1 / k)) / n;
+    let std_y = (sum(valid.iter().map(|p| (p.1 / k - my).powi(2))) / n).sqrt();
+    let (mean, std) = (my * k, std_y * k);
+    // Least-squares line against the grid position (centred, so the sums stay small).
+    let tm = sum(valid.iter().map(|p| p.0)) / n;
+    let sxx = sum(valid.iter().map(|p| (p.0 - tm).powi(2)));
+    let sxy = sum(valid.iter().map(|p| (p.0 - tm) * (p.1 / k - my)));
+    let slope_y = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    let resid_y = (sum(valid
         .iter()
-        .enumerate()
-        .map(|(i, v)| (v - mean - slope_per_sample * (i as f64 - tm)).powi(2))
-        .sum::<f64>()
+        .map(|p| (p.1 / k - my - slope_y * (p.0 - tm)).powi(2)))
         / n)
         .sqrt();
-    let slope_per_s = slope_per_sample * rec.fs_hz();
+    let slope_per_s = slope_y * rec.fs_hz * k;
+    let change_over_record = slope_y * rec.grid_len as f64 * k;
+    let resid = resid_y * k;
     let mut clipped = 0;
     let mut longest_clip: Option<Run> = None;
     let mut dropouts = Vec::new();
     let mut i = 0;
     while i < x.len() {
+        if !x[i].is_finite() {
+            i += 1;
+            continue;
+        }
         let mut j = i + 1;
         while j < x.len() && x[j] == x[i] {
             j += 1;
@@ -319,7 +526,7 @@ fn summarise(rec: &Recording, c: Channel, x: &[f64], s: &InspectSettings) -> Cha
         longest_clip,
         dropouts,
         slope_per_s,
-        change_over_record: slope_per_s * rec.duration_s(),
+        change_over_record,
         detrended_std: resid,
     }
 }
@@ -428,5 +635,71 @@ mod tests {
         let o = &r.channels[2];
         assert_eq!(o.longest_clip.unwrap().start, 2000);
         assert_eq!(o.dropouts[0].start, 5000);
+    }
+
+    /// Issue 18, item 12: a channel alternating 1e308 and 1.7e308 has a
+    /// finite mean and deviation (1.35e308 and 0.35e308), not inf.
+    #[test]
+    fn inspect_statistics_overflow() {
+        let n = 1000;
+        let big: Vec<f64> = (0..n)
+            .map(|i| if i % 2 == 0 { 1e308 } else { 1.7e308 })
+            .collect();
+        let view = View {
+            source: "big".into(),
+            test_id: None,
+            fs_hz: 1000.0,
+            start_time_s: 0.0,
+            grid_len: n,
+            channels: vec![(Channel::Friction, &big)],
+            grid: None,
+            velocity_mm_s: None,
+            bearing: None,
+        };
+        let r = inspect_view(&view, None, &InspectSettings::default());
+        let c = &r.channels[0];
+        // Scaling by a power of two is exact and the compensated sums of
+        // 1000 terms are good to a few ulps: 1e-12 relative is ample.
+        assert!((c.mean / 1.35e308 - 1.0).abs() < 1e-12, "{}", c.mean);
+        assert!((c.std / 0.35e308 - 1.0).abs() < 1e-12, "{}", c.std);
+        assert!(c.detrended_std.is_finite() && c.slope_per_s.is_finite());
+        // Tiny values keep their deviation too (their squares would underflow).
+        let tiny: Vec<f64> = (0..n)
+            .map(|i| if i % 2 == 0 { 1e-300 } else { 3e-300 })
+            .collect();
+        let view = View {
+            channels: vec![(Channel::Friction, &tiny)],
+            ..view
+        };
+        let c = &inspect_view(&view, None, &InspectSettings::default()).channels[0];
+        assert!((c.std / 1e-300 - 1.0).abs() < 1e-12, "{}", c.std);
+    }
+
+    /// Gaps are skipped by the statistics and positioned by the grid.
+    #[test]
+    fn statistics_skip_gaps_and_use_grid_positions() {
+        // A ramp 0, 1, 2, ... with samples 3 and 4 missing from the grid and
+        // sample 7 without a value: mean of the finite values, slope 1 per sample.
+        let x = [0.0, 1.0, 2.0, 5.0, 6.0, f64::NAN, 8.0, 9.0];
+        let grid = [0, 1, 2, 5, 6, 7, 8, 9];
+        let view = View {
+            source: "g".into(),
+            test_id: None,
+            fs_hz: 10.0,
+            start_time_s: 0.0,
+            grid_len: 10,
+            channels: vec![(Channel::Position, &x)],
+            grid: Some(&grid),
+            velocity_mm_s: None,
+            bearing: None,
+        };
+        let r = inspect_view(&view, None, &InspectSettings::default());
+        let c = &r.channels[0];
+        assert_eq!(c.min, 0.0);
+        assert_eq!(c.max, 9.0);
+        assert!((c.mean - 31.0 / 7.0).abs() < 1e-12);
+        // 1 mm per sample at 10 Hz: 10 mm/s, exact to rounding.
+        assert!((c.slope_per_s - 10.0).abs() < 1e-9, "{}", c.slope_per_s);
+        assert!(c.detrended_std < 1e-12);
     }
 }

@@ -15,7 +15,9 @@ pub mod io;
 pub mod profile;
 pub mod segment;
 
-pub use io::{load, write_csv, write_mat, ChannelSource, Format, LoadOptions};
+pub use io::{
+    load, load_all, write_csv, write_mat, ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit,
+};
 pub use profile::Profile;
 
 /// The three measured channels of the testbed.
@@ -81,6 +83,10 @@ pub struct Metadata {
     pub source: Option<PathBuf>,
     /// Time of the first sample, s (from the time column; 0 when unknown).
     pub start_time_s: f64,
+    /// What loading did to the numbers, in words: units converted, gaps
+    /// filled, the record split (empty when it read them as they are).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// One bench recording: uniformly sampled channels plus metadata.
@@ -89,7 +95,8 @@ pub struct Metadata {
 /// [`Recording::require`] and get an error that names the channel otherwise.
 /// A `Recording` is only built through [`Recording::new`], which validates:
 /// positive finite sampling rate, at least one channel, equal channel lengths,
-/// at least [`Recording::MIN_SAMPLES`] samples, finite values.
+/// at least [`Recording::MIN_SAMPLES`] samples, finite values within
+/// ±[`Recording::MAX_ABS`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recording {
     fs_hz: f64,
@@ -116,12 +123,17 @@ impl Recording {
     /// Fewest samples a recording may hold.
     pub const MIN_SAMPLES: usize = 16;
 
+    /// Largest magnitude of a sample: far beyond any force in N, position in
+    /// mm or voltage, and small enough that the analyses' sums of squares of
+    /// a billion samples stay finite (a value near 1e307 would overflow them).
+    pub const MAX_ABS: f64 = 1e100;
+
     /// Builds a validated recording.
     ///
     /// # Errors
     /// [`Error::InvalidSetting`] for a bad `fs_hz`; [`Error::InvalidChannel`]
-    /// for no channels, unequal lengths, too few samples or a non-finite sample
-    /// (naming the channel and the sample index).
+    /// for no channels, unequal lengths, too few samples or a non-finite or
+    /// out-of-range sample (naming the channel and the sample index).
     pub fn new(fs_hz: f64, channels: Channels, meta: Metadata) -> Result<Self> {
         let source_name = source_name(&meta);
         if !(fs_hz.is_finite() && fs_hz > 0.0) {
@@ -160,11 +172,25 @@ impl Recording {
                     ),
                 });
             }
+            // One pass in the common case: NaN fails the comparison too.
+            if v.iter().fold(true, |ok, x| ok & (x.abs() <= Self::MAX_ABS)) {
+                continue;
+            }
             if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
                 return Err(Error::InvalidChannel {
                     channel: c.column_name().into(),
                     source_name,
                     reason: format!("sample {i} is {x}; expected a finite number"),
+                });
+            }
+            if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| x.abs() > Self::MAX_ABS) {
+                return Err(Error::InvalidChannel {
+                    channel: c.column_name().into(),
+                    source_name,
+                    reason: format!(
+                        "sample {i} is {x:e}, beyond ±{:e}: far outside any measurement",
+                        Self::MAX_ABS
+                    ),
                 });
             }
         }
@@ -247,9 +273,9 @@ impl Recording {
 
 fn source_name(meta: &Metadata) -> String {
     if let Some(p) = &meta.source {
-        p.display().to_string()
+        crate::error::shown_path(p)
     } else if let Some(t) = &meta.test_id {
-        t.clone()
+        crate::error::excerpt(t)
     } else {
         "recording".into()
     }

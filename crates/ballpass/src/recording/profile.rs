@@ -2,9 +2,15 @@
 //!
 //! ```toml
 //! name = "UNH air-bearing stage, dSPACE DS1103"
-//! format = "mat"                 # csv | tsv | mat; default: from the file name
+//! format = "mat"                 # csv | tsv | mat | tdms | mf4; default: from the file name
 //! fs_hz = 1000.0                 # needed when files have no time column
+//! # fs_from = "bearing.sr"       # or: a MAT variable / struct field holding it
 //! time = "Zeit"                  # time column / variable, default time_s
+//! # time_unit = "ms"             # s | ms | us; default: what the file states, else s
+//! # decimal_comma = true         # default: detected
+//! # skip_lines = 4               # lines before the header; default: found
+//! # fill_gaps = 0.005            # fill gaps up to 5 ms by linear interpolation
+//! # split_gaps = true            # split the record at longer gaps
 //! bearing = "sr25w"              # catalog key
 //! min_periods = 3.0
 //!
@@ -28,12 +34,13 @@
 //!
 //! Unknown keys are errors (a misspelt `fs` is reported, not ignored), except
 //! inside `[analysis]`, which later stages read with their own settings types.
+//! Every error names the profile file and the line of the key at fault.
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::io::{ChannelSource, Format, LoadOptions};
+use super::io::{ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit};
 use crate::bearing::{self, Geometry};
 use crate::error::{Error, Result};
 
@@ -49,8 +56,20 @@ pub struct Profile {
     pub delimiter: Option<String>,
     /// Sampling rate, Hz.
     pub fs_hz: Option<f64>,
+    /// MAT variable or struct field holding the sampling rate, Hz.
+    pub fs_from: Option<String>,
     /// Time column / variable name.
     pub time: Option<String>,
+    /// Unit of the time column.
+    pub time_unit: Option<TimeUnit>,
+    /// Text files write numbers with a decimal comma; `None`: detected.
+    pub decimal_comma: Option<bool>,
+    /// Lines before the header of text files; `None`: found.
+    pub skip_lines: Option<usize>,
+    /// Fill gaps up to this long, s, by linear interpolation.
+    pub fill_gaps: Option<f64>,
+    /// Split records at the gaps that are not filled.
+    pub split_gaps: bool,
     /// Ignore the time column and use `fs_hz`.
     pub ignore_time: bool,
     /// Largest relative deviation of one time step from the median step.
@@ -118,16 +137,24 @@ impl Profile {
     ///
     /// # Errors
     /// [`Error::Io`] when unreadable; [`Error::Parse`] naming the line for bad
-    /// TOML, an unknown key or a value of the wrong type; the errors of
-    /// [`Profile::load_options`] for values out of range.
+    /// TOML, an unknown key, a value of the wrong type or out of range.
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
         })?;
+        let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
+            path: path.to_path_buf(),
+            line: 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count(),
+            column: None,
+            reason: "text that is not UTF-8; a profile is TOML text".into(),
+        })?;
         let mut p = Self::parse(path, &text)?;
         p.source = Some(path.to_path_buf());
-        p.load_options()?;
+        p.load_options().map_err(|e| locate(path, &text, e))?;
         Ok(p)
     }
 
@@ -145,7 +172,7 @@ impl Profile {
                 path: path.to_path_buf(),
                 line,
                 column: None,
-                reason: e.message().replace('\n', " ").trim().to_string(),
+                reason: crate::error::excerpt_within(e.message().trim(), 300),
             }
         })
     }
@@ -200,8 +227,16 @@ impl Profile {
         let mut o = LoadOptions {
             format: self.format,
             delimiter: self.delimiter.as_deref().map(parse_delimiter).transpose()?,
+            decimal_comma: self.decimal_comma,
+            skip_lines: self.skip_lines,
             fs_hz: self.fs_hz,
+            fs_from: self.fs_from.clone(),
             time: self.time.clone(),
+            time_unit: self.time_unit,
+            gaps: GapPolicy {
+                fill_max_s: self.fill_gaps,
+                split: self.split_gaps,
+            },
             ignore_time: self.ignore_time,
             friction: self.friction.clone(),
             position: self.position.clone(),
@@ -223,12 +258,77 @@ impl Profile {
     }
 }
 
+/// A setting's error as an error at the line of its key in the profile text.
+fn locate(path: &Path, text: &str, e: Error) -> Error {
+    let Error::InvalidSetting { name, reason } = &e else {
+        return e;
+    };
+    let (table, key) = match name.as_str() {
+        "fs" => (None, "fs_hz"),
+        "delimiter" => (None, "delimiter"),
+        "bearing" => (None, "bearing"),
+        "time step tolerance" => (None, "time_step_tolerance"),
+        "min_periods" => (None, "min_periods"),
+        "fill-gaps" => (None, "fill_gaps"),
+        "skip-lines" => (None, "skip_lines"),
+        "decimal-comma" => (None, "decimal_comma"),
+        "geometry" => (Some("geometry"), ""),
+        "ball diameter" => (Some("geometry"), "ball_diameter_mm"),
+        "free space" => (Some("geometry"), "free_space_mm"),
+        "balls in race" => (Some("geometry"), "balls_in_race"),
+        other => match other.split_once(' ') {
+            Some((ch @ ("friction" | "position" | "optical"), k @ ("scale" | "offset"))) => {
+                (Some(ch), k)
+            }
+            _ => return e,
+        },
+    };
+    match line_of(text, table, key) {
+        Some(line) => Error::Parse {
+            path: path.to_path_buf(),
+            line,
+            column: None,
+            reason: format!("invalid {name}: {reason}"),
+        },
+        None => e,
+    }
+}
+
+/// 1-based line where `key` is set in `[table]` (top level for `None`); an
+/// empty key names the table's header line.
+fn line_of(text: &str, table: Option<&str>, key: &str) -> Option<usize> {
+    let mut current: Option<String> = None;
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if let Some(name) = l.strip_prefix('[').and_then(|r| r.split(']').next()) {
+            current = Some(name.trim().to_string());
+            if key.is_empty() && table == current.as_deref() {
+                return Some(i + 1);
+            }
+            continue;
+        }
+        if current.as_deref() != table || key.is_empty() {
+            continue;
+        }
+        if let Some((k, _)) = l.split_once('=') {
+            if k.trim().trim_matches('"') == key {
+                return Some(i + 1);
+            }
+        }
+    }
+    None
+}
+
 fn lookup(key: &str) -> Result<&'static bearing::CatalogEntry> {
     bearing::lookup(key).ok_or_else(|| {
         let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
         Error::setting(
             "bearing",
-            format!("unknown bearing '{key}' (catalog: {})", keys.join(", ")),
+            format!(
+                "unknown bearing '{}' (catalog: {})",
+                crate::error::excerpt(key),
+                keys.join(", ")
+            ),
         )
     })
 }
@@ -250,8 +350,9 @@ pub fn parse_delimiter(s: &str) -> Result<u8> {
         _ => Err(Error::setting(
             "delimiter",
             format!(
-                "expected one character or tab, comma, semicolon, space; got '{s}' \
-                 ('#' and '\"' are reserved)"
+                "expected one character or tab, comma, semicolon, space; got '{}' \
+                 ('#' and '\"' are reserved)",
+                crate::error::excerpt(s)
             ),
         )),
     }
@@ -328,6 +429,14 @@ detrend = "linear"
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown bearing 'nope'"), "{e}");
+        // Found by the fuzz run (seed 7): the name is escaped, not echoed raw.
+        let e = Profile::parse(Path::new("b.toml"), "bearing = \"sr25\\tw\"\n")
+            .unwrap()
+            .load_options()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown bearing 'sr25\\tw'"), "{e}");
+        assert!(!e.chars().any(char::is_control), "{e}");
         let e = Profile::parse(Path::new("b.toml"), "[geometry]\nball_diameter_mm = -4\n")
             .unwrap()
             .load_options()
@@ -343,6 +452,64 @@ detrend = "linear"
         .unwrap_err()
         .to_string();
         assert!(e.contains("ball diameter") && e.contains("-4"), "{e}");
+    }
+
+    /// Issue 18, item 11: a value out of range is an error naming the
+    /// profile file and the line of its key.
+    #[test]
+    fn profile_value_errors_name_file_and_line() {
+        let dir = std::env::temp_dir().join(format!("ballpass-profile-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (text, line, what) in [
+            (
+                "name = \"x\"\n\n[position]\nname = \"p\"\nscale = 0\n",
+                5,
+                "position scale",
+            ),
+            ("fs_hz = -5\n", 1, "fs"),
+            ("# c\nbearing = \"nope\"\n", 2, "unknown bearing"),
+            (
+                "bearing = \"sr25w\"\n[geometry]\nballs_in_race = 0\n",
+                3,
+                "balls in race",
+            ),
+            (
+                "[geometry]\nball_diameter_mm = 1\n",
+                1,
+                "without a catalog bearing",
+            ),
+            ("fill_gaps = 0\n", 1, "fill-gaps"),
+        ] {
+            let p = dir.join("bench.toml");
+            std::fs::write(&p, text).unwrap();
+            let e = Profile::read(&p).unwrap_err().to_string();
+            let want = format!("{}:{line}", p.display());
+            assert!(e.starts_with(&want) && e.contains(what), "{text:?}: {e}");
+        }
+        std::fs::write(dir.join("bad.toml"), b"name = \"\xff\"\n").unwrap();
+        let e = Profile::read(&dir.join("bad.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bad.toml:1") && e.contains("not UTF-8"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn new_keys_set_dialects_and_gap_policy() {
+        let p = Profile::parse(
+            Path::new("b.toml"),
+            "format = \"tdms\"\nfs_from = \"bearing.sr\"\ntime_unit = \"ms\"\n\
+             decimal_comma = true\nskip_lines = 3\nfill_gaps = 0.01\nsplit_gaps = true\n",
+        )
+        .unwrap();
+        let o = p.load_options().unwrap();
+        assert_eq!(o.format, Some(Format::Tdms));
+        assert_eq!(o.fs_from.as_deref(), Some("bearing.sr"));
+        assert_eq!(o.time_unit, Some(TimeUnit::Ms));
+        assert_eq!(o.decimal_comma, Some(true));
+        assert_eq!(o.skip_lines, Some(3));
+        assert_eq!(o.gaps.fill_max_s, Some(0.01));
+        assert!(o.gaps.split);
     }
 
     #[test]

@@ -673,6 +673,7 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         })),
         source: None,
         start_time_s: 0.0,
+        notes: Vec::new(),
     };
     let recording = Recording::new(
         s.fs_hz,

@@ -1,16 +1,27 @@
-//! Reading and writing recording files: CSV/TSV text and MATLAB `.mat`.
+//! Reading and writing recording files: CSV/TSV text, MATLAB `.mat` (level 5
+//! and v7.3), NI TDMS and ASAM MDF 4.
 //!
 //! Every loader produces the same [`Recording`] through one validation path
-//! ([`LoadOptions`] says which columns or variables hold which channel, with
-//! what scale and offset, and how the sampling rate is known):
+//! ([`LoadOptions`] says which columns, variables or channels hold which
+//! channel, with what scale and offset, and how the sampling rate is known):
 //!
-//! - a time column (`time_s`, or the one named by [`LoadOptions::time`]) must
-//!   increase by a uniform step; the sampling rate is derived from it
-//!   (see [`timebase`]), and an [`LoadOptions::fs_hz`] given as well must agree;
-//! - without a time column, [`LoadOptions::fs_hz`] is required;
-//! - every cell must be a finite number, every channel as long as the others,
-//!   and, when velocity and bearing are known, the recording must span at
-//!   least [`LoadOptions::min_periods`] ball-pass periods.
+//! - a time column (`time_s`, or the one named by [`LoadOptions::time`]; an
+//!   MF4 master channel) must increase by a uniform step; the sampling rate
+//!   is derived from it (see [`timebase`]), and an [`LoadOptions::fs_hz`]
+//!   given as well must agree. A rate the file states (TDMS `wf_increment`,
+//!   a MAT variable named by [`LoadOptions::fs_from`]) counts as given;
+//! - without a time column or a stated rate, [`LoadOptions::fs_hz`] is required;
+//! - every channel must be as long as the others; a sample without a finite
+//!   value or a time stamp missing from the grid is a gap, refused unless
+//!   [`LoadOptions::gaps`] says to fill or split (see [`GapPolicy`]); a
+//!   value beyond ±[`Recording::MAX_ABS`] is refused;
+//! - when velocity and bearing are known, the recording must span at least
+//!   [`LoadOptions::min_periods`] ball-pass periods.
+//!
+//! Errors are one line and name the file and the line and column (text) or
+//! the variable/channel and sample (binary formats). Loaders bound their
+//! time and memory by what the file can really hold, and contain any
+//! failure of a third-party parser as such an error (see [`contain`]).
 //!
 //! [`write_csv`] writes the canonical CSV and [`write_mat`] a level-5 MAT-file;
 //! [`load`] reads either back bit for bit.
@@ -18,227 +29,23 @@
 use std::io::Write;
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
-use super::{Channel, Channels, Metadata, Recording};
-use crate::bearing::Geometry;
+use super::{Channel, Recording};
 use crate::error::{Error, Result};
 
+pub(crate) mod contain;
 pub mod csv;
+mod finish;
 pub mod mat;
+mod mf4;
+pub(crate) mod names;
+mod options;
+mod tdms;
 pub mod timebase;
+pub(crate) mod units;
 
+pub use finish::{prepare_for_inspection, Gap, GapCause, Prepared};
 pub use mat::write_mat;
-
-/// File formats a recording can be read from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-#[non_exhaustive]
-pub enum Format {
-    /// Delimited text with a header row; the delimiter is detected
-    /// (`,` `;` or tab) unless [`LoadOptions::delimiter`] is set.
-    Csv,
-    /// Tab-separated text with a header row.
-    Tsv,
-    /// MATLAB MAT-file, level 5 (`-v6`/`-v7`).
-    Mat,
-}
-
-impl Format {
-    /// The format a file name implies: `.mat` → MAT, `.tsv`/`.tab` → TSV,
-    /// anything else → CSV (the delimiter is then detected from the header).
-    pub fn from_path(path: &Path) -> Format {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        match ext.as_deref() {
-            Some("mat") => Format::Mat,
-            Some("tsv" | "tab") => Format::Tsv,
-            _ => Format::Csv,
-        }
-    }
-}
-
-/// Where one channel comes from in a file, and how to convert it to its unit.
-///
-/// ```text
-/// value [unit] = raw * scale + offset
-/// ```
-///
-/// e.g. encoder counts at 0.1 µm per count: `scale = 1e-4` → mm.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ChannelSource {
-    /// Column (CSV) or variable / signal name (MAT), matched ignoring case.
-    /// `None`: the canonical name (`friction_N`, `position_mm`, `optical_V`).
-    pub name: Option<String>,
-    /// Multiplier applied to the raw numbers.
-    pub scale: f64,
-    /// Added after scaling, in the channel's unit.
-    pub offset: f64,
-}
-
-impl Default for ChannelSource {
-    fn default() -> Self {
-        Self {
-            name: None,
-            scale: 1.0,
-            offset: 0.0,
-        }
-    }
-}
-
-impl ChannelSource {
-    fn is_identity(&self) -> bool {
-        self.scale == 1.0 && self.offset == 0.0
-    }
-
-    fn check(&self, channel: Channel) -> Result<()> {
-        if !(self.scale.is_finite() && self.scale != 0.0) {
-            return Err(Error::setting(
-                format!("{} scale", channel.short_name()),
-                format!("must be a finite non-zero number, got {}", self.scale),
-            ));
-        }
-        if !self.offset.is_finite() {
-            return Err(Error::setting(
-                format!("{} offset", channel.short_name()),
-                format!("must be a finite number, got {}", self.offset),
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// How to read a recording file: which columns hold what, scales, sampling
-/// rate, and the metadata the file itself does not carry.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LoadOptions {
-    /// File format; `None`: from the file name (see [`Format::from_path`]),
-    /// and a file whose contents say otherwise is an error that says so.
-    pub format: Option<Format>,
-    /// Field delimiter of a text file; `None`: detected from the header line.
-    pub delimiter: Option<u8>,
-    /// Sampling rate, Hz. Required when the file has no time column; checked
-    /// against the time column when it has one.
-    pub fs_hz: Option<f64>,
-    /// Name of the time column / variable, s. `None`: `time_s` if present
-    /// (ControlDesk's `X.Data` in a ControlDesk MAT-file).
-    pub time: Option<String>,
-    /// Ignore any time column and use [`LoadOptions::fs_hz`] alone.
-    pub ignore_time: bool,
-    /// Friction force channel, N.
-    pub friction: ChannelSource,
-    /// Stage position channel, mm.
-    pub position: ChannelSource,
-    /// Optical sensor channel, V.
-    pub optical: ChannelSource,
-    /// Largest deviation of one time step from the median step, relative to
-    /// the step (the printed time's rounding is allowed on top, see [`timebase`]).
-    pub time_step_tolerance: f64,
-    /// Tracking velocity, mm/s, recorded in the metadata.
-    pub velocity_mm_s: Option<f64>,
-    /// Bearing name, recorded in the metadata.
-    pub bearing: Option<String>,
-    /// Bearing geometry used to check that the recording spans enough
-    /// ball-pass periods (only when the velocity is known too).
-    pub geometry: Option<Geometry>,
-    /// Fewest ball-pass periods `tau_c` a recording must span.
-    pub min_periods: f64,
-    /// Test identifier; `None`: the file stem.
-    pub test_id: Option<String>,
-}
-
-impl Default for LoadOptions {
-    fn default() -> Self {
-        Self {
-            format: None,
-            delimiter: None,
-            fs_hz: None,
-            time: None,
-            ignore_time: false,
-            friction: ChannelSource::default(),
-            position: ChannelSource::default(),
-            optical: ChannelSource::default(),
-            time_step_tolerance: timebase::DEFAULT_STEP_TOLERANCE,
-            velocity_mm_s: None,
-            bearing: None,
-            geometry: None,
-            min_periods: 3.0,
-            test_id: None,
-        }
-    }
-}
-
-impl LoadOptions {
-    /// The source of one channel.
-    pub fn source(&self, c: Channel) -> &ChannelSource {
-        match c {
-            Channel::Friction => &self.friction,
-            Channel::Position => &self.position,
-            Channel::Optical => &self.optical,
-        }
-    }
-
-    /// Mutable access to the source of one channel.
-    pub fn source_mut(&mut self, c: Channel) -> &mut ChannelSource {
-        match c {
-            Channel::Friction => &mut self.friction,
-            Channel::Position => &mut self.position,
-            Channel::Optical => &mut self.optical,
-        }
-    }
-
-    /// Checks the ranges of the settings (scales, rate, velocity, tolerances).
-    ///
-    /// # Errors
-    /// [`Error::InvalidSetting`] naming the setting.
-    pub fn validate(&self) -> Result<()> {
-        for c in Channel::ALL {
-            self.source(c).check(c)?;
-        }
-        if let Some(fs) = self.fs_hz {
-            if !(fs.is_finite() && fs > 0.0) {
-                return Err(Error::setting(
-                    "fs",
-                    format!("must be a positive number of Hz, got {fs}"),
-                ));
-            }
-        }
-        if self.ignore_time && self.fs_hz.is_none() {
-            return Err(Error::setting(
-                "fs",
-                "the time column is ignored, so the sampling rate must be given",
-            ));
-        }
-        if let Some(v) = self.velocity_mm_s {
-            crate::bearing::check_velocity(v)?;
-        }
-        if let Some(g) = &self.geometry {
-            g.validate()?;
-        }
-        if !(self.time_step_tolerance.is_finite()
-            && self.time_step_tolerance > 0.0
-            && self.time_step_tolerance < 0.5)
-        {
-            return Err(Error::setting(
-                "time step tolerance",
-                format!(
-                    "must be between 0 and 0.5 (relative to the step), got {}",
-                    self.time_step_tolerance
-                ),
-            ));
-        }
-        if !(self.min_periods.is_finite() && self.min_periods >= 0.0) {
-            return Err(Error::setting(
-                "min_periods",
-                format!("must be zero or positive, got {}", self.min_periods),
-            ));
-        }
-        Ok(())
-    }
-}
+pub use options::{ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit};
 
 /// Loads one recording file.
 ///
@@ -249,21 +56,101 @@ impl LoadOptions {
 /// # Errors
 /// [`Error::Io`] when the file cannot be read; [`Error::Parse`] naming file,
 /// line and column for a bad cell, a ragged row or a bad time step;
-/// [`Error::Format`] for an empty, truncated or mislabelled file;
+/// [`Error::Format`] for an empty, truncated, damaged or mislabelled file;
 /// [`Error::InvalidSetting`] for bad options; [`Error::InvalidRecording`] for a
-/// recording that spans too few ball-pass periods.
+/// recording that spans too few ball-pass periods, or that the gap policy
+/// splits into several pieces (use [`load_all`] for those).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Recording> {
     opts.validate()?;
-    let format = opts.format.unwrap_or_else(|| Format::from_path(path));
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let bytes = read(path)?;
+    load_bytes(path, &bytes, opts)
+}
+
+/// Loads one recording file that [`GapPolicy::split`] may cut into several
+/// recordings at its gaps (one when it has none).
+///
+/// # Errors
+/// As [`load`].
+pub fn load_all(path: &Path, opts: &LoadOptions) -> Result<Vec<Recording>> {
+    opts.validate()?;
+    let bytes = read(path)?;
+    load_all_bytes(path, &bytes, opts)
+}
+
+/// [`load`] of a file already in memory; `path` names it in messages and
+/// gives the format when none is set.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_bytes(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Recording> {
+    let mut pieces = load_all_bytes(path, bytes, opts)?;
+    match pieces.len() {
+        1 => Ok(pieces.remove(0)),
+        n => Err(Error::InvalidRecording {
+            source_name: crate::error::shown_path(path),
+            reason: format!(
+                "split at its gaps into {n} pieces, and one recording per file is expected here"
+            ),
+        }),
+    }
+}
+
+/// [`load_all`] of a file already in memory.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_all_bytes(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Vec<Recording>> {
+    opts.validate()?;
+    let table = parse(path, bytes, opts)?;
+    finish::finish(path, table, opts)
+}
+
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    let table = match format {
-        Format::Csv | Format::Tsv => csv::parse(path, &bytes, format, opts)?,
-        Format::Mat => mat::parse(path, &bytes, opts)?,
-    };
-    finish(path, table, opts)
+    })
+}
+
+/// The raw table of a file in memory, by its format.
+pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawTable> {
+    let format = opts.format.unwrap_or_else(|| Format::from_path(path));
+    match format {
+        Format::Csv | Format::Tsv => csv::parse(path, bytes, format, opts),
+        Format::Mat => mat::parse(path, bytes, opts),
+        Format::Tdms => tdms::parse(path, bytes, opts),
+        Format::Mf4 => mf4::parse(path, bytes, opts),
+    }
+}
+
+/// What a file holds, one line per item (a variable, struct field, group or
+/// channel with what it is), for `inspect`: the names to give as channel
+/// sources. At most `limit` items.
+///
+/// # Errors
+/// As [`load`] for a file that cannot be read at all.
+pub fn contents(path: &Path, opts: &LoadOptions, limit: usize) -> Result<Vec<(String, String)>> {
+    let bytes = read(path)?;
+    contents_of_bytes(path, &bytes, opts, limit)
+}
+
+/// [`contents`] of a file in memory.
+///
+/// # Errors
+/// As [`load`] for a file that cannot be read at all.
+pub fn contents_of_bytes(
+    path: &Path,
+    bytes: &[u8],
+    opts: &LoadOptions,
+    limit: usize,
+) -> Result<Vec<(String, String)>> {
+    let format = opts.format.unwrap_or_else(|| Format::from_path(path));
+    match format {
+        Format::Csv | Format::Tsv => csv::contents(path, bytes, format, opts, limit),
+        Format::Mat => mat::contents(path, bytes, limit),
+        Format::Tdms => tdms::contents(path, bytes, limit),
+        Format::Mf4 => mf4::contents(path, bytes, limit),
+    }
 }
 
 /// Numbers read from a file, before validation.
@@ -271,21 +158,31 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Recording> {
 pub(crate) struct RawTable {
     /// The time column, if any.
     pub time: Option<RawColumn>,
+    /// Unit of the time column the file states, with where it says so.
+    pub time_unit: Option<(TimeUnit, String)>,
     /// Channel columns found, unscaled.
     pub channels: Vec<(Channel, RawColumn)>,
     /// How to name sample `i` in messages.
     pub locator: Locator,
+    /// A sampling rate the file states, Hz, and where it says so.
+    pub stated_rate: Option<(f64, String)>,
+    /// Time of the first sample the file states, s, when it has no time column.
+    pub start_time_s: Option<f64>,
+    /// How the file was read, when that changed numbers (units converted).
+    pub notes: Vec<String>,
 }
 
 /// One column as read.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RawColumn {
-    /// Name in the file.
+    /// Name in the file (escaped for messages).
     pub name: String,
     /// Values.
     pub values: Vec<f64>,
     /// Half a unit of the last printed digit (text files), 0 for binary.
     pub resolution: f64,
+    /// The unit the file states for it, with where it says so.
+    pub unit: Option<(String, String)>,
 }
 
 /// Names sample `i` of a table in error messages.
@@ -309,112 +206,19 @@ impl Locator {
             },
             Locator::Samples => Error::Format {
                 path: path.to_path_buf(),
-                reason: format!("variable '{column}', sample {}: {reason}", i + 1),
+                reason: format!("'{column}', sample {}: {reason}", i + 1),
             },
         }
     }
-}
 
-/// Validates a raw table and builds the recording.
-pub(crate) fn finish(path: &Path, table: RawTable, opts: &LoadOptions) -> Result<Recording> {
-    let n = table
-        .channels
-        .first()
-        .map(|(_, c)| c.values.len())
-        .unwrap_or(0);
-    let time = if opts.ignore_time { None } else { table.time };
-    let (fs_hz, start_time_s) = match &time {
-        Some(t) => {
-            if t.values.len() != n {
-                return Err(Error::Format {
-                    path: path.to_path_buf(),
-                    reason: format!(
-                        "time '{}' has {} samples but the channels have {n}",
-                        t.name,
-                        t.values.len()
-                    ),
-                });
-            }
-            let base = timebase::derive(&t.values, t.resolution, opts.time_step_tolerance)
-                .map_err(|e| table.locator.error(path, e.index, &t.name, e.reason))?;
-            let fs = match opts.fs_hz {
-                Some(fs) => {
-                    timebase::check_given_rate(&t.values, t.resolution, fs).map_err(|e| {
-                        Error::setting(
-                            "fs",
-                            format!("{}: {} (time '{}')", path.display(), e.reason, t.name),
-                        )
-                    })?;
-                    fs
-                }
-                None => base.fs_hz,
-            };
-            (fs, base.start_time_s)
-        }
-        None => match opts.fs_hz {
-            Some(fs) => (fs, 0.0),
-            None => {
-                return Err(Error::Format {
-                    path: path.to_path_buf(),
-                    reason: format!(
-                        "no time column ('{}') and no sampling rate given (fs): one is needed",
-                        opts.time.as_deref().unwrap_or("time_s")
-                    ),
-                })
-            }
-        },
-    };
-    let mut channels = Channels::default();
-    for (c, col) in table.channels {
-        let src = opts.source(c);
-        let mut v = col.values;
-        if !src.is_identity() {
-            for x in &mut v {
-                *x = *x * src.scale + src.offset;
-            }
-        }
-        match c {
-            Channel::Friction => channels.friction_n = Some(v),
-            Channel::Position => channels.position_mm = Some(v),
-            Channel::Optical => channels.optical_v = Some(v),
+    /// Where sample `i` is, in words (`line 57`, `sample 57`).
+    fn place(&self, i: usize) -> String {
+        match self {
+            Locator::Lines(lines) => format!("line {}", lines.get(i).copied().unwrap_or(0)),
+            Locator::Samples => format!("sample {}", i + 1),
         }
     }
-    let meta = Metadata {
-        velocity_mm_s: opts.velocity_mm_s,
-        bearing: opts.bearing.clone(),
-        test_id: opts
-            .test_id
-            .clone()
-            .or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned())),
-        source: Some(path.to_path_buf()),
-        start_time_s,
-    };
-    let rec = Recording::new(fs_hz, channels, meta)?;
-    check_periods(&rec, opts)?;
-    Ok(rec)
 }
-
-/// With velocity and geometry known, the recording must span `min_periods` periods.
-fn check_periods(rec: &Recording, opts: &LoadOptions) -> Result<()> {
-    let (Some(v), Some(g)) = (opts.velocity_mm_s, opts.geometry) else {
-        return Ok(());
-    };
-    let tau_c_s = 1.0 / (v / (2.0 * g.d_avg_mm()));
-    let periods = rec.duration_s() / tau_c_s;
-    if periods < opts.min_periods {
-        return Err(Error::InvalidRecording {
-            source_name: rec.source_name(),
-            reason: format!(
-                "{:.4} s of data spans {periods:.2} ball-pass periods at {v} mm/s \
-                 (tau_c = {tau_c_s:.4} s); at least {} needed (min_periods)",
-                rec.duration_s(),
-                opts.min_periods
-            ),
-        });
-    }
-    Ok(())
-}
-
 /// Writes a recording as canonical CSV: header `time_s` followed by the
 /// channels present (`friction_N`, `position_mm`, `optical_V`), `,`-separated,
 /// one row per sample, numbers in the shortest form that reads back to the

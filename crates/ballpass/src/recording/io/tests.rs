@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
+use crate::recording::{Channels, Metadata};
 
 /// A fresh empty folder under the system temp dir, unique per test.
 fn scratch(name: &str) -> PathBuf {
@@ -27,7 +28,8 @@ fn awkward(n: usize, seed: u64) -> Vec<f64> {
         0.0,
         5e-324,
         -2.2250738585072014e-308,
-        1.7976931348623157e308,
+        1e100,
+        -9.999999999999999e99,
         0.1,
         1.0 / 3.0,
         -1e-7,
@@ -42,7 +44,7 @@ fn awkward(n: usize, seed: u64) -> Vec<f64> {
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             let x = f64::from_bits(s);
-            if x.is_finite() {
+            if x.is_finite() && x.abs() <= Recording::MAX_ABS {
                 x
             } else {
                 (s >> 11) as f64 * 1e-3
@@ -246,12 +248,18 @@ fn text_cell_names_file_line_and_column() {
             format!("{},1", i as f64 / 1000.0)
         }
     });
+    // An empty cell and `nan` are gaps: refused by default, naming the first.
     let e = err_of(&dir, "c.csv", &text, &LoadOptions::default());
-    assert!(e.contains("c.csv:5 column 'friction_N': empty cell"), "{e}");
+    assert!(
+        e.contains("c.csv:5 column 'friction_N': no finite value in friction_N for 1 sample(s)")
+            && e.contains("2 gaps")
+            && e.contains("fill-gaps"),
+        "{e}"
+    );
     let text = text.replace("0.003,\n", "0.003,2\n");
     let e = err_of(&dir, "n.csv", &text, &LoadOptions::default());
     assert!(
-        e.contains("n.csv:7 column 'friction_N': 'nan' is not a finite"),
+        e.contains("n.csv:7 column 'friction_N': no finite value"),
         "{e}"
     );
 }
@@ -378,7 +386,7 @@ fn missing_and_unknown_columns_are_named() {
     assert!(
         e.contains("m.csv:1")
             && e.contains("no column 'Friction'")
-            && e.contains("time_s, force, optical_V"),
+            && e.contains("'time_s', 'force', 'optical_V'"),
         "{e}"
     );
     // Without a mapping the file loads with the optical channel only, and an

@@ -1,0 +1,377 @@
+//! How to read a recording file: [`LoadOptions`] and the types it is made of.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::timebase;
+use crate::bearing::Geometry;
+use crate::error::{Error, Result};
+use crate::recording::Channel;
+
+/// File formats a recording can be read from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum Format {
+    /// Delimited text with a header row; the delimiter is detected
+    /// (`,` `;` or tab) unless [`LoadOptions::delimiter`] is set.
+    Csv,
+    /// Tab-separated text with a header row.
+    Tsv,
+    /// MATLAB MAT-file: level 5 (`-v6`/`-v7`) or v7.3 (HDF5), told apart by
+    /// their contents.
+    Mat,
+    /// NI TDMS (LabVIEW, DAQmx).
+    Tdms,
+    /// ASAM MDF 4 (`.mf4`: Vector, dSPACE, ETAS loggers).
+    Mf4,
+}
+
+impl Format {
+    /// The format a file name implies: `.mat`, `.h5`, `.hdf5` → MAT, `.tdms`
+    /// → TDMS, `.mf4`, `.mdf` → MF4, `.tsv`/`.tab` → TSV, anything else →
+    /// CSV (the delimiter is then detected from the header).
+    pub fn from_path(path: &Path) -> Format {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("mat" | "h5" | "hdf5") => Format::Mat,
+            Some("tdms") => Format::Tdms,
+            Some("mf4" | "mdf") => Format::Mf4,
+            Some("tsv" | "tab") => Format::Tsv,
+            _ => Format::Csv,
+        }
+    }
+
+    /// The format whose signature starts `bytes`, for binary formats.
+    pub(crate) fn sniff(bytes: &[u8]) -> Option<Format> {
+        if bytes.starts_with(b"TDSm") {
+            Some(Format::Tdms)
+        } else if bytes.starts_with(b"MDF     ") {
+            Some(Format::Mf4)
+        } else if bytes.starts_with(b"MATLAB") || bytes.starts_with(b"\x89HDF\r\n\x1a\n") {
+            Some(Format::Mat)
+        } else {
+            None
+        }
+    }
+
+    /// Lower-case name (`csv`, `mat`, ...), as `--format` takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Csv => "csv",
+            Format::Tsv => "tsv",
+            Format::Mat => "mat",
+            Format::Tdms => "tdms",
+            Format::Mf4 => "mf4",
+        }
+    }
+}
+
+/// Where one channel comes from in a file, and how to convert it to its unit.
+///
+/// ```text
+/// value [unit] = raw * scale + offset
+/// ```
+///
+/// e.g. encoder counts at 0.1 µm per count: `scale = 1e-4` → mm.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ChannelSource {
+    /// Column (CSV), variable, struct field path or signal (MAT), channel
+    /// (`Group/Channel` or `Channel`, TDMS and MF4), matched ignoring case.
+    /// `None`: the canonical name (`friction_N`, `position_mm`, `optical_V`).
+    pub name: Option<String>,
+    /// Multiplier applied to the raw numbers.
+    pub scale: f64,
+    /// Added after scaling, in the channel's unit.
+    pub offset: f64,
+}
+
+impl Default for ChannelSource {
+    fn default() -> Self {
+        Self {
+            name: None,
+            scale: 1.0,
+            offset: 0.0,
+        }
+    }
+}
+
+impl ChannelSource {
+    /// True when values are used as read.
+    pub fn is_identity(&self) -> bool {
+        self.scale == 1.0 && self.offset == 0.0
+    }
+
+    fn check(&self, channel: Channel) -> Result<()> {
+        if !(self.scale.is_finite() && self.scale != 0.0) {
+            return Err(Error::setting(
+                format!("{} scale", channel.short_name()),
+                format!("must be a finite non-zero number, got {}", self.scale),
+            ));
+        }
+        if !self.offset.is_finite() {
+            return Err(Error::setting(
+                format!("{} offset", channel.short_name()),
+                format!("must be a finite number, got {}", self.offset),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Unit of a time column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TimeUnit {
+    /// Seconds.
+    S,
+    /// Milliseconds.
+    Ms,
+    /// Microseconds.
+    Us,
+}
+
+impl TimeUnit {
+    /// Seconds per unit.
+    pub fn seconds(self) -> f64 {
+        match self {
+            TimeUnit::S => 1.0,
+            TimeUnit::Ms => 1e-3,
+            TimeUnit::Us => 1e-6,
+        }
+    }
+
+    /// Symbol (`s`, `ms`, `us`).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            TimeUnit::S => "s",
+            TimeUnit::Ms => "ms",
+            TimeUnit::Us => "us",
+        }
+    }
+
+    /// The unit a symbol names: `s`, `sec`, `ms`, `us`, `µs`, `μs` (any case).
+    pub fn parse(symbol: &str) -> Option<TimeUnit> {
+        let s = symbol.trim();
+        Some(match s.to_ascii_lowercase().as_str() {
+            "s" | "sec" | "secs" | "second" | "seconds" => TimeUnit::S,
+            "ms" | "msec" | "millisecond" | "milliseconds" => TimeUnit::Ms,
+            "us" | "usec" | "microsecond" | "microseconds" => TimeUnit::Us,
+            _ if s == "µs" || s == "μs" || s == "µsec" || s == "μsec" => TimeUnit::Us,
+            _ => return None,
+        })
+    }
+
+    /// The unit a column or variable name states: `time_ms`, `t [ms]`,
+    /// `Zeit (µs)`, `time/s`, `time in ms`; `None` when it states none.
+    pub fn of_name(name: &str) -> Option<TimeUnit> {
+        super::units::unit_of_name(name).and_then(TimeUnit::parse)
+    }
+}
+
+/// What to do with gaps: time stamps missing from a uniform grid, and
+/// samples without a finite value (`NaN`, an empty cell).
+///
+/// By default a record with a gap is refused, naming where the first one
+/// is (`inspect` lists them all). Gaps up to `fill_max_s` long may be
+/// filled by linear interpolation between the samples on either side;
+/// longer ones may split the record into pieces, each a recording of its
+/// own. Gaps at either end, which have a neighbour on one side only, are
+/// cut off when filling or splitting is asked for. Every repair is stated
+/// in [`crate::recording::Metadata::notes`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GapPolicy {
+    /// Fill gaps up to this long, s, by linear interpolation.
+    pub fill_max_s: Option<f64>,
+    /// Split the record at the gaps that are not filled.
+    pub split: bool,
+}
+
+impl GapPolicy {
+    /// True when gaps are refused (the default).
+    pub fn refuses(&self) -> bool {
+        self.fill_max_s.is_none() && !self.split
+    }
+}
+
+/// How to read a recording file: which columns hold what, scales, sampling
+/// rate, and the metadata the file itself does not carry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadOptions {
+    /// File format; `None`: from the file name (see [`Format::from_path`]),
+    /// and a file whose contents say otherwise is an error that says so.
+    pub format: Option<Format>,
+    /// Field delimiter of a text file; `None`: detected from the header line.
+    pub delimiter: Option<u8>,
+    /// Decimal comma in a text file (`1,5`); `None`: detected (a `,` inside
+    /// numbers of a `;`- or tab-separated file).
+    pub decimal_comma: Option<bool>,
+    /// Lines before the header of a text file (metadata a logger writes);
+    /// `None`: the header is the first line, among the first
+    /// [`super::csv::MAX_PREAMBLE_LINES`], that names a wanted column.
+    pub skip_lines: Option<usize>,
+    /// Sampling rate, Hz. Required when the file has no time column and
+    /// states no rate; checked against the time column when it has one.
+    pub fs_hz: Option<f64>,
+    /// A variable or struct field holding the sampling rate, Hz (MAT-files:
+    /// `bearing.sr`).
+    pub fs_from: Option<String>,
+    /// Name of the time column / variable. `None`: `time_s` if present
+    /// (ControlDesk's `X.Data` in a ControlDesk MAT-file, the master channel
+    /// in MF4).
+    pub time: Option<String>,
+    /// Unit of the time column; `None`: from the file (a units row, or the
+    /// column name: `time_ms`, `t [ms]`), else seconds. Given, it must agree
+    /// with what the file states.
+    pub time_unit: Option<TimeUnit>,
+    /// Ignore any time column and use [`LoadOptions::fs_hz`] alone.
+    pub ignore_time: bool,
+    /// Friction force channel, N.
+    pub friction: ChannelSource,
+    /// Stage position channel, mm.
+    pub position: ChannelSource,
+    /// Optical sensor channel, V.
+    pub optical: ChannelSource,
+    /// Largest deviation of one time step from the median step, relative to
+    /// the step (the printed time's rounding is allowed on top, see [`timebase`]).
+    pub time_step_tolerance: f64,
+    /// What to do with missing samples and values.
+    pub gaps: GapPolicy,
+    /// Tracking velocity, mm/s, recorded in the metadata.
+    pub velocity_mm_s: Option<f64>,
+    /// Bearing name, recorded in the metadata.
+    pub bearing: Option<String>,
+    /// Bearing geometry used to check that the recording spans enough
+    /// ball-pass periods (only when the velocity is known too).
+    pub geometry: Option<Geometry>,
+    /// Fewest ball-pass periods `tau_c` a recording must span.
+    pub min_periods: f64,
+    /// Test identifier; `None`: the file stem.
+    pub test_id: Option<String>,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            format: None,
+            delimiter: None,
+            decimal_comma: None,
+            skip_lines: None,
+            fs_hz: None,
+            fs_from: None,
+            time: None,
+            time_unit: None,
+            ignore_time: false,
+            friction: ChannelSource::default(),
+            position: ChannelSource::default(),
+            optical: ChannelSource::default(),
+            time_step_tolerance: timebase::DEFAULT_STEP_TOLERANCE,
+            gaps: GapPolicy::default(),
+            velocity_mm_s: None,
+            bearing: None,
+            geometry: None,
+            min_periods: 3.0,
+            test_id: None,
+        }
+    }
+}
+
+impl LoadOptions {
+    /// The source of one channel.
+    pub fn source(&self, c: Channel) -> &ChannelSource {
+        match c {
+            Channel::Friction => &self.friction,
+            Channel::Position => &self.position,
+            Channel::Optical => &self.optical,
+        }
+    }
+
+    /// Mutable access to the source of one channel.
+    pub fn source_mut(&mut self, c: Channel) -> &mut ChannelSource {
+        match c {
+            Channel::Friction => &mut self.friction,
+            Channel::Position => &mut self.position,
+            Channel::Optical => &mut self.optical,
+        }
+    }
+
+    /// Checks the ranges of the settings (scales, rate, velocity, tolerances).
+    ///
+    /// # Errors
+    /// [`Error::InvalidSetting`] naming the setting.
+    pub fn validate(&self) -> Result<()> {
+        for c in Channel::ALL {
+            self.source(c).check(c)?;
+        }
+        if let Some(fs) = self.fs_hz {
+            if !(fs.is_finite() && fs > 0.0) {
+                return Err(Error::setting(
+                    "fs",
+                    format!("must be a positive number of Hz, got {fs}"),
+                ));
+            }
+        }
+        if self.ignore_time && self.fs_hz.is_none() && self.fs_from.is_none() {
+            return Err(Error::setting(
+                "fs",
+                "the time column is ignored, so the sampling rate must be given",
+            ));
+        }
+        if let Some(v) = self.velocity_mm_s {
+            crate::bearing::check_velocity(v)?;
+        }
+        if let Some(g) = &self.geometry {
+            g.validate()?;
+        }
+        if !(self.time_step_tolerance.is_finite()
+            && self.time_step_tolerance > 0.0
+            && self.time_step_tolerance < 0.5)
+        {
+            return Err(Error::setting(
+                "time step tolerance",
+                format!(
+                    "must be between 0 and 0.5 (relative to the step), got {}",
+                    self.time_step_tolerance
+                ),
+            ));
+        }
+        if !(self.min_periods.is_finite() && self.min_periods >= 0.0) {
+            return Err(Error::setting(
+                "min_periods",
+                format!("must be zero or positive, got {}", self.min_periods),
+            ));
+        }
+        if let Some(m) = self.gaps.fill_max_s {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(Error::setting(
+                    "fill-gaps",
+                    format!("must be a positive number of seconds, got {m}"),
+                ));
+            }
+        }
+        if let Some(n) = self.skip_lines {
+            if n > super::csv::MAX_PREAMBLE_LINES {
+                return Err(Error::setting(
+                    "skip-lines",
+                    format!(
+                        "at most {} lines before the header, got {n}",
+                        super::csv::MAX_PREAMBLE_LINES
+                    ),
+                ));
+            }
+        }
+        if self.decimal_comma == Some(true) && self.delimiter == Some(b',') {
+            return Err(Error::setting(
+                "decimal-comma",
+                "a decimal comma needs another delimiter than ',' (';' or tab)",
+            ));
+        }
+        Ok(())
+    }
+}
