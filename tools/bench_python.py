@@ -21,7 +21,8 @@ default pool (analyze parallelises over channels; the signal kernels run
 in the calling thread).
 
 Usage: python3 tools/bench_python.py [--repeat 7] [--json out.json]
-Pinned versions: tools/requirements.txt and crates/ballpass-py/requirements-test.txt.
+(``RAYON_NUM_THREADS=1`` in the environment times analyze on one core, as
+SciPy runs.) Pinned versions: tools/requirements-py.txt.
 """
 import argparse
 import json
@@ -115,6 +116,7 @@ def kernel_cases():
         ("freqs (30k frequencies)", lambda m: m.freqs(b, a, worN=w)),
         ("freqz (30k frequencies)", lambda m: m.freqz(b, a, worN=f, fs=1000.0)),
         ("sosfreqz (30k frequencies)", lambda m: m.sosfreqz(sos, worN=f, fs=1000.0)),
+        ("freqz_sos (30k frequencies)", lambda m: m.freqz_sos(sos, worN=f, fs=1000.0)),
         ("gradient", lambda m: (np if m is ss else m).gradient(x, 0.001)),
     ]
 
