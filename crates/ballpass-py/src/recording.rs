@@ -83,6 +83,7 @@ impl PyRecording {
             test_id,
             source,
             start_time_s,
+            notes: Vec::new(),
         };
         let rec = rec::Recording::new(fs_hz, channels, meta).map_err(errors::domain)?;
         Ok(Self { rec })
