@@ -2,15 +2,17 @@
 """A bearing fleet on Spark: `ballpass diagnose` scaled out.
 
     python examples/spark_fleet.py MANIFEST --out DIR [--master local[2]]
+        [--low-band HZ] [--spike-spreads K] [--bad-false-alarm P]
         [--env-archive ballpass_env.tar.gz | --pack-wheel ballpass-*.whl]
 
 1. The driver reads the manifest and selects the records as `ballpass
    diagnose` does (by default the velocity with the most bearings).
 2. The executors analyse each record (`mapInPandas`): `ballpass.process_record`
    is exactly the per-record work of `ballpass diagnose` (analysis, optical
-   passages, sticking events, friction spectrum). The records table is
-   written as Parquet (`DIR/records.parquet`: flat scalars, the full result
-   as JSON, the friction spectrum).
+   passages, the friction of each ball-pass period, friction spectrum). The
+   records table is written as Parquet (`DIR/records.parquet`: flat
+   scalars, the full result as JSON, the friction spectrum and the
+   per-period heights, which the diagnosis pools per bearing).
 3. The diagnosis runs per batch (`groupBy(velocity).applyInPandas`):
    `ballpass.diagnose_records` ranks every bearing of the batch against the
    batch median, giving one row per bearing with its verdict and evidence
@@ -34,7 +36,7 @@ Scaling: each record is independent, so step 2 scales with the executors'
 cores until the file system is the limit; give each task one worker thread
 (`--threads-per-task 1`, the default) so that executors x cores tasks do not
 oversubscribe the machines. Step 3 moves each batch's record results (a few
-kB each plus a 2049-bin spectrum) to one task and is small next to step 2.
+kB each plus a 2049-bin spectrum and one height per ball-pass period) to one task and is small next to step 2.
 """
 
 from __future__ import annotations
@@ -72,8 +74,8 @@ RECORDS_SCHEMA = ", ".join(
     ["order long", "path string", "bearing string", "velocity_mm_s double", "repeat int",
      "condition string", "error string"]
     + [f"{k} {t}" for k, t in RECORD_SCALARS]
-    + ["sticking_events long", "result_json string",
-       "friction_psd_freq_hz binary", "friction_psd binary",
+    + ["sticking_periods long", "sticking_spikes long", "result_json string",
+       "friction_psd_freq_hz binary", "friction_psd binary", "sticking_heights_n binary",
        "python_prefix string"]
 )
 BEARINGS_SCHEMA = ("velocity_mm_s double, rank long, bearing string, verdict string, "
@@ -107,11 +109,13 @@ def analyse_records(settings: dict, threads: int):
                     for k, _ in RECORD_SCALARS:
                         row[k] = d.get(k)
                     st = d.get("sticking")
-                    row["sticking_events"] = None if st is None else len(st["times_s"])
+                    row["sticking_periods"] = None if st is None else st["periods"]
+                    row["sticking_spikes"] = None if st is None else st["spikes"]
                     row["result_json"] = json.dumps(d)
                     # float64 bytes: Arrow and Parquet carry them as they are
                     row["friction_psd_freq_hz"] = r.friction_psd_freq_hz.astype("<f8").tobytes()
                     row["friction_psd"] = r.friction_psd.astype("<f8").tobytes()
+                    row["sticking_heights_n"] = r.sticking_heights_n.astype("<f8").tobytes()
                     rows.append(row)
                 yield pd.DataFrame(rows, columns=[c.split(" ")[0] for c in RECORDS_SCHEMA.split(", ")])
 
@@ -127,9 +131,10 @@ def diagnose_batch(source: str, notes: list[str], settings: dict):
         pdf = pdf.sort_values("order")  # manifest order, as ballpass diagnose
         ok = pdf[pdf["error"].isna()]
         f64 = np.dtype("<f8")
-        records = [bp.RecordResult(json.loads(j), np.frombuffer(f, f64), np.frombuffer(p, f64))
-                   for j, f, p in zip(ok["result_json"], ok["friction_psd_freq_hz"],
-                                      ok["friction_psd"])]
+        records = [bp.RecordResult(json.loads(j), np.frombuffer(f, f64), np.frombuffer(p, f64),
+                                   np.frombuffer(h, f64))
+                   for j, f, p, h in zip(ok["result_json"], ok["friction_psd_freq_hz"],
+                                         ok["friction_psd"], ok["sticking_heights_n"])]
         failed = [(r.path, r.bearing, r.velocity_mm_s, r.repeat, r.error)
                   for r in pdf[pdf["error"].notna()].itertuples(index=False)]
         d = bp.diagnose_records(records, failures=failed, source=source, selection=notes,
@@ -208,7 +213,9 @@ def spark_session(master: str, archive: pathlib.Path | None, app: str = "ballpas
 def run(manifest: pathlib.Path, out: pathlib.Path, *, master: str = "local[2]",
         archive: pathlib.Path | None = None, threads_per_task: int = 1,
         partitions: int | None = None, only_bearings=(), only_velocities=(),
-        lowpass_hz: float = 20.0, harmonics: int = 5, quiet: bool = False) -> dict:
+        lowpass_hz: float = 20.0, harmonics: int = 5, low_band_hz: float = 25.0,
+        spike_spreads: float = 8.0, bad_false_alarm: float = 1e-4,
+        quiet: bool = False) -> dict:
     """Runs the pipeline; returns {"records", "seconds", "records_per_s",
     "bearings": [bearing rows]} and writes DIR/records.parquet,
     DIR/diagnosis.parquet and DIR/diagnosis.json."""
@@ -217,7 +224,10 @@ def run(manifest: pathlib.Path, out: pathlib.Path, *, master: str = "local[2]",
                           only_velocities=only_velocities)
     entries = sel.to_dict()["entries"]
     notes = sel.to_dict()["notes"]
-    settings = {"lowpass_hz": lowpass_hz, "harmonics": harmonics}
+    # ballpass diagnose's flags: the per-record ones, then the batch's too
+    settings = {"lowpass_hz": lowpass_hz, "harmonics": harmonics,
+                "low_band_hz": low_band_hz, "spike_spreads": spike_spreads}
+    batch_settings = dict(settings, bad_false_alarm=bad_false_alarm)
     spark = spark_session(master, archive)
     try:
         t0 = time.perf_counter()
@@ -234,7 +244,7 @@ def run(manifest: pathlib.Path, out: pathlib.Path, *, master: str = "local[2]",
         t_records = time.perf_counter() - t0
         stored = spark.read.parquet(str(records_path))
         bearings = (stored.groupBy("velocity_mm_s")
-                    .applyInPandas(diagnose_batch(sel.source, notes, settings), BEARINGS_SCHEMA))
+                    .applyInPandas(diagnose_batch(sel.source, notes, batch_settings), BEARINGS_SCHEMA))
         diag_path = out / "diagnosis.parquet"
         bearings.write.mode("overwrite").parquet(str(diag_path))
         rows = (spark.read.parquet(str(diag_path))
@@ -276,6 +286,9 @@ def main():
     ap.add_argument("--only-velocity", action="append", type=float, default=[])
     ap.add_argument("--lowpass", type=float, default=20.0)
     ap.add_argument("--harmonics", type=int, default=5)
+    ap.add_argument("--low-band", type=float, default=25.0, metavar="HZ")
+    ap.add_argument("--spike-spreads", type=float, default=8.0, metavar="K")
+    ap.add_argument("--bad-false-alarm", type=float, default=1e-4, metavar="P")
     a = ap.parse_args()
     archive = a.env_archive
     if a.pack_wheel is not None:
@@ -283,7 +296,8 @@ def main():
     run(a.manifest, a.out, master=a.master, archive=archive,
         threads_per_task=a.threads_per_task, partitions=a.partitions,
         only_bearings=a.only_bearing, only_velocities=a.only_velocity,
-        lowpass_hz=a.lowpass, harmonics=a.harmonics)
+        lowpass_hz=a.lowpass, harmonics=a.harmonics, low_band_hz=a.low_band,
+        spike_spreads=a.spike_spreads, bad_false_alarm=a.bad_false_alarm)
 
 
 if __name__ == "__main__":

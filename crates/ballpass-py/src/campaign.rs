@@ -118,13 +118,20 @@ fn diagnose_settings(json: Option<&str>) -> PyResult<DiagnoseSettings> {
     convert::settings(&DiagnoseSettings::default(), json, "diagnosis settings")
 }
 
-/// A record's result as `(dict, friction_psd_freq_hz, friction_psd)`: the
-/// JSON leaves the spectrum out, so it travels beside it.
+/// A record's result as `(dict, friction_psd_freq_hz, friction_psd,
+/// sticking_heights_n)`: the JSON leaves the spectrum and the per-period
+/// heights out (the diagnosis pools the heights), so they travel beside it.
 fn record_to_py<'py>(py: Python<'py>, r: &RecordResult) -> PyResult<Bound<'py, PyAny>> {
+    let heights = r
+        .sticking
+        .as_ref()
+        .map(|s| s.heights_n.clone())
+        .unwrap_or_default();
     (
         convert::serialize(py, r)?,
         convert::array(py, r.friction_psd_freq_hz.clone()),
         convert::array(py, r.friction_psd.clone()),
+        convert::array(py, heights),
     )
         .into_pyobject(py)
         .map(|t| t.into_any())
@@ -167,14 +174,41 @@ fn process_record<'py>(
     record_to_py(py, &r)
 }
 
-/// A record's result back from `(json, friction_psd_freq_hz, friction_psd)`.
+/// A record's result back from `(json, friction_psd_freq_hz, friction_psd,
+/// sticking_heights_n)`.
 fn record_from_py(t: &Bound<'_, PyAny>) -> PyResult<RecordResult> {
-    let (json, freq, psd): (String, PyReadonlyArray1<'_, f64>, PyReadonlyArray1<'_, f64>) =
-        t.extract()?;
+    type State<'a> = (
+        String,
+        PyReadonlyArray1<'a, f64>,
+        PyReadonlyArray1<'a, f64>,
+        PyReadonlyArray1<'a, f64>,
+    );
+    let (json, freq, psd, heights): State<'_> = t.extract()?;
     let mut r: RecordResult = serde_json::from_str(&json)
         .map_err(|e| errors::value(format!("not a ballpass record result: {e}")))?;
     r.friction_psd_freq_hz = freq.as_array().to_vec();
     r.friction_psd = psd.as_array().to_vec();
+    let heights = heights.as_array().to_vec();
+    match r.sticking.as_mut() {
+        Some(s) => {
+            if heights.len() != s.periods {
+                return Err(errors::value(format!(
+                    "record {}: sticking_heights_n has {} values but the result counts {} periods",
+                    r.path,
+                    heights.len(),
+                    s.periods
+                )));
+            }
+            s.heights_n = heights;
+        }
+        None if !heights.is_empty() => {
+            return Err(errors::value(format!(
+                "record {}: sticking_heights_n given but the result has no sticking",
+                r.path
+            )));
+        }
+        None => {}
+    }
     Ok(r)
 }
 

@@ -191,8 +191,12 @@ def test_sweep_and_diagnose_equal_the_cli(fleet, cli, tmp):
     cli("sweep", m, "--no-report", "--out", tmp / "s")
     s = ballpass.sweep(m)
     assert s.to_dict() == read_json(tmp / "s" / "sweep.json")
-    cli("diagnose", m, "--no-report", "--out", tmp / "d", "--spike-factor", "7")
-    d = ballpass.diagnose(m, spike_factor=7.0, threads=2)
+    # every flag away from its default, so that a keyword lost on the way
+    # to the library shows as a different diagnosis.json (settings included)
+    cli("diagnose", m, "--no-report", "--out", tmp / "d", "--low-band", "30",
+        "--spike-spreads", "7", "--bad-false-alarm", "1e-3")
+    d = ballpass.diagnose(m, low_band_hz=30.0, spike_spreads=7.0, bad_false_alarm=1e-3,
+                          threads=2)
     want = read_json(tmp / "d" / "diagnosis.json")
     assert d.to_dict() == want
     assert_table_equals_csv(d.friction_spectra, tmp / "d" / "friction_spectra.csv")
@@ -203,16 +207,31 @@ def test_sweep_and_diagnose_equal_the_cli(fleet, cli, tmp):
 def test_diagnosis_split_into_records_and_batch_equals_the_whole(fleet):
     """process_record on each record (anywhere, pickled in between) and
     diagnose_records on the lot give the diagnose verdicts."""
-    whole = ballpass.diagnose(fleet / "manifest.csv")
+    flags = {"low_band_hz": 30.0, "spike_spreads": 7.0}
+    whole = ballpass.diagnose(fleet / "manifest.csv", bad_false_alarm=1e-3, **flags)
     entries = ballpass.read_manifest(fleet / "manifest.csv").entries
     chosen = [e for e in entries if e.velocity_mm_s == 20 and e.bearing != "sr25w"]
     parts = [pickle.loads(pickle.dumps(
         ballpass.process_record(e.path, bearing=e.bearing, velocity_mm_s=e.velocity_mm_s,
-                                repeat=e.repeat, condition=e.condition)))
+                                repeat=e.repeat, condition=e.condition, **flags)))
         for e in chosen]
-    split = ballpass.diagnose_records(parts, source=whole.source, selection=whole.selection)
+    # the per-period heights travel beside the JSON, which leaves them out
+    for p in parts:
+        st = p.to_dict()["sticking"]
+        assert st is not None and "times_s" not in st and "heights_n" not in st
+        assert len(p.sticking_heights_n) == st["periods"] > 10
+    split = ballpass.diagnose_records(parts, source=whole.source, selection=whole.selection,
+                                      bad_false_alarm=1e-3, **flags)
     assert split.to_dict()["result"] == whole.to_dict()["result"]
     assert split.to_dict()["record_results"] == whole.to_dict()["record_results"]
+    assert split.to_dict()["settings"] == whole.to_dict()["settings"]
+    # a result rebuilt without its heights is refused, not diagnosed on nothing
+    bare = ballpass.RecordResult(parts[0].to_dict(), parts[0].friction_psd_freq_hz,
+                                 parts[0].friction_psd)
+    with pytest.raises(ValueError, match="sticking_heights_n has 0 values"):
+        ballpass.diagnose_records([bare])
+    with pytest.raises(ValueError, match="unknown field `spike_factor`"):
+        ballpass.diagnose(fleet / "manifest.csv", settings={"spike_factor": 7.0})
 
 
 # ---------------------------------------------------------------- Python-only

@@ -59,7 +59,9 @@ def test_spark_fleet_gives_the_cli_verdicts(tmp_path, cli):
         rows.append(f"../sweep/{path},bearing001,{v},{r},{c}")
     manifest.write_text("\n".join(rows) + "\n")
 
-    cli("diagnose", manifest, "--no-report", "--out", tmp_path / "cli")
+    # non-default flags: they must reach both halves on the executors
+    cli("diagnose", manifest, "--no-report", "--out", tmp_path / "cli",
+        "--spike-spreads", "7", "--bad-false-alarm", "1e-3")
     want = json.loads((tmp_path / "cli" / "diagnosis.json").read_text())
 
     archive = None
@@ -67,7 +69,7 @@ def test_spark_fleet_gives_the_cli_verdicts(tmp_path, cli):
     if wheel:
         archive = spark_fleet.pack_environment(pathlib.Path(wheel), tmp_path / "env.tar.gz")
     got = spark_fleet.run(manifest, tmp_path / "spark", master="local[2]", archive=archive,
-                          quiet=True)
+                          spike_spreads=7.0, bad_false_alarm=1e-3, quiet=True)
 
     # bearing001 is also recorded at 9 mm/s: left out of the batch (12 records)
     assert got["records"] == want["records"] == 12

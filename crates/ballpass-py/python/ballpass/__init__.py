@@ -344,14 +344,15 @@ def select(source: str | os.PathLike, kind: str = "diagnose", *, pattern: str | 
     )
 
 
-def _diagnosis_json(settings, low_band_hz, bad_ratio, suspect_ratio, spike_factor, bad_spikes):
+def _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm):
+    """``DiagnoseSettings`` as JSON: the keyword flags fill what ``settings``
+    (any ``DiagnoseSettings`` field, ``sticking`` a dict of
+    ``StickingSettings``) leaves unset."""
     d = dict(settings or {})
-    d.setdefault("low_band_hz", low_band_hz)
-    d.setdefault("bad_low_band_ratio", bad_ratio)
-    d.setdefault("suspect_low_band_ratio", suspect_ratio)
-    d.setdefault("bad_events_per_record", bad_spikes)
+    d.setdefault("low_band_hz", float(low_band_hz))
+    d.setdefault("bad_false_alarm", float(bad_false_alarm))
     sticking = dict(d.get("sticking") or {})
-    sticking.setdefault("spike_factor", spike_factor)
+    sticking.setdefault("outlier_spreads", float(spike_spreads))
     d["sticking"] = sticking
     return json.dumps(d)
 
@@ -373,21 +374,27 @@ def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = 
 
 def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
              only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
-             harmonics: int = 5, low_band_hz: float = 25.0, bad_ratio: float = 10.0,
-             suspect_ratio: float = 3.0, spike_factor: float = 8.0, bad_spikes: float = 3.0,
-             settings: dict | None = None, threads=None, **load_options) -> Result:
+             harmonics: int = 5, low_band_hz: float = 25.0, spike_spreads: float = 8.0,
+             bad_false_alarm: float = 1e-4, settings: dict | None = None, threads=None,
+             **load_options) -> Result:
     """A batch of bearings, as ``ballpass diagnose``: friction spectra,
-    harmonics, sticking events and a verdict per bearing (worst first in
-    ``.result.bearings``). ``source`` is a manifest CSV or a folder with
-    ``pattern``; by default the velocity with the most bearings. The keyword
-    thresholds are the command line's flags; ``settings`` sets any
-    ``DiagnoseSettings`` field. ``to_dict()`` equals ``diagnosis.json``;
+    harmonics, the friction of each ball-pass period and a verdict per
+    bearing (worst first in ``.result.bearings``). ``source`` is a manifest
+    CSV or a folder with ``pattern``; by default the velocity with the most
+    bearings. The keywords are the command line's flags: ``low_band_hz``
+    (``--low-band``, Hz, evidence only), ``spike_spreads``
+    (``--spike-spreads``: a period is a sticking spike when it rises this
+    many spreads above the bearing's typical period) and ``bad_false_alarm``
+    (``--bad-false-alarm``: false-alarm probability per good bearing of the
+    spike count for "bad"); ``settings`` sets any ``DiagnoseSettings`` field
+    (e.g. ``{"suspect_false_alarm": 0.01, "sticking": {"smoothing_periods":
+    0.01}}``) and wins over the keywords. ``to_dict()`` equals ``diagnosis.json``;
     ``.friction_spectra`` is ``friction_spectra.csv`` (columns
     ``psd_friction_<bearing>_n2_per_hz``)."""
     data, spectra = _native.campaign(
         "diagnose", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics),
-        _diagnosis_json(settings, low_band_hz, bad_ratio, suspect_ratio, spike_factor, bad_spikes),
+        _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm),
         _load_json(load_options), _pool(threads),
     )
     return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
@@ -395,27 +402,27 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
 
 def process_record(path, *, bearing: str, velocity_mm_s: float, repeat: int = 1,
                    condition: str | None = None, lowpass_hz: float = 20.0, harmonics: int = 5,
-                   low_band_hz: float = 25.0, spike_factor: float = 8.0,
+                   low_band_hz: float = 25.0, spike_spreads: float = 8.0,
                    settings: dict | None = None, **load_options) -> RecordResult:
     """One record of a campaign, loaded and processed exactly as
-    ``ballpass diagnose`` processes each record (analysis, passages,
-    sticking events, friction spectrum): the per-record half of
-    :func:`diagnose`, for executors of a distributed engine. The result
-    pickles."""
-    data, freq, psd = _native.process_record(
+    ``ballpass diagnose`` processes each record (analysis, passages, the
+    friction of each ball-pass period, friction spectrum): the per-record
+    half of :func:`diagnose`, for executors of a distributed engine. Give it
+    the ``low_band_hz`` and ``spike_spreads`` the batch half gets. The
+    result pickles."""
+    data, freq, psd, heights = _native.process_record(
         os.fspath(path), bearing, float(velocity_mm_s), int(repeat), condition,
         float(lowpass_hz), int(harmonics),
-        _diagnosis_json(settings, low_band_hz, 10.0, 3.0, spike_factor, 3.0),
+        _diagnosis_json(settings, low_band_hz, spike_spreads, 1e-4),
         _load_json(load_options),
     )
-    return RecordResult(data, freq, psd)
+    return RecordResult(data, freq, psd, heights)
 
 
 def diagnose_records(records: Iterable[RecordResult], *, failures: Iterable[tuple] = (),
                      source: str = "records", selection: Iterable[str] = (),
                      lowpass_hz: float = 20.0, harmonics: int = 5, low_band_hz: float = 25.0,
-                     bad_ratio: float = 10.0, suspect_ratio: float = 3.0,
-                     spike_factor: float = 8.0, bad_spikes: float = 3.0,
+                     spike_spreads: float = 8.0, bad_false_alarm: float = 1e-4,
                      settings: dict | None = None) -> Result:
     """The batch half of :func:`diagnose`: verdicts from records processed
     by :func:`process_record` (anywhere), with the same thresholds.
@@ -426,7 +433,7 @@ def diagnose_records(records: Iterable[RecordResult], *, failures: Iterable[tupl
     data, spectra = _native.diagnose_records(
         states, [tuple(f) for f in failures], str(source), list(selection),
         float(lowpass_hz), int(harmonics),
-        _diagnosis_json(settings, low_band_hz, bad_ratio, suspect_ratio, spike_factor, bad_spikes),
+        _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm),
     )
     return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
 

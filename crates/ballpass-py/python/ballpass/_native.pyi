@@ -138,9 +138,9 @@ def process_record(
     harmonics: int = 5,
     diagnosis: str | None = None,
     load: str | None = None,
-) -> tuple[dict[str, Any], F64, F64]: ...
+) -> tuple[dict[str, Any], F64, F64, F64]: ...
 def diagnose_records(
-    records: list[tuple[str, F64, F64]],
+    records: list[tuple[str, F64, F64, F64]],
     failures: list[tuple[str, str, float, int, str]],
     source: str,
     selection: list[str],

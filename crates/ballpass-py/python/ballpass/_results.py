@@ -172,24 +172,32 @@ class Result:
 class RecordResult(Result):
     """One campaign record's result (a row of ``records.csv``, an entry of a
     campaign JSON's ``record_results``) with its friction spectrum
-    (``friction_psd_freq_hz`` in Hz, ``friction_psd`` in N²/Hz). Picklable:
-    it travels between processes (Spark executors) whole."""
+    (``friction_psd_freq_hz`` in Hz, ``friction_psd`` in N²/Hz) and the
+    friction height of each ball-pass period (``sticking_heights_n``, N; the
+    diagnosis pools them per bearing, the JSON leaves them out). Picklable:
+    it travels between processes (Spark executors) whole; a result rebuilt
+    from its parts needs all four."""
 
     __slots__ = ()
 
-    def __init__(self, data: dict, freq_hz: np.ndarray, psd: np.ndarray):
+    def __init__(self, data: dict, freq_hz: np.ndarray, psd: np.ndarray,
+                 sticking_heights_n: np.ndarray | None = None):
+        heights = np.zeros(0) if sticking_heights_n is None else sticking_heights_n
         super().__init__(
             data,
-            {"friction_psd_freq_hz": np.asarray(freq_hz), "friction_psd": np.asarray(psd)},
+            {"friction_psd_freq_hz": np.asarray(freq_hz), "friction_psd": np.asarray(psd),
+             "sticking_heights_n": np.asarray(heights, dtype=np.float64)},
             "RecordResult",
         )
 
     def _state(self):
-        return (json.dumps(self._data), self._tables["friction_psd_freq_hz"], self._tables["friction_psd"])
+        return (json.dumps(self._data), self._tables["friction_psd_freq_hz"],
+                self._tables["friction_psd"], self._tables["sticking_heights_n"])
 
     def __reduce__(self):
         return (_record_from_state, self._state())
 
 
-def _record_from_state(text: str, freq_hz, psd) -> RecordResult:
-    return RecordResult(json.loads(text), np.asarray(freq_hz), np.asarray(psd))
+def _record_from_state(text: str, freq_hz, psd, heights=None) -> RecordResult:
+    return RecordResult(json.loads(text), np.asarray(freq_hz), np.asarray(psd),
+                        None if heights is None else np.asarray(heights))
