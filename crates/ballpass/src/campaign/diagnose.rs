@@ -16,7 +16,11 @@
 //!   is then at most binomial `(N, p₀)`.
 //! - **bad** when the count reaches the binomial critical value at 1e-4
 //!   (and at least 3): a good bearing is called bad by it with probability
-//!   below 1e-4; or when the spread of its periods is at least three times
+//!   below 1e-4. The per-period rate is `p₀`, or the median spike rate of
+//!   the *other* bearings of the batch when that is higher (at least three
+//!   others: a bench whose good periods have heavier tails than `p₀`
+//!   raises the bar for all, and one or two sticking siblings cannot move
+//!   the median); or when the spread of its periods is at least three times
 //!   the batch's (spikes on so many passages that they enter the bearing's
 //!   own lower half and no longer stand out from it: the simulator's severe
 //!   sticking puts them on 60 %; good bearings of one bench stayed within
@@ -340,9 +344,36 @@ pub fn diagnose(records: &[&RecordResult], settings: &DiagnoseSettings) -> Diagn
             .collect()
     };
 
+    // Each bearing's spike rate; a bearing's spike bar uses the larger of
+    // the nominal per-period rate and the median rate of the *other*
+    // bearings (at least three of them): on a bench whose good bearings'
+    // periods have heavier tails than the nominal rate assumes, their
+    // exceedances raise the bar for all, while one or two sticking
+    // siblings cannot move a median of the others.
+    let rates: Vec<Option<f64>> = partial
+        .iter()
+        .map(|p| (p.3.periods > 0).then(|| p.3.spikes.len() as f64 / p.3.periods as f64))
+        .collect();
+    let period_rates: Vec<f64> = (0..partial.len())
+        .map(|i| {
+            let others: Vec<f64> = rates
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .filter_map(|(_, r)| *r)
+                .collect();
+            let batch_rate = if others.len() >= 3 {
+                median(&others).unwrap_or(0.0)
+            } else {
+                0.0
+            };
+            settings.period_false_rate.max(batch_rate)
+        })
+        .collect();
     let mut bearings: Vec<BearingDiagnosis> = partial
         .into_iter()
-        .map(|(bearing, mine, low, pooled)| {
+        .zip(period_rates)
+        .map(|((bearing, mine, low, pooled), period_rate)| {
             let harmonics = harmonics_of(&mine);
             let low_band_ratio = if median_low > 0.0 {
                 low / median_low
@@ -359,6 +390,7 @@ pub fn diagnose(records: &[&RecordResult], settings: &DiagnoseSettings) -> Diagn
                 mine.len(),
                 manifest_condition,
                 &pooled,
+                period_rate,
                 batch,
                 low,
                 low_band_ratio,
@@ -432,6 +464,7 @@ fn judge(
     records: usize,
     manifest_condition: Option<String>,
     p: &Pooled,
+    period_rate: f64,
     batch: Option<(f64, f64)>,
     low: f64,
     low_band_ratio: f64,
@@ -440,8 +473,8 @@ fn judge(
 ) -> BearingDiagnosis {
     let n = p.periods;
     let spikes = p.spikes.len();
-    let for_bad = binomial_critical(n, s.period_false_rate, s.bad_false_alarm, 3);
-    let for_suspect = binomial_critical(n, s.period_false_rate, s.suspect_false_alarm, 2);
+    let for_bad = binomial_critical(n, period_rate, s.bad_false_alarm, 3);
+    let for_suspect = binomial_critical(n, period_rate, s.suspect_false_alarm, 2);
     let max_spike_over_typical = (p.typical > 0.0 && spikes > 0)
         .then(|| p.spikes.iter().copied().fold(f64::NEG_INFINITY, f64::max) / p.typical);
     let ratio = |a: f64, b: f64| (b > 0.0).then(|| a / b);
@@ -451,6 +484,13 @@ fn judge(
         "{n} ball-pass periods: typical rise {:.3} N (spread {:.3} N), {spikes} spike(s) {} spreads above it; {for_bad} make it bad, {for_suspect} suspect",
         p.typical, p.spread, s.sticking.outlier_spreads
     )];
+    if period_rate > s.period_false_rate {
+        evidence.push(format!(
+            "the other bearings' periods exceed that bar at a median rate of {:.2} %, above the nominal {:.2} %: this bench's good periods scatter more, and the bar was raised to match",
+            100.0 * period_rate,
+            100.0 * s.period_false_rate
+        ));
+    }
     if let (Some(r), Some(sr)) = (typical_over_batch, spread_over_batch) {
         evidence.push(format!(
             "typical period {r:.2}× the batch's, spread {sr:.2}× the batch's"
@@ -615,6 +655,40 @@ mod tests {
         let p = vec![2.0; 200];
         assert_eq!(low_band_power(&f, &p, 25.0), 50.0);
         assert_eq!(low_band_power(&f[..1], &p[..1], 25.0), 0.0);
+    }
+
+    /// A bench whose good bearings all show a few exceedances (heavier
+    /// tails than the nominal rate): the others' median rate raises the
+    /// bar, so none of them is bad, while a sticking sibling still is.
+    #[test]
+    fn a_heavy_tailed_bench_raises_the_bar_for_all() {
+        let recs: Vec<RecordResult> = (1..=5)
+            .flat_map(|b| {
+                (1..=2).map(move |rep| {
+                    // 2 exceedances per 74-period record on every good
+                    // bearing (4 per bearing: bad at the nominal rate);
+                    // b5 sticks on 20 per record.
+                    let (n, h) = if b == 5 { (20, 1.0) } else { (2, 1.0) };
+                    bearing_record(&format!("b{b}"), rep, 0.1, n, h)
+                })
+            })
+            .collect();
+        let refs: Vec<&RecordResult> = recs.iter().collect();
+        // At the nominal rate alone, 4 spikes in 148 periods would be bad.
+        assert!(binomial_critical(148, 5e-4, 1e-4, 3) <= 4);
+        let d = diagnose(&refs, &DiagnoseSettings::default());
+        for b in &d.bearings {
+            if b.bearing == "b5" {
+                assert_eq!(b.verdict, Condition::Bad, "{b:#?}");
+            } else {
+                // Not flagged; with the raised bar 148 periods may be too
+                // few to rule out mild sticking, which it says.
+                assert!(
+                    matches!(b.verdict, Condition::Good | Condition::Inconclusive),
+                    "{b:#?}"
+                );
+            }
+        }
     }
 
     /// A strong but regular ripple is not sticking, whatever its size
