@@ -18,7 +18,7 @@
 //! phase is within 0.03 τc).
 //!
 //! ```text
-//! X_s  = Σ_n w[n] (x[n] − mean_s) e^{−2πi k f_c n / fs}    (segment s, harmonic k)
+//! X_s  = Σ_n w[n] (x[n] − mean_s) e^{−2πi f_c n / fs}      (segment s)
 //! Pxy  = mean_s conj(X_s) Y_s,   γ² = |Pxy|² / (Pxx Pyy)
 //! φ = arg Pxy(f_c)          (y lagging x by d gives −360 f d)
 //! σ_φ = sqrt((1 − γ²) / (2 n_d γ²))  rad,  95 %: ±1.96 σ_φ
@@ -169,27 +169,25 @@ pub(crate) fn lag_words(
     )
 }
 
-/// One signal's DFTs: per segment, `(re, im)` at each harmonic.
-type SegmentDfts = Vec<Vec<(f64, f64)>>;
+/// One signal's DFTs: per segment, `(re, im)` at the frequency.
+type SegmentDfts = Vec<(f64, f64)>;
 
-/// Segment DFTs of the prepared signals at the harmonics `k f` of one
-/// frequency, for the phases (module docs). Accumulates over repeats.
+/// Segment DFTs of the prepared signals at one frequency (the measured
+/// `f_c`), for the phases (module docs). Accumulates over repeats.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct LineSpectra {
-    /// Harmonics evaluated, `k = 1..=harmonics`.
-    harmonics: usize,
-    /// Per signal, per segment (all records), its DFT at each `k f`.
+    /// Per signal, per segment (all records), its DFT at `f`.
     dft: Vec<(Signal, SegmentDfts)>,
     /// Equivalent degrees of freedom of the average (all records).
     nu: f64,
 }
 
 impl LineSpectra {
-    /// The segment DFTs of one record at `k f_hz`, `k = 1..=harmonics`:
-    /// segments of a whole number of periods `1 / f_hz` (three, fewer when
-    /// the record holds fewer than six), so that the window's image of `−kf`
-    /// falls near a zero of the Hann spectrum.
-    pub(crate) fn of(p: &Prepared, f_hz: f64, harmonics: usize) -> LineSpectra {
+    /// The segment DFTs of one record at `f_hz`: segments of a whole
+    /// number of periods `1 / f_hz` (three, fewer when the record holds
+    /// fewer than six), so that the window's image of `−f` falls near a zero
+    /// of the Hann spectrum.
+    pub(crate) fn of(p: &Prepared, f_hz: f64) -> LineSpectra {
         let fs = p.fs_hz;
         let n = p.n;
         let per = fs / f_hz;
@@ -203,12 +201,10 @@ impl LineSpectra {
             .map(|k| k * step)
             .take_while(|s| s + len <= n)
             .collect();
-        let rot: Vec<(f64, f64)> = (1..=harmonics)
-            .map(|k| {
-                let a = std::f64::consts::TAU * k as f64 * f_hz / fs;
-                (a.cos(), a.sin())
-            })
-            .collect();
+        let (c, s) = {
+            let a = std::f64::consts::TAU * f_hz / fs;
+            (a.cos(), a.sin())
+        };
         let dft = p
             .signals
             .iter()
@@ -218,34 +214,29 @@ impl LineSpectra {
                     .map(|&st| {
                         let seg = &x[st..st + len];
                         let mean = seg.iter().sum::<f64>() / len as f64;
-                        rot.iter()
-                            .map(|&(c, s)| {
-                                // e^{-i a n} by rotation, renormalised every 1024 steps.
-                                let (mut re, mut im) = (0.0, 0.0);
-                                let (mut er, mut ei) = (1.0, 0.0);
-                                for (i, (v, wi)) in seg.iter().zip(&w).enumerate() {
-                                    let u = (v - mean) * wi;
-                                    re += u * er;
-                                    im += u * ei;
-                                    let nr = er * c + ei * s;
-                                    ei = ei * c - er * s;
-                                    er = nr;
-                                    if i % 1024 == 1023 {
-                                        let m = (er * er + ei * ei).sqrt();
-                                        er /= m;
-                                        ei /= m;
-                                    }
-                                }
-                                (re, im)
-                            })
-                            .collect()
+                        // e^{-i a n} by rotation, renormalised every 1024 steps.
+                        let (mut re, mut im) = (0.0, 0.0);
+                        let (mut er, mut ei) = (1.0, 0.0);
+                        for (i, (v, wi)) in seg.iter().zip(&w).enumerate() {
+                            let u = (v - mean) * wi;
+                            re += u * er;
+                            im += u * ei;
+                            let nr = er * c + ei * s;
+                            ei = ei * c - er * s;
+                            er = nr;
+                            if i % 1024 == 1023 {
+                                let m = (er * er + ei * ei).sqrt();
+                                er /= m;
+                                ei /= m;
+                            }
+                        }
+                        (re, im)
                     })
                     .collect();
                 (*sig, v)
             })
             .collect();
         LineSpectra {
-            harmonics,
             dft,
             nu: welch_dof(&w, step, starts.len()),
         }
@@ -263,17 +254,17 @@ impl LineSpectra {
         out
     }
 
-    /// `Pxy` and coherence of a pair at harmonic `k` (1-based), and `n_d`.
-    fn cross(&self, x: Signal, y: Signal, k: usize) -> Option<((f64, f64), f64, f64)> {
+    /// `Pxy` and coherence of a pair, and `n_d`.
+    fn cross(&self, x: Signal, y: Signal) -> Option<((f64, f64), f64, f64)> {
         let get = |s: Signal| self.dft.iter().find(|(g, _)| *g == s).map(|(_, v)| v);
         let (a, b) = (get(x)?, get(y)?);
         let m = a.len() as f64;
-        if m == 0.0 || k == 0 || k > self.harmonics {
+        if m == 0.0 {
             return None;
         }
         let (mut pr, mut pi, mut pxx, mut pyy) = (0.0, 0.0, 0.0, 0.0);
         for (sa, sb) in a.iter().zip(b) {
-            let ((xr, xi), (yr, yi)) = (sa[k - 1], sb[k - 1]);
+            let ((xr, xi), (yr, yi)) = (*sa, *sb);
             // conj(X) Y
             pr += xr * yr + xi * yi;
             pi += xr * yi - xi * yr;
@@ -292,7 +283,7 @@ impl LineSpectra {
 /// Fills in the phase at `f_hz` of `ph` from the line spectra (module
 /// docs); `confidence` sets the coherence threshold.
 pub(crate) fn fill_phase(ph: &mut Phase, lines: &LineSpectra, f_hz: f64, confidence: f64) {
-    let Some(((re, im), g1, n_d)) = lines.cross(ph.x, ph.y, 1) else {
+    let Some(((re, im), g1, n_d)) = lines.cross(ph.x, ph.y) else {
         return;
     };
     let threshold = (n_d > 1.0).then(|| 1.0 - (1.0 - confidence).powf(1.0 / (n_d - 1.0)));
@@ -360,7 +351,7 @@ mod tests {
             velocity_error: None,
             trimmed_samples: 0,
         };
-        let lines = LineSpectra::of(&p, f, 3);
+        let lines = LineSpectra::of(&p, f);
         let mut ph = Phase {
             pair: "friction__optical".into(),
             x: Signal::Friction,

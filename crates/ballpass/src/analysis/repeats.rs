@@ -663,7 +663,7 @@ pub(crate) fn run(
     let mut findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
     let lines: Vec<LineSpectra> = prepared
         .par_iter()
-        .map(|p| LineSpectra::of(p, findings.f_used, settings.harmonics))
+        .map(|p| LineSpectra::of(p, findings.f_used))
         .collect();
     fill_phases(
         &mut findings.phases,
@@ -676,7 +676,7 @@ pub(crate) fn run(
         for ((r, p), (c, h)) in recs.iter().zip(&prepared).zip(corrs.iter().zip(&hires)) {
             let mut w = Vec::new();
             let mut f = evaluate(c, h, pred, settings, &mut w);
-            let own = LineSpectra::of(p, f.f_used, settings.harmonics);
+            let own = LineSpectra::of(p, f.f_used);
             fill_phases(&mut f.phases, &own, f.f_used, settings.confidence);
             records.push(scalars(r.source_name(), &f, p));
         }
