@@ -24,8 +24,11 @@
 //!   the batch's (spikes on so many passages that they enter the bearing's
 //!   own lower half and no longer stand out from it: the simulator's severe
 //!   sticking puts them on 60 %; good bearings of one bench stayed within
-//!   1.41× on the development fleets). The batch reference needs three
-//!   bearings or more.
+//!   1.41× on the development fleets), and the ratio is significant at the
+//!   same 1e-4: its square, as a ratio of variances, exceeds the F
+//!   quantile at the spreads' degrees of freedom (a spread from few
+//!   periods scatters a lot: three periods can read 3× the batch by
+//!   chance). The batch reference needs three bearings or more.
 //! - **suspect** when the count reaches the critical value at 1e-2 (and at
 //!   least 2), or the typical period is at least twice the batch's without
 //!   the spread (a bearing whose every passage rubs harder than its
@@ -47,7 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use super::record::RecordResult;
 use super::sticking::{lower_spread, StickingSettings};
-use crate::stats::{mean_std, median, reg_inc_beta};
+use crate::stats::{f_cdf, mean_std, median, reg_inc_beta};
 
 /// Thresholds of the diagnosis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -225,6 +228,44 @@ pub fn binomial_critical(n: usize, p: f64, alpha: f64, min: usize) -> usize {
     c
 }
 
+/// The batch's references: medians over the bearings with periods.
+#[derive(Debug, Clone, Copy)]
+struct Batch {
+    typical: f64,
+    spread: f64,
+    periods: f64,
+}
+
+/// Degrees of freedom per period of the robust spread
+/// `(median − p10) / z₀.₉` of normal heights, as a variance estimate.
+///
+/// Large-sample quantile variances (`n Var q_p = p (1 − p) / φ(z_p)²`,
+/// `n Cov(q_a, q_b) = a (1 − b) / (φ(z_a) φ(z_b))` for `a < b`) give
+/// `n Var σ̂ / σ² = 1.866`; a standard deviation from `ν` degrees of
+/// freedom has `Var s / σ² = 1 / (2ν)`, so `ν = 0.268 n`.
+fn spread_dof_per_period() -> f64 {
+    let z = 1.281_551_565_544_600_5_f64;
+    let phi = |x: f64| (-0.5 * x * x).exp() / (std::f64::consts::TAU).sqrt();
+    let (a, b) = (0.1, 0.5);
+    let var_a = a * (1.0 - a) / phi(z).powi(2);
+    let var_b = b * (1.0 - b) / phi(0.0).powi(2);
+    let cov = a * (1.0 - b) / (phi(z) * phi(0.0));
+    let n_var = (var_a + var_b - 2.0 * cov) / (z * z);
+    1.0 / (2.0 * n_var)
+}
+
+/// Probability that a good bearing's spread from `n` periods reads at least
+/// `ratio` times a batch spread from `n_batch` periods (F test on the
+/// squared ratio, [`spread_dof_per_period`]).
+fn spread_ratio_p(ratio: f64, n: f64, n_batch: f64) -> f64 {
+    let k = spread_dof_per_period();
+    let (d1, d2) = (k * n, k * n_batch);
+    if d1 <= 0.0 || d2 <= 0.0 || !ratio.is_finite() {
+        return 1.0;
+    }
+    (1.0 - f_cdf(ratio * ratio, d1, d2)).clamp(0.0, 1.0)
+}
+
 /// The spike statistics of one bearing's pooled periods.
 struct Pooled {
     periods: usize,
@@ -311,11 +352,16 @@ pub fn diagnose(records: &[&RecordResult], settings: &DiagnoseSettings) -> Diagn
         .map(|p| &p.3)
         .filter(|p| p.periods > 0)
         .collect();
-    let batch = (with_periods.len() >= 3).then(|| {
-        (
-            median(&with_periods.iter().map(|p| p.typical).collect::<Vec<_>>()).unwrap_or(0.0),
-            median(&with_periods.iter().map(|p| p.spread).collect::<Vec<_>>()).unwrap_or(0.0),
+    let batch = (with_periods.len() >= 3).then(|| Batch {
+        typical: median(&with_periods.iter().map(|p| p.typical).collect::<Vec<_>>()).unwrap_or(0.0),
+        spread: median(&with_periods.iter().map(|p| p.spread).collect::<Vec<_>>()).unwrap_or(0.0),
+        periods: median(
+            &with_periods
+                .iter()
+                .map(|p| p.periods as f64)
+                .collect::<Vec<_>>(),
         )
+        .unwrap_or(0.0),
     });
     let k_max = records
         .iter()
@@ -425,8 +471,8 @@ pub fn diagnose(records: &[&RecordResult], settings: &DiagnoseSettings) -> Diagn
     }
     Diagnosis {
         settings: settings.clone(),
-        batch_typical_n: batch.map(|b| b.0),
-        batch_spread_n: batch.map(|b| b.1),
+        batch_typical_n: batch.map(|b| b.typical),
+        batch_spread_n: batch.map(|b| b.spread),
         bearings: sorted,
         freq_hz,
         friction_psd,
@@ -465,7 +511,7 @@ fn judge(
     manifest_condition: Option<String>,
     p: &Pooled,
     period_rate: f64,
-    batch: Option<(f64, f64)>,
+    batch: Option<Batch>,
     low: f64,
     low_band_ratio: f64,
     harmonics: Vec<BearingHarmonic>,
@@ -478,8 +524,12 @@ fn judge(
     let max_spike_over_typical = (p.typical > 0.0 && spikes > 0)
         .then(|| p.spikes.iter().copied().fold(f64::NEG_INFINITY, f64::max) / p.typical);
     let ratio = |a: f64, b: f64| (b > 0.0).then(|| a / b);
-    let typical_over_batch = batch.and_then(|(t, _)| ratio(p.typical, t));
-    let spread_over_batch = batch.and_then(|(_, sp)| ratio(p.spread, sp));
+    let typical_over_batch = batch.and_then(|b| ratio(p.typical, b.typical));
+    let spread_over_batch = batch.and_then(|b| ratio(p.spread, b.spread));
+    let spread_p = match (spread_over_batch, batch) {
+        (Some(r), Some(b)) => spread_ratio_p(r, n as f64, b.periods),
+        _ => 1.0,
+    };
     let mut evidence = vec![format!(
         "{n} ball-pass periods: typical rise {:.3} N (spread {:.3} N), {spikes} spike(s) {} spreads above it; {for_bad} make it bad, {for_suspect} suspect",
         p.typical, p.spread, s.sticking.outlier_spreads
@@ -508,7 +558,14 @@ fn judge(
         ));
     }
     let high = typical_over_batch.is_some_and(|r| r >= s.batch_ratio);
-    let scattered = spread_over_batch.is_some_and(|r| r >= s.batch_spread_ratio);
+    let wide = spread_over_batch.is_some_and(|r| r >= s.batch_spread_ratio);
+    let scattered = wide && spread_p <= s.bad_false_alarm;
+    if wide && !scattered {
+        evidence.push(format!(
+            "its spread is {:.2}× the batch's, but {n} periods cannot show that (a good bearing reads it with probability {spread_p:.1e})",
+            spread_over_batch.unwrap_or(f64::NAN)
+        ));
+    }
     if scattered {
         verdict = Condition::Bad;
         evidence.push(format!(
@@ -645,6 +702,40 @@ mod tests {
             "{:#?}",
             d.bearings
         );
+    }
+
+    /// The robust spread's degrees of freedom against a simulation: 4000
+    /// sets of 200 normal heights; the variance of `σ̂ / σ` must be
+    /// `1 / (2 ν)` with `ν = 0.268 · 200`. Tolerance 10 %: the Monte-Carlo
+    /// variance of a variance from 4000 draws is ±2.2 % (1σ), plus the
+    /// large-sample approximation's own error at n = 200.
+    #[test]
+    fn the_robust_spread_has_the_stated_degrees_of_freedom() {
+        let k = spread_dof_per_period();
+        assert!((k - 0.268).abs() < 0.001, "{k}");
+        let mut rng = crate::sim::rng::Rng::new(17);
+        let n = 200;
+        let draws: Vec<f64> = (0..4000)
+            .map(|_| {
+                let v: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
+                lower_spread(&v).1
+            })
+            .collect();
+        let m = draws.iter().sum::<f64>() / draws.len() as f64;
+        let var = draws.iter().map(|d| (d - m).powi(2)).sum::<f64>() / (draws.len() - 1) as f64;
+        let expected = 1.0 / (2.0 * k * n as f64);
+        assert!((var / expected - 1.0).abs() < 0.10, "{var} vs {expected}");
+    }
+
+    /// Three periods whose spread reads 3.44× the batch's (validation
+    /// fleet 6 000 027, a good bearing) are no evidence; 80 periods at 3×
+    /// are.
+    #[test]
+    fn a_spread_ratio_from_few_periods_is_not_significant() {
+        assert!(spread_ratio_p(3.44, 3.0, 3.0) > 1e-2);
+        assert!(spread_ratio_p(3.0, 80.0, 80.0) < 1e-4);
+        assert_eq!(spread_ratio_p(f64::NAN, 80.0, 80.0), 1.0);
+        assert_eq!(spread_ratio_p(3.0, 0.0, 80.0), 1.0);
     }
 
     /// A flat PSD of 2 unit²/Hz on a 0.25 Hz grid holds 2 · 25 = 50 units²

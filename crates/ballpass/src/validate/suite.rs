@@ -88,6 +88,11 @@ pub struct LagScore {
     /// Of those, lag within the larger of 0.02 τc and its own stated 95 %
     /// interval.
     pub within_interval: Rate,
+    /// Of the measured, those whose stated 95 % interval is within
+    /// ±0.02 τc (the record resolves the lag to the acceptance).
+    pub resolved: Rate,
+    /// Of the resolved, lag within 0.02 τc of the truth.
+    pub resolved_within_0_02_tau_c: Rate,
     /// Median, 90th percentile and largest error, τc.
     pub error_p50_tau_c: Option<f64>,
     /// 90th percentile, τc.
@@ -241,6 +246,11 @@ impl ValidationReport {
                 opt(l.error_p90_tau_c),
                 opt(l.error_max_tau_c)
             );
+            let _ = writeln!(
+                o,
+                "  stated 95 % interval within ±0.02 τc {}; of those within 0.02 τc {}",
+                l.resolved, l.resolved_within_0_02_tau_c
+            );
         }
         if let Some(st) = &self.stage {
             let _ = writeln!(
@@ -304,6 +314,11 @@ fn lags_and_stage(
         .iter()
         .filter(|(e, ci)| e.abs() <= ci.max(0.02))
         .count();
+    let resolved: Vec<f64> = lag_rows
+        .iter()
+        .filter(|(_, ci)| *ci <= 0.02)
+        .map(|r| r.0.abs())
+        .collect();
     let mut errs: Vec<f64> = lag_rows.iter().map(|r| r.0.abs()).collect();
     errs.sort_by(f64::total_cmp);
     let q =
@@ -312,6 +327,11 @@ fn lags_and_stage(
         measured: Rate::of(errs.len(), eligible),
         within_0_02_tau_c: Rate::of(errs.iter().filter(|&&e| e <= 0.02).count(), errs.len()),
         within_interval: Rate::of(inside, errs.len()),
+        resolved: Rate::of(resolved.len(), errs.len()),
+        resolved_within_0_02_tau_c: Rate::of(
+            resolved.iter().filter(|&&e| e <= 0.02).count(),
+            resolved.len(),
+        ),
         error_p50_tau_c: q(0.5),
         error_p90_tau_c: q(0.9),
         error_max_tau_c: errs.last().copied(),
