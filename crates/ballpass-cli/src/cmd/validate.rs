@@ -5,7 +5,10 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use ballpass::validate::{Domain, SuiteSettings};
+use ballpass::analysis::preflight::{self, PreflightSettings};
+use ballpass::validate::{estimate_domain, Domain, SuiteSettings};
+
+use crate::args::LoadArgs;
 use clap::Args;
 
 /// Arguments of `ballpass validate`.
@@ -37,6 +40,38 @@ pub struct ValidateArgs {
     /// Also write the full report as JSON to this file.
     #[arg(long, short = 'o', value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Recordings of your bench: the domain is narrowed to what they show
+    /// (rate, length, velocity, the bearing's geometry, the load cell's
+    /// discharge, the stage, the optical pulse width; the rest keeps the
+    /// grid's ranges or --domain's). Read with the input flags below.
+    #[arg(long = "from", value_name = "REC", num_args = 1..)]
+    from: Vec<PathBuf>,
+    /// Write the domain validated on as JSON (edit it and pass it back with
+    /// --domain).
+    #[arg(long, value_name = "FILE")]
+    write_domain: Option<PathBuf>,
+    #[command(flatten)]
+    load: LoadArgs,
+}
+
+/// The domain estimated from `--from`'s recordings on top of `base`, and
+/// the notes saying what came from where.
+fn from_recordings(a: &ValidateArgs, base: &Domain) -> Result<(Domain, Vec<String>)> {
+    let opts = a.load.options()?;
+    let geometry = opts.geometry.expect("options() resolves the bearing");
+    let recs = crate::records::load_all(&a.from, &opts, &a.load.window)?;
+    let mut with_speed = Vec::with_capacity(recs.len());
+    for rec in recs {
+        let name = rec.source_name();
+        let stated = a.load.velocity.or(rec.meta.velocity_mm_s);
+        let checked = preflight::check(vec![rec], stated, &geometry, &PreflightSettings::default())
+            .with_context(|| format!("{name}: cannot take the bench from it"))?;
+        let v = checked.velocity_mm_s;
+        with_speed.extend(checked.recordings.into_iter().map(|r| (r, v)));
+    }
+    let est = estimate_domain(&with_speed, &geometry, base)
+        .with_context(|| "estimating the bench from the recordings".to_string())?;
+    Ok((est.domain, est.notes))
 }
 
 /// Runs `ballpass validate`.
@@ -57,6 +92,14 @@ pub fn run(a: &ValidateArgs) -> Result<()> {
     domain
         .validate()
         .with_context(|| "the validation domain".to_string())?;
+    let (domain, notes) = if a.from.is_empty() {
+        (domain, Vec::new())
+    } else {
+        from_recordings(a, &domain)?
+    };
+    if let Some(p) = &a.write_domain {
+        ballpass::fsutil::write_json_pretty(p, &domain)?;
+    }
     let mut s = if a.grid {
         SuiteSettings::default()
     } else {
@@ -96,6 +139,12 @@ pub fn run(a: &ValidateArgs) -> Result<()> {
         ballpass::fsutil::write_json_pretty(p, &report)?;
     }
     let mut out = crate::output::stdout();
+    if !notes.is_empty() {
+        writeln!(out, "bench estimated from {} recording(s):", a.from.len())?;
+        for n in &notes {
+            writeln!(out, "  {n}")?;
+        }
+    }
     write!(out, "{}", report.text())?;
     Ok(())
 }

@@ -4,11 +4,13 @@
 //! detection rates with their binomial intervals).
 
 pub mod bench;
+pub mod estimate;
 pub mod fleets;
 pub mod passages;
 pub mod score;
 pub mod suite;
 
 pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
+pub use estimate::{estimate_domain, DomainEstimate};
 pub use score::Rate;
 pub use suite::{run, SuiteSettings, ValidationReport};
