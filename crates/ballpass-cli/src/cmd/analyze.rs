@@ -107,6 +107,10 @@ pub struct AnalyzeArgs {
     /// Confidence of the significance tests [default: 0.99].
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     confidence: Option<f64>,
+    /// Two-sided confidence of the PSD bands exported and drawn with every
+    /// spectrum [default: 0.95].
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    band_confidence: Option<f64>,
     /// The quartz load cell's discharge time constant in seconds, undone
     /// before the analysis; `auto` (default) estimates it from each record,
     /// `off` leaves the friction as recorded (a DC-coupled sensor).
@@ -199,6 +203,9 @@ impl AnalyzeArgs {
         }
         if let Some(v) = self.confidence {
             s.confidence = v;
+        }
+        if let Some(v) = self.band_confidence {
+            s.band_confidence = v;
         }
         s.validate()?;
         Ok(s)

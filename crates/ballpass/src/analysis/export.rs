@@ -21,7 +21,9 @@
 //!   `freq_hz`, the auto-spectra `psd_<signal>_<unit²>_per_hz`
 //!   (`psd_friction_n2_per_hz`), then per cross pair
 //!   `csd_<pair>_re_<unit>_per_hz`, `csd_<pair>_im_<unit>_per_hz` and the
-//!   coherence `coh_<pair>`.
+//!   coherence `coh_<pair>`, then per auto-spectrum its confidence band
+//!   `psd_<signal>_lower_<unit²>_per_hz`, `psd_<signal>_upper_<unit²>_per_hz`
+//!   (level and degrees of freedom in `analysis.json`, `spectrum_*.band`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -119,6 +121,7 @@ pub fn spectrum_columns(s: &Spectra) -> Vec<(String, Vec<f64>)> {
         ));
         cols.push((format!("coh_{name}"), c.coherence.clone()));
     }
+    cols.extend(super::confidence::band_columns(s));
     cols
 }
 

@@ -644,15 +644,18 @@ pub(crate) fn run(
         hires.push(h);
         unfiltered.push(u);
     }
-    let unfiltered = average_spectra(&unfiltered);
+    let mut unfiltered = average_spectra(&unfiltered);
     // One record: its correlations are the result (no copy).
     let corr = if corrs.len() == 1 {
         corrs.pop().expect("one record")
     } else {
         average_correlations(&corrs)
     };
-    let full = average_spectra(&fulls);
-    let hr = average_spectra(&hires);
+    let mut full = average_spectra(&fulls);
+    let mut hr = average_spectra(&hires);
+    for s in [&mut unfiltered, &mut full, &mut hr] {
+        super::confidence::finish(s, settings.band_confidence, settings.confidence);
+    }
     if hr.info.n_segments < 2 && recs.len() < 2 {
         warnings.push(format!(
             "high-resolution spectrum has {} segment: coherence is 1 by construction and the \
