@@ -48,6 +48,7 @@ pub mod load_cell;
 pub mod passage;
 pub mod passage_table;
 pub mod phase;
+pub mod position;
 pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
@@ -537,6 +538,11 @@ pub struct Analysis {
     /// each segment's mean.
     #[serde(skip)]
     pub spectra_unfiltered: Spectra,
+    /// Friction and velocity-error spectra against the travel, in
+    /// cycles/mm (`None` without a position channel, or when no run of one
+    /// direction is long enough; see the warnings). Its table is
+    /// `spectra_position.csv`.
+    pub position: Option<position::PositionSpectra>,
 }
 
 /// Runs the whole analysis on one record or several repeats at the same

@@ -443,6 +443,20 @@ pub fn sections(
         }
         spectra = spectra.with_figure(fig.interactive());
     }
+    if let Some(pos) = &a.position {
+        spectra = spectra.with(Block::Paragraph(format!(
+            "Against the travel instead of time, {} shows the spectra in cycles/mm, where the \
+             balls pass every 2 d_avg at any speed (line at {} cycles/mm).",
+            format_args!("{{fig:{}}}", id("spectra_position")),
+            fmt_sig(pos.line_per_mm, 5)
+        )));
+        spectra = spectra.with_figure(super::position::figure(
+            pos,
+            a.settings.harmonics,
+            id("spectra_position"),
+            table("spectra_position.csv"),
+        ));
+    }
     out.push(spectra);
 
     if let Some(st) = &a.stage {
