@@ -101,6 +101,7 @@ fn writes_the_four_outputs_and_a_summary() {
             "correlations.csv",
             "spectra.csv",
             "spectra_hires.csv",
+            "spectra_position.csv",
             "spectra_unfiltered.csv"
         ]
     );
