@@ -48,7 +48,7 @@ import pathlib
 import time
 
 import numpy as np
-from scipy import signal
+from scipy import signal, stats
 
 PAIRS = [
     ("friction", "friction"),
@@ -83,8 +83,28 @@ def correlation_table(corr, norm):
     return out
 
 
+def band_factors(length, nperseg, noverlap, confidence=0.95):
+    """Chi-square band of a Welch PSD: factors [nu/chi2(1-a/2), nu/chi2(a/2)] for the
+    bins between DC and Nyquist and for those two (half the dof), with nu the
+    equivalent dof of K periodic-Hann segments (Percival & Walden 292b)."""
+    step = nperseg - noverlap
+    k = (length - nperseg) // step + 1
+    w = signal.get_window("hann", nperseg)
+    h = w / np.sqrt(np.sum(w * w))
+    s = 0.0
+    for j in range(1, k):
+        if j * step >= nperseg:
+            break
+        s += (1 - j / k) * np.sum(h[j * step:] * h[: nperseg - j * step]) ** 2
+    nu = 2 * k / (1 + 2 * s)
+    a = 1 - confidence
+    f = lambda v: (v / stats.chi2.ppf(1 - a / 2, v), v / stats.chi2.ppf(a / 2, v))
+    return f(nu), f(nu / 2), nperseg
+
+
 def spectrum_table(spec):
-    """spectra*.csv columns: freq_hz, psd_*, then csd_*_re/_im and coh_* per pair."""
+    """spectra*.csv columns: freq_hz, psd_*, then csd_*_re/_im and coh_* per pair,
+    then the 95 % band of each psd."""
     out = {"freq_hz": spec["freq_hz"]}
     for p, q in PAIRS:
         if p == q:
@@ -95,6 +115,16 @@ def spectrum_table(spec):
             out[f"csd_{name}_re_{unit}_per_hz"] = spec[name + "_re"]
             out[f"csd_{name}_im_{unit}_per_hz"] = spec[name + "_im"]
             out[f"coh_{name}"] = spec[name + "_coh"]
+    (lo, hi), (lo_e, hi_e), nperseg = spec["_band"]
+    for p, q in PAIRS:
+        if p == q:
+            nb = len(spec[p])
+            edge = np.zeros(nb, bool)
+            edge[0] = True
+            if nperseg % 2 == 0:
+                edge[-1] = True
+            out[f"psd_{p}_lower_{SQUARED[p]}_per_hz"] = spec[p] * np.where(edge, lo_e, lo)
+            out[f"psd_{p}_upper_{SQUARED[p]}_per_hz"] = spec[p] * np.where(edge, hi_e, hi)
     return out
 
 
@@ -160,6 +190,7 @@ def analyze(fs, friction, position, optical, a):
                 out[name + "_re"] = pxy.real
                 out[name + "_im"] = pxy.imag
                 out[name + "_coh"] = cxy
+        out["_band"] = band_factors(len(s["friction"]), nperseg, noverlap)
         return out
 
     nperseg = min(a.nperseg, n)
@@ -212,6 +243,9 @@ def zoom_spectra(sig, fs, m, nperseg, noverlap):
             out[name + "_re"] = pxy.real
             out[name + "_im"] = pxy.imag
             out[name + "_coh"] = np.abs(pxy) ** 2 / auto[p] / auto[q]
+    # ballpass states the dof of one branch's Welch average (the branches
+    # are not independent averages, docs/methods.md section 10).
+    out["_band"] = band_factors(n, nperseg, noverlap)
     return out
 
 

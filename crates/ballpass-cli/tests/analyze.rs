@@ -53,6 +53,12 @@ fn writes_the_four_outputs_and_a_summary() {
          csd_friction__velocity_error_re_n_mm_s_per_hz,csd_friction__velocity_error_im_n_mm_s_per_hz,\
          coh_friction__velocity_error"
     ));
+    // Each PSD's confidence band at the end, with the PSD's unit.
+    assert!(head("spectra.csv").ends_with(
+        "psd_friction_lower_n2_per_hz,psd_friction_upper_n2_per_hz,\
+         psd_velocity_error_lower_mm2_s2_per_hz,psd_velocity_error_upper_mm2_s2_per_hz,\
+         psd_optical_lower_v2_per_hz,psd_optical_upper_v2_per_hz"
+    ));
     assert_eq!(head("spectra_hires.csv"), head("spectra.csv"));
     assert_eq!(head("spectra_unfiltered.csv"), head("spectra.csv"));
     // The report: the page and one figure per correlation, spectra, coherence.
@@ -95,6 +101,7 @@ fn writes_the_four_outputs_and_a_summary() {
             "correlations.csv",
             "spectra.csv",
             "spectra_hires.csv",
+            "spectra_position.csv",
             "spectra_unfiltered.csv"
         ]
     );

@@ -93,10 +93,12 @@ fn the_demo_counts_figures_tables_and_data_files_apart() {
 /// text columns (docs/user-guide.md lists both).
 #[test]
 fn every_exported_column_names_its_unit() {
-    const UNITS: [&str; 22] = [
+    // `_mm3_s2`: (mm/s)² per cycle/mm, the position-domain PSD of the
+    // velocity error
+    const UNITS: [&str; 23] = [
         "_s", "_hz", "_n", "_v", "_mm", "_mm_s", "_um_s", "_um", "_deg", "_db", "_n2", "_per_hz",
         "_kg", "_rad_s", "_m", "_n_v", "_n_mm_s", "_mm_s_v", "_v2", "_mm2_s2", "_n_per_m",
-        "_s_per_m",
+        "_s_per_m", "_mm3_s2",
     ];
     // counts, ratios, fractions, flags, names: no unit
     const PLAIN: [&str; 24] = [

@@ -56,7 +56,8 @@ pub struct AnalyzeArgs {
     #[command(flatten)]
     load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
-    /// spectra_hires.csv, spectra_unfiltered.csv, the report and
+    /// spectra_hires.csv, spectra_unfiltered.csv, spectra_position.csv
+    /// (with a position channel), the report and
     /// ballpass-run.json (written last: the folder holds a complete run
     /// exactly when it is there).
     #[arg(long, short = 'o', value_name = "DIR")]
@@ -107,6 +108,10 @@ pub struct AnalyzeArgs {
     /// Confidence of the significance tests [default: 0.99].
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     confidence: Option<f64>,
+    /// Two-sided confidence of the PSD bands exported and drawn with every
+    /// spectrum [default: 0.95].
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    band_confidence: Option<f64>,
     /// The quartz load cell's discharge time constant in seconds, undone
     /// before the analysis; `auto` (default) estimates it from each record,
     /// `off` leaves the friction as recorded (a DC-coupled sensor).
@@ -199,6 +204,9 @@ impl AnalyzeArgs {
         }
         if let Some(v) = self.confidence {
             s.confidence = v;
+        }
+        if let Some(v) = self.band_confidence {
+            s.band_confidence = v;
         }
         s.validate()?;
         Ok(s)

@@ -1,5 +1,8 @@
 //! Writing an [`Analysis`]: `analysis.json`, `correlations.csv`,
-//! `spectra.csv`, `spectra_hires.csv`, `spectra_unfiltered.csv`, each
+//! `spectra.csv`, `spectra_hires.csv`, `spectra_unfiltered.csv` and, with
+//! position-domain spectra, `spectra_position.csv` (`freq_per_mm` in
+//! cycles/mm, `psd_friction_n2_mm`, `psd_velocity_error_mm3_s2`, one-sided
+//! densities per cycle/mm, and their `_lower_`/`_upper_` bands), each
 //! written atomically by [`crate::fsutil::write_atomic_with`] (a reader never
 //! sees half a file; no `fsync`, see [`crate::fsutil`]).
 //!
@@ -21,7 +24,9 @@
 //!   `freq_hz`, the auto-spectra `psd_<signal>_<unit²>_per_hz`
 //!   (`psd_friction_n2_per_hz`), then per cross pair
 //!   `csd_<pair>_re_<unit>_per_hz`, `csd_<pair>_im_<unit>_per_hz` and the
-//!   coherence `coh_<pair>`.
+//!   coherence `coh_<pair>`, then per auto-spectrum its confidence band
+//!   `psd_<signal>_lower_<unit²>_per_hz`, `psd_<signal>_upper_<unit²>_per_hz`
+//!   (level and degrees of freedom in `analysis.json`, `spectrum_*.band`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -43,6 +48,8 @@ pub struct OutputPaths {
     pub spectra_hires: PathBuf,
     /// `spectra_unfiltered.csv`.
     pub spectra_unfiltered: PathBuf,
+    /// `spectra_position.csv`, when there are position-domain spectra.
+    pub spectra_position: Option<PathBuf>,
 }
 
 /// Unit token of a signal in column names (`n`, `mm_s`, `v`).
@@ -119,6 +126,7 @@ pub fn spectrum_columns(s: &Spectra) -> Vec<(String, Vec<f64>)> {
         ));
         cols.push((format!("coh_{name}"), c.coherence.clone()));
     }
+    cols.extend(super::confidence::band_columns(s));
     cols
 }
 
@@ -305,6 +313,10 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
         spectra: dir.join("spectra.csv"),
         spectra_hires: dir.join("spectra_hires.csv"),
         spectra_unfiltered: dir.join("spectra_unfiltered.csv"),
+        spectra_position: a
+            .position
+            .as_ref()
+            .map(|_| dir.join("spectra_position.csv")),
     };
     // The large correlations.csv beside the four small files.
     let (corr, rest) = rayon::join(
@@ -313,6 +325,16 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
             write_spectra(&paths.spectra, &a.spectra)?;
             write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
             write_spectra(&paths.spectra_unfiltered, &a.spectra_unfiltered)?;
+            if let (Some(path), Some(p)) = (&paths.spectra_position, &a.position) {
+                write_csv(
+                    path,
+                    &Table {
+                        index_name: "freq_per_mm",
+                        index: &p.freq_per_mm,
+                        columns: super::position::position_columns(p),
+                    },
+                )?;
+            }
             write_atomic_with(&paths.json, |w| {
                 serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
                 w.write_all(b"\n")

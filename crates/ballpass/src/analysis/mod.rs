@@ -41,12 +41,14 @@ use crate::bearing::Prediction;
 use crate::error::{Error, Result};
 use crate::recording::Recording;
 
+pub mod confidence;
 pub mod correlation;
 pub mod export;
 pub mod load_cell;
 pub mod passage;
 pub mod passage_table;
 pub mod phase;
+pub mod position;
 pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
@@ -248,6 +250,10 @@ pub struct AnalyzeSettings {
     pub harmonics: usize,
     /// Confidence of the significance tests. Default 0.99.
     pub confidence: f64,
+    /// Two-sided confidence of the PSD bands exported and drawn with every
+    /// auto-spectrum (chi-square with Welch's equivalent degrees of
+    /// freedom, [`confidence`]). Default 0.95 (MATLAB `pwelch`'s usual level).
+    pub band_confidence: f64,
     /// Half-width of the autocorrelation peak windows around `k tau_c`, in
     /// periods. Default 0.25.
     pub period_window: f64,
@@ -282,6 +288,7 @@ impl Default for AnalyzeSettings {
             hires_noverlap: None,
             harmonics: 5,
             confidence: 0.99,
+            band_confidence: 0.95,
             period_window: 0.25,
             max_period_peaks: None,
             phase_tolerance_deg: 20.0,
@@ -332,6 +339,15 @@ impl AnalyzeSettings {
                 format!(
                     "must be between 0.5 and 1 (exclusive), got {}",
                     self.confidence
+                ),
+            ));
+        }
+        if !(self.band_confidence > 0.0 && self.band_confidence < 1.0) {
+            return Err(Error::setting(
+                "band confidence",
+                format!(
+                    "must be between 0 and 1 (exclusive), got {}",
+                    self.band_confidence
                 ),
             ));
         }
@@ -522,6 +538,11 @@ pub struct Analysis {
     /// each segment's mean.
     #[serde(skip)]
     pub spectra_unfiltered: Spectra,
+    /// Friction and velocity-error spectra against the travel, in
+    /// cycles/mm (`None` without a position channel, or when no run of one
+    /// direction is long enough; see the warnings). Its table is
+    /// `spectra_position.csv`.
+    pub position: Option<position::PositionSpectra>,
 }
 
 /// Runs the whole analysis on one record or several repeats at the same

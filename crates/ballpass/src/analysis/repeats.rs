@@ -644,15 +644,18 @@ pub(crate) fn run(
         hires.push(h);
         unfiltered.push(u);
     }
-    let unfiltered = average_spectra(&unfiltered);
+    let mut unfiltered = average_spectra(&unfiltered);
     // One record: its correlations are the result (no copy).
     let corr = if corrs.len() == 1 {
         corrs.pop().expect("one record")
     } else {
         average_correlations(&corrs)
     };
-    let full = average_spectra(&fulls);
-    let hr = average_spectra(&hires);
+    let mut full = average_spectra(&fulls);
+    let mut hr = average_spectra(&hires);
+    for s in [&mut unfiltered, &mut full, &mut hr] {
+        super::confidence::finish(s, settings.band_confidence, settings.confidence);
+    }
     if hr.info.n_segments < 2 && recs.len() < 2 {
         warnings.push(format!(
             "high-resolution spectrum has {} segment: coherence is 1 by construction and the \
@@ -744,6 +747,38 @@ pub(crate) fn run(
         }
     }
     let verdict = verdict(pred, &findings);
+    // Position-domain spectra for `analyze` itself; the campaigns (which
+    // detect the passages themselves, `with_passages` false) do not use
+    // them and skip their cost.
+    let position = if with_passages && signals.contains(&Signal::VelocityError) {
+        let parts: Vec<super::position::RecordPart<'_>> = recs
+            .iter()
+            .zip(&restored)
+            .map(|(r, fr)| (r, fr.as_ref().map(|(f, _)| f.as_ref()), trim..trim + n))
+            .collect();
+        match super::position::compute(&parts, settings, filter.as_ref(), pred.d_avg_mm) {
+            Ok(p) => {
+                notes.push(format!(
+                    "position-domain spectra: {} runs of one direction, {:.0} mm of travel on a \
+                     {:.4} mm grid, {}-point Hann segments (resolution {:.5} cycles/mm), line at \
+                     1/(2 d_avg) = {:.5} cycles/mm",
+                    p.runs.iter().filter(|r| r.segments > 0).count(),
+                    p.travel_used_mm,
+                    p.dx_mm,
+                    p.nperseg,
+                    p.resolution_per_mm,
+                    p.line_per_mm
+                ));
+                Some(p)
+            }
+            Err(e) => {
+                warnings.push(format!("no position-domain spectra: {e}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
     Ok(Analysis {
         schema: SCHEMA,
         version: crate::VERSION,
@@ -798,6 +833,7 @@ pub(crate) fn run(
         spectra: full,
         spectra_hires: hr,
         spectra_unfiltered: unfiltered,
+        position,
     })
 }
 

@@ -54,7 +54,8 @@
 //!
 //! Coherence at `k f_c`: the largest of the ±1 bins, significant above
 //! `1 - a^(1/(n_d - 1))`, `a = 1 - confidence^(1/3)`, with `n_d = nu/2`
-//! the equivalent number of independent segments.
+//! the equivalent number of independent segments
+//! ([`super::confidence::coherence_threshold`]).
 
 use ballpass_dsp::{
     polyphase_average_csd, polyphase_average_psd, Complex64, DecimateSettings, Decimator, Welch,
@@ -91,6 +92,14 @@ pub struct SpectrumInfo {
     pub dof: f64,
     /// Window name.
     pub window: String,
+    /// Chi-square confidence band of the auto-spectra at
+    /// `band_confidence` (see [`super::confidence`]); `None` without
+    /// degrees of freedom.
+    pub band: Option<super::confidence::PsdBand>,
+    /// Coherence two independent signals exceed with the probability the
+    /// coherence table tests at (see [`super::confidence`]); `None` with
+    /// fewer than two equivalent segments.
+    pub coherence_threshold: Option<f64>,
 }
 
 /// Auto- and cross-spectra and coherence of one record or of the average.
@@ -301,6 +310,8 @@ fn info(
         resolution_hz: fs_hz / nperseg as f64,
         dof: welch_dof(&w, nperseg - noverlap, n_segments),
         window: settings.window.to_dsp().name().into(),
+        band: None,
+        coherence_threshold: None,
     })
 }
 
@@ -937,9 +948,7 @@ pub(crate) fn coherence_rows(
     f_c: f64,
     settings: &AnalyzeSettings,
 ) -> Vec<CoherenceRow> {
-    let n_d = s.info.dof / 2.0;
-    let a = 1.0 - settings.confidence.powf(1.0 / 3.0);
-    let threshold = (n_d > 1.0).then(|| 1.0 - a.powf(1.0 / (n_d - 1.0)));
+    let threshold = super::confidence::coherence_threshold(s.info.dof, settings.confidence);
     let mut rows = Vec::new();
     for c in &s.cross {
         for k in 1..=settings.harmonics {

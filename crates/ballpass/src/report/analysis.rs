@@ -13,7 +13,9 @@ use crate::analysis::{Analysis, CorrNorm, Signal};
 use crate::error::Result;
 use crate::recording::{Channel, Recording};
 use crate::report::kinds::{self, fmt_pm, fmt_sig, SpectrumView, Trace};
-use crate::report::{Axis, Block, Figure, Level, Report, Section, Table, Verdict};
+use crate::report::{
+    Axis, Block, Figure, Level, Marker, Report, Rgb, Section, Series, Table, Verdict,
+};
 
 /// Where the report's data files are and how its figure ids start.
 #[derive(Debug, Clone, Default)]
@@ -385,7 +387,7 @@ pub fn sections(
             s.info.n_records,
             fmt_sig(s.info.resolution_hz, 3),
             fmt_sig(f_c, 5)
-        )
+        ) + &band_words(s)
     };
     let full = SpectrumFigure {
         spectra: u,
@@ -421,22 +423,39 @@ pub fn sections(
     if !h.cross.is_empty() {
         let mut fig = Figure::new(id("coherence"), "Coherence, high resolution")
             .with_caption(format!(
-                "Magnitude-squared coherence |Pxy|²/(Pxx·Pyy) of the averaged spectra; {}",
-                info(h)
+                "Magnitude-squared coherence |Pxy|²/(Pxx·Pyy) of the averaged spectra; {}{}",
+                info(h),
+                coherence_words(h, a.settings.confidence)
             ))
             .with_data(table("spectra_hires.csv"), "freq_hz, coh_*");
         for cr in &h.cross {
-            fig = fig.with_panel(
-                kinds::coherence_panel(
-                    &h.freq_hz,
-                    &cr.coherence,
-                    &pair_words(cr.x, cr.y),
-                    view_hires,
-                )
-                .titled(pair_words(cr.x, cr.y)),
-            );
+            let mut panel = kinds::coherence_panel(
+                &h.freq_hz,
+                &cr.coherence,
+                &pair_words(cr.x, cr.y),
+                view_hires,
+            )
+            .titled(pair_words(cr.x, cr.y));
+            if let Some(t) = h.info.coherence_threshold {
+                panel = panel.with_hlines([Marker::black_dashed(t, "significance")]);
+            }
+            fig = fig.with_panel(panel);
         }
         spectra = spectra.with_figure(fig.interactive());
+    }
+    if let Some(pos) = &a.position {
+        spectra = spectra.with(Block::Paragraph(format!(
+            "Against the travel instead of time, {} shows the spectra in cycles/mm, where the \
+             balls pass every 2 d_avg at any speed (line at {} cycles/mm).",
+            format_args!("{{fig:{}}}", id("spectra_position")),
+            fmt_sig(pos.line_per_mm, 5)
+        )));
+        spectra = spectra.with_figure(super::position::figure(
+            pos,
+            a.settings.harmonics,
+            id("spectra_position"),
+            table("spectra_position.csv"),
+        ));
     }
     out.push(spectra);
 
@@ -489,6 +508,38 @@ pub fn sections(
     Ok(out)
 }
 
+/// Colour of the PSD confidence bands: a pale blue under the curves.
+const BAND: Rgb = Rgb(160, 190, 225);
+
+/// What the pale lines of an auto-spectrum figure are; empty without a band.
+fn band_words(s: &crate::analysis::Spectra) -> String {
+    s.info.band.map_or(String::new(), |b| {
+        format!(
+            " Pale lines: the {} confidence band of each PSD (chi-square with ν = {} \
+             equivalent degrees of freedom, the segments' overlap and window accounted for; \
+             ×{} to ×{} of the estimate).",
+            fmt_percent(b.confidence),
+            fmt_sig(b.dof, 3),
+            fmt_sig(b.lower_factor, 3),
+            fmt_sig(b.upper_factor, 3)
+        )
+    })
+}
+
+/// What the dashed horizontal line of the coherence figure is.
+fn coherence_words(s: &crate::analysis::Spectra, confidence: f64) -> String {
+    s.info.coherence_threshold.map_or(String::new(), |t| {
+        format!(
+            " The dashed horizontal line at {} is the {} significance level: two unrelated \
+             signals exceed 1 − a^(1/(ν/2 − 1)) with probability a, here a = 1 − c^(1/3) for \
+             the three pairs tested at confidence c, ν = {} equivalent degrees of freedom.",
+            fmt_sig(t, 3),
+            fmt_percent(confidence),
+            fmt_sig(s.info.dof, 3)
+        )
+    })
+}
+
 /// The auto- and cross-spectrum figures of one [`crate::analysis::Spectra`].
 struct SpectrumFigure<'a> {
     spectra: &'a crate::analysis::Spectra,
@@ -524,11 +575,24 @@ impl SpectrumFigure<'_> {
                 format!("freq_hz, {}", columns.join(", ")),
             );
         for (sig, psd) in &s.auto {
-            fig = fig.with_panel(self.panel(
+            let mut panel = self.panel(
                 psd,
                 sig.words(),
                 Axis::log(format!("PSD of {}", sig.words()), unit2(*sig)),
-            ));
+            );
+            if let Some(bounds) = crate::analysis::confidence::band_of(s, psd) {
+                for b in bounds {
+                    let (f, v): (Vec<f64>, Vec<f64>) = s
+                        .freq_hz
+                        .iter()
+                        .zip(b)
+                        .filter(|(f, _)| !self.log_frequency || **f > 0.0)
+                        .map(|(f, v)| (*f, v))
+                        .unzip();
+                    panel = panel.with_series(Series::line("", f, v).with_color(BAND));
+                }
+            }
+            fig = fig.with_panel(panel);
         }
         Some(fig.interactive())
     }

@@ -84,6 +84,7 @@ mod live;
 pub mod model;
 mod page;
 pub mod passage;
+mod position;
 mod prepare;
 mod spec;
 mod text;

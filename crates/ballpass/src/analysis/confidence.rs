@@ -1,0 +1,280 @@
+//! Confidence on spectra: chi-square intervals of the Welch PSDs and the
+//! significance level of the coherence.
+//!
+//! # PSD bands
+//!
+//! A bin of a Welch estimate `P̂(f)` of Gaussian noise whose spectrum
+//! `S(f)` is smooth over the window's bandwidth is distributed as
+//! `S(f) χ²_ν / ν`, with `ν` the equivalent degrees of freedom of the
+//! average of `K` overlapping windowed segments (Welch 1967; Percival &
+//! Walden 1993, Eq. 292b; [`crate::stats::welch_dof`]):
+//!
+//! ```text
+//! h      = w / sqrt(sum w²)
+//! ρ(j)   = (sum_t h[t] h[t + j·step])²          (window overlap correlation)
+//! ν      = 2K / (1 + 2 sum_{j=1}^{K-1} (1 − j/K) ρ(j))
+//! band   = [ν P̂ / χ²_ν(1 − α/2),  ν P̂ / χ²_ν(α/2)],   α = 1 − confidence
+//! ```
+//!
+//! `R` averaged records multiply `ν` by `R`. The DC and Nyquist bins are
+//! real-valued (χ²_1 per segment) and carry `ν/2`. Rectangular segments
+//! without overlap give `ν = 2K`; periodic Hann at 50 % has `ρ(1) = 1/36`
+//! and `ρ(j ≥ 2) = 0`, so `ν = 2K / (1 + (K−1)/(18K))` (→ `1.895 K`).
+//!
+//! MATLAB's `pwelch(..., 'ConfidenceLevel', p)` gives the same interval
+//! form but with `ν = 2K` (its `chi2conf(p, K)`), whatever the window and
+//! overlap; for Hann at 50 % its band is therefore slightly too narrow (ν
+//! about 5 % too large). ballpass accounts for the overlap.
+//!
+//! # Coherence significance
+//!
+//! For two independent Gaussian signals and `n` independent segments the
+//! magnitude-squared coherence estimate has `P(C > c) = (1 − c)^(n−1)`
+//! (Carter 1987, Eq. 39), so the level that noise exceeds with probability
+//! `a` is `1 − a^(1/(n−1))`. With overlapping segments `n` is replaced by
+//! the equivalent number `ν/2`. The analysis tests three pairs at each
+//! harmonic, so each at `a = 1 − confidence^(1/3)` (Šidák): the level drawn
+//! on the coherence plots is the one the coherence table tests against.
+
+use serde::Serialize;
+
+use super::export::{product_token, psd_column};
+use super::{Signal, Spectra};
+use crate::stats::chi2_ppf;
+
+/// A PSD's confidence band as multipliers of the estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PsdBand {
+    /// Two-sided confidence of the band (0.95 = 95 %).
+    pub confidence: f64,
+    /// Equivalent degrees of freedom the band rests on (bins between DC and
+    /// Nyquist; those two carry half).
+    pub dof: f64,
+    /// Lower bound over the estimate, `ν / χ²_ν(1 − α/2)`.
+    pub lower_factor: f64,
+    /// Upper bound over the estimate, `ν / χ²_ν(α/2)`.
+    pub upper_factor: f64,
+}
+
+/// Multipliers `[ν / χ²_ν(1 − α/2), ν / χ²_ν(α/2)]` of a chi-square
+/// confidence interval at `confidence` for an estimate with `nu` degrees of
+/// freedom; `None` unless `nu > 0` and `0 < confidence < 1`.
+///
+/// ```
+/// use ballpass::analysis::confidence::psd_band_factors;
+/// // 20 dof at 95 %: scipy.stats.chi2.ppf([0.975, 0.025], 20) = 34.170, 9.591.
+/// let [lo, hi] = psd_band_factors(20.0, 0.95).unwrap();
+/// assert!((lo - 20.0 / 34.16960690283833).abs() < 1e-12);
+/// assert!((hi - 20.0 / 9.590777392264867).abs() < 1e-12);
+/// ```
+pub fn psd_band_factors(nu: f64, confidence: f64) -> Option<[f64; 2]> {
+    if !(nu > 0.0 && nu.is_finite() && confidence > 0.0 && confidence < 1.0) {
+        return None;
+    }
+    let alpha = 1.0 - confidence;
+    Some([
+        nu / chi2_ppf(1.0 - alpha / 2.0, nu),
+        nu / chi2_ppf(alpha / 2.0, nu),
+    ])
+}
+
+/// The band of a spectrum with `nu` equivalent degrees of freedom.
+pub fn psd_band(nu: f64, confidence: f64) -> Option<PsdBand> {
+    let [lower_factor, upper_factor] = psd_band_factors(nu, confidence)?;
+    Some(PsdBand {
+        confidence,
+        dof: nu,
+        lower_factor,
+        upper_factor,
+    })
+}
+
+/// Coherence that two independent signals exceed with probability `a`
+/// when estimated from `nu` equivalent degrees of freedom (`nu/2`
+/// equivalent segments): `1 − a^(1/(nu/2 − 1))`; `None` with fewer than
+/// two equivalent segments (the coherence is then 1 by construction).
+pub fn coherence_level(nu: f64, a: f64) -> Option<f64> {
+    let n_d = nu / 2.0;
+    (n_d > 1.0 && a > 0.0 && a < 1.0).then(|| 1.0 - a.powf(1.0 / (n_d - 1.0)))
+}
+
+/// The coherence significance level the analysis uses: each of the three
+/// pairs at `a = 1 − confidence^(1/3)` (module docs).
+pub fn coherence_threshold(nu: f64, confidence: f64) -> Option<f64> {
+    coherence_level(nu, 1.0 - confidence.powf(1.0 / 3.0))
+}
+
+/// Fills in a spectrum's band and coherence level once its `dof` is final
+/// (after the repeats are averaged).
+pub(crate) fn finish(s: &mut Spectra, band_confidence: f64, confidence: f64) {
+    s.info.band = psd_band(s.info.dof, band_confidence);
+    s.info.coherence_threshold = coherence_threshold(s.info.dof, confidence);
+}
+
+/// Band multipliers of bin `i` of `n` (DC and an even-`nperseg` Nyquist
+/// bin carry half the degrees of freedom).
+fn factors_for_bin(s: &Spectra, band: &PsdBand, i: usize, n: usize) -> [f64; 2] {
+    let edge = i == 0 || (s.info.nperseg % 2 == 0 && i + 1 == n);
+    if edge {
+        psd_band_factors(band.dof / 2.0, band.confidence).unwrap_or([f64::NAN; 2])
+    } else {
+        [band.lower_factor, band.upper_factor]
+    }
+}
+
+/// The lower and upper band of one auto-spectrum, bin by bin; `None`
+/// without a band.
+pub fn band_of(s: &Spectra, psd: &[f64]) -> Option<[Vec<f64>; 2]> {
+    let band = s.info.band?;
+    let n = psd.len();
+    let (mut lo, mut hi) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for (i, p) in psd.iter().enumerate() {
+        let [a, b] = factors_for_bin(s, &band, i, n);
+        lo.push(a * p);
+        hi.push(b * p);
+    }
+    Some([lo, hi])
+}
+
+/// Column names of a signal's band: `psd_friction_lower_n2_per_hz`,
+/// `psd_friction_upper_n2_per_hz`.
+pub fn band_columns_of(sig: Signal) -> [String; 2] {
+    let unit = product_token(sig, sig);
+    debug_assert!(psd_column(sig).ends_with(&format!("_{unit}_per_hz")));
+    [
+        format!("psd_{}_lower_{unit}_per_hz", sig.name()),
+        format!("psd_{}_upper_{unit}_per_hz", sig.name()),
+    ]
+}
+
+/// The band columns of every auto-spectrum (appended after the spectra's
+/// other columns in the CSV exports).
+pub fn band_columns(s: &Spectra) -> Vec<(String, Vec<f64>)> {
+    let mut out = Vec::new();
+    for (sig, psd) in &s.auto {
+        if let Some([lo, hi]) = band_of(s, psd) {
+            let [nl, nh] = band_columns_of(*sig);
+            out.push((nl, lo));
+            out.push((nh, hi));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::welch_dof;
+
+    fn hann(n: usize) -> Vec<f64> {
+        (0..n)
+            .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos())
+            .collect()
+    }
+
+    /// Analytic equivalent degrees of freedom. Rectangular segments without
+    /// overlap are independent: 2K exactly. Rectangular at 50 %: the
+    /// normalised overlap at one step is 1/2, so ρ(1) = 1/4 and ρ(j ≥ 2) = 0
+    /// (no overlap): ν = 2K / (1 + (1 − 1/K)/2). Periodic Hann at 50 %:
+    /// Σ h[t] h[t + N/2] = 1/6 (Σ w[t] w[t+N/2] = N/16 over Σ w² = 3N/8),
+    /// ρ(1) = 1/36: ν = 2K / (1 + (1 − 1/K)/18), → 1.895 K.
+    #[test]
+    fn edof_known_cases() {
+        let n = 512;
+        let boxcar = vec![1.0; n];
+        let w = hann(n);
+        for k in [1usize, 2, 3, 7, 10, 100] {
+            let kf = k as f64;
+            // Tolerance: the overlap sums are exact rationals up to the
+            // rounding of 512 products, 1e-12 relative.
+            let close = |got: f64, want: f64| (got - want).abs() < 1e-12 * want;
+            assert!(close(welch_dof(&boxcar, n, k), 2.0 * kf), "boxcar K={k}");
+            let want = 2.0 * kf / (1.0 + (1.0 - 1.0 / kf) / 2.0);
+            assert!(
+                close(welch_dof(&boxcar, n / 2, k), want),
+                "boxcar 50 % K={k}"
+            );
+            let want = 2.0 * kf / (1.0 + (1.0 - 1.0 / kf) / 18.0);
+            let got = welch_dof(&w, n / 2, k);
+            assert!(close(got, want), "Hann 50 % K={k}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn band_factors_edges() {
+        assert!(psd_band_factors(0.0, 0.95).is_none());
+        assert!(psd_band_factors(10.0, 1.0).is_none());
+        let [lo, hi] = psd_band_factors(2.0, 0.95).unwrap();
+        // χ²_2 is exponential: quantiles −2 ln(1 − p), so the factors are
+        // 1/−ln(0.025) and 1/−ln(0.975): exact to rounding.
+        assert!((lo - 1.0 / -(0.025f64).ln()).abs() < 1e-12);
+        assert!((hi - 1.0 / -(0.975f64).ln()).abs() < 1e-10);
+    }
+
+    #[test]
+    fn coherence_level_is_carters() {
+        // n = 10 segments, a = 0.05: 1 − 0.05^(1/9).
+        let c = coherence_level(20.0, 0.05).unwrap();
+        assert!((c - (1.0 - 0.05f64.powf(1.0 / 9.0))).abs() < 1e-15);
+        assert!(coherence_level(2.0, 0.05).is_none());
+    }
+
+    /// Seeded Monte-Carlo coverage: Welch (Hann, 256-sample segments, 50 %
+    /// overlap, 15 segments: ν = 28.5) of white noise and of AR(1) noise
+    /// `x[n] = 0.6 x[n−1] + e[n]` (true one-sided PSD
+    /// `2 σ² / (fs |1 − 0.6 e^{−2πif/fs}|²)`); the 95 % band must cover the
+    /// true PSD in 95 % of bins. Every 3rd bin of each of 400 records is
+    /// scored (Hann bins 3 apart share no window overlap in frequency beyond
+    /// ρ = 1/36², so they are nearly independent): 400 × 42 = 16 800
+    /// scores, and the exact 99.9 % binomial interval of the observed rate
+    /// must hold 0.95 (its half-width is about ±0.0055).
+    #[test]
+    fn bands_cover_the_true_psd_at_their_level() {
+        use crate::sim::rng::Rng;
+        use crate::stats::binomial_interval;
+        use ballpass_dsp::{Welch, WelchSettings, Window};
+        let (nperseg, k) = (256usize, 15usize);
+        let n = nperseg / 2 * (k + 1);
+        let fs = 100.0;
+        let mut welch = Welch::new(WelchSettings {
+            window: Window::Hann,
+            nperseg,
+            ..WelchSettings::default()
+        })
+        .unwrap();
+        let nu = welch_dof(&hann(nperseg), nperseg / 2, k);
+        let [lo_f, hi_f] = psd_band_factors(nu, 0.95).unwrap();
+        for (name, phi) in [("white", 0.0), ("AR(1) 0.6", 0.6)] {
+            let mut rng = Rng::new(20_251_124);
+            let (mut hits, mut total) = (0usize, 0usize);
+            for _ in 0..400 {
+                let mut prev = 0.0;
+                // Burn-in of 200 samples for the AR(1) start-up.
+                let x: Vec<f64> = (0..n + 200)
+                    .map(|_| {
+                        prev = phi * prev + rng.normal();
+                        prev
+                    })
+                    .skip(200)
+                    .collect();
+                let p = welch.psd(&x, fs).unwrap();
+                assert_eq!(p.n_segments, k);
+                for i in (3..p.freq_hz.len() - 3).step_by(3) {
+                    let th = std::f64::consts::TAU * p.freq_hz[i] / fs;
+                    let d = (1.0 - phi * th.cos()).powi(2) + (phi * th.sin()).powi(2);
+                    let truth = 2.0 / (fs * d);
+                    total += 1;
+                    if lo_f * p.pxx[i] <= truth && truth <= hi_f * p.pxx[i] {
+                        hits += 1;
+                    }
+                }
+            }
+            let [a, b] = binomial_interval(hits, total, 0.999);
+            assert!(
+                a <= 0.95 && 0.95 <= b,
+                "{name}: coverage {hits}/{total} = {:.4}, 99.9 % interval [{a:.4}, {b:.4}]",
+                hits as f64 / total as f64
+            );
+        }
+    }
+}
