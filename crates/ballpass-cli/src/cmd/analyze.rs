@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight::{self, VelocitySource};
+use ballpass::analysis::MaxLag;
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
 };
@@ -112,6 +113,11 @@ pub struct AnalyzeArgs {
     /// `off` leaves the friction as recorded (a DC-coupled sensor).
     #[arg(long, value_name = "S|auto|off", value_parser = parse_load_cell)]
     load_cell_tau: Option<LoadCellCorrection>,
+    /// Lags of the correlations (and correlations.csv), in seconds, or
+    /// `full` for every lag of the record; `auto` (default) is 100
+    /// predicted ball periods and at least 60 s.
+    #[arg(long, value_name = "S|auto|full", value_parser = parse_max_lag)]
+    max_lag: Option<MaxLag>,
     #[command(flatten)]
     report: ReportArgs,
     /// Print analysis.json to stdout instead of the summary.
@@ -145,6 +151,9 @@ impl AnalyzeArgs {
         }
         if let Some(v) = self.load_cell_tau {
             s.load_cell = v;
+        }
+        if let Some(v) = self.max_lag {
+            s.max_lag = v;
         }
         if self.no_lowpass {
             s.lowpass_hz = None;
@@ -371,6 +380,20 @@ impl Ctx<'_> {
             a.report.write(&report, dir)?;
         }
         Ok((analysis, checked.velocity_source))
+    }
+}
+
+/// `--max-lag`: seconds, `auto` or `full`.
+fn parse_max_lag(v: &str) -> std::result::Result<MaxLag, String> {
+    match v {
+        "auto" => Ok(MaxLag::Auto),
+        "full" => Ok(MaxLag::Full),
+        _ => match v.parse::<f64>() {
+            Ok(t) if t.is_finite() && t > 0.0 => Ok(MaxLag::Seconds(t)),
+            _ => Err(format!(
+                "expected a lag in seconds (> 0), `auto` or `full`, got `{v}`"
+            )),
+        },
     }
 }
 
