@@ -227,6 +227,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     let bearing_name = opts.bearing.clone().unwrap_or_default();
     let geometry = opts.geometry.expect("options() resolves the bearing");
     let out = output::open_dir(&a.out, "analyze")?;
+    let steps = output::steps("reading the records");
     let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
     let window = a.load.window.parsed()?;
     let ctx = Ctx {
@@ -234,6 +235,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         settings: &settings,
         geometry,
         window,
+        steps: steps.clone(),
     };
     let mut done = Vec::new();
     if a.segment.segment {
@@ -276,6 +278,9 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         let analysis = ctx.analyze(recs, stated, out.path())?;
         done.push((None, analysis));
     }
+    if let Some(s) = steps {
+        s.finish_and_clear();
+    }
     let dir = output::commit(out)?;
     let mut out = output::stdout();
     if a.json {
@@ -308,9 +313,17 @@ struct Ctx<'a> {
     settings: &'a AnalyzeSettings,
     geometry: ballpass::bearing::Geometry,
     window: Option<Window>,
+    /// The step shown on a terminal.
+    steps: Option<indicatif::ProgressBar>,
 }
 
 impl Ctx<'_> {
+    fn step(&self, what: &str) {
+        if let Some(s) = &self.steps {
+            s.set_message(what.to_string());
+        }
+    }
+
     /// Checks, analyses and writes one set of repeats into `dir` (staged).
     fn analyze(
         &self,
@@ -323,11 +336,22 @@ impl Ctx<'_> {
         records::check_memory(
             &checked.recordings,
             !a.report.no_report,
+            self.settings.max_lag,
             "analyse a part with --window T0:T1 (and --no-report saves about half)",
         )?;
         let prediction = self
             .geometry
             .predict(checked.velocity_mm_s, self.settings.harmonics)?;
+        self.step(&format!(
+            "analysing {} record(s) of {} samples",
+            checked.recordings.len(),
+            checked
+                .recordings
+                .iter()
+                .map(Recording::len)
+                .max()
+                .unwrap_or(0)
+        ));
         let mut analysis = analysis::analyze(&checked.recordings, &prediction, self.settings)?;
         analysis
             .warnings
@@ -349,7 +373,7 @@ impl Ctx<'_> {
             ),
         ));
         analysis.method_notes.extend(checked.notes.iter().cloned());
-        {
+        let print = || -> std::io::Result<()> {
             let mut err = std::io::stderr().lock();
             for n in &checked.notes {
                 writeln!(err, "note: {}", text::line(n))?;
@@ -357,9 +381,16 @@ impl Ctx<'_> {
             for w in &analysis.warnings {
                 writeln!(err, "warning: {}", text::line(w))?;
             }
+            Ok(())
+        };
+        match &self.steps {
+            Some(s) => s.suspend(print)?,
+            None => print()?,
         }
+        self.step("writing the tables");
         analysis::write_outputs(&analysis, dir)?;
         if !a.report.no_report {
+            self.step("drawing the report");
             let links = ballpass::report::analysis::AnalysisLinks {
                 tables_dir: String::new(),
                 recording: checked
