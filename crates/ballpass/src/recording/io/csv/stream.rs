@@ -179,9 +179,15 @@ mod tests {
     use super::*;
     use crate::recording::io::parse;
 
-    fn write(name: &str, text: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("ballpass-stream-{}", std::process::id()));
+    /// A scratch folder of its own per test (they run in parallel).
+    fn scratch(test: &str) -> std::path::PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("ballpass-stream-{test}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();
         p
@@ -206,13 +212,14 @@ mod tests {
     /// reader's, value for value and line for line.
     #[test]
     fn pieces_read_what_the_whole_file_reader_reads() {
+        let dir = scratch("pieces");
         let opts = LoadOptions::default();
         for (name, text) in [
             ("plain.csv", body(20_000)),
             ("no_final_newline.csv", body(5_000).trim_end().to_string()),
             ("units.csv", body(3_000).replacen("\n", "\ns,N,mm,V\n", 1)),
         ] {
-            let p = write(name, &text);
+            let p = write(&dir, name, &text);
             let whole = parse(&p, text.as_bytes(), &opts).unwrap();
             for piece in [4096, 5000, 1 << 16] {
                 let got = parse_in_pieces(&p, Format::Csv, &opts, 0, 3000, piece)
@@ -228,11 +235,13 @@ mod tests {
             }
             std::fs::remove_file(&p).unwrap();
         }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// What the fast path does not take goes back to the whole-file reader.
     #[test]
     fn files_the_pieces_do_not_take_are_declined() {
+        let dir = scratch("declined");
         let opts = LoadOptions::default();
         let base = body(2_000);
         for (name, text) in [
@@ -241,11 +250,12 @@ mod tests {
             ("bad.csv", base.replacen("\n0.5,", "\n0.5,x", 1)),
             ("crlf.csv", base.replace('\n', "\r\n")),
         ] {
-            let p = write(name, &text);
+            let p = write(&dir, name, &text);
             let min = if name == "short.csv" { 1 << 30 } else { 0 };
             let got = parse_in_pieces(&p, Format::Csv, &opts, min, 3000, 4096).unwrap();
             assert!(got.is_none(), "{name} should be declined");
             std::fs::remove_file(&p).unwrap();
         }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
