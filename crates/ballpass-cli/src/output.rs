@@ -60,6 +60,24 @@ impl Drop for Stdout {
     }
 }
 
+/// A spinner with the elapsed time and a message naming the current step,
+/// on a terminal (long records take a while per step); `None` when stderr
+/// is a file or a pipe. Steps are announced with `set_message`; the
+/// spinner is cleared with `finish_and_clear` or when dropped.
+pub fn steps(first: &str) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} {msg}  {elapsed}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+        );
+        b.set_message(first.to_string());
+        b.enable_steady_tick(std::time::Duration::from_millis(200));
+        b
+    })
+}
+
 /// A progress bar over `len` items named `what` on a terminal; `None` when
 /// stderr is a file or a pipe (logs stay clean).
 pub fn progress(len: usize, what: &str) -> Option<indicatif::ProgressBar> {

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use ballpass::analysis::preflight::PreflightSettings;
+use ballpass::analysis::MaxLag;
 use ballpass::recording::segment::{self, Plateau, SegmentSettings, Window};
 use ballpass::recording::{LoadOptions, Recording};
 use clap::Args;
@@ -186,9 +187,19 @@ pub fn group_by_speed(parts: Vec<Recording>, tolerance: f64) -> Vec<(f64, Vec<Re
 /// 0.48–0.56 kB without; each further repeat 0.1–0.23 kB per sample. The
 /// constants below round these up by about 10 %, so a refusal means the
 /// run would not have fitted.
-pub fn analysis_bytes(samples: usize, records: usize, report: bool) -> f64 {
-    let first = if report { 1100.0 } else { 620.0 };
-    let further = 250.0;
+///
+/// With the correlations over a lag window shorter than the record
+/// (`windowed`), measured the same way on a 2-hour record (7.2 million
+/// samples, 2026-11-24): 104 bytes per sample without the report, 135 with
+/// it; the constants round these up by about 15 %, and a further repeat is
+/// taken at 100 bytes per sample (its recording, signals and spectra).
+pub fn analysis_bytes(samples: usize, records: usize, report: bool, windowed: bool) -> f64 {
+    let (first, further) = match (windowed, report) {
+        (false, true) => (1100.0, 250.0),
+        (false, false) => (620.0, 250.0),
+        (true, true) => (160.0, 100.0),
+        (true, false) => (120.0, 100.0),
+    };
     samples as f64 * (first + further * records.saturating_sub(1) as f64)
 }
 
@@ -243,9 +254,19 @@ fn system_available_bytes() -> Option<f64> {
 }
 
 /// Refuses, before any work, an analysis that would not fit in memory.
-pub fn check_memory(recs: &[Recording], report: bool, hint: &str) -> Result<()> {
+///
+/// `max_lag` is the correlations' lag window: a window shorter than the
+/// record needs far less (see [`analysis_bytes`]); [`MaxLag::Auto`] is
+/// taken at its shortest, [`MaxLag::AUTO_MIN_S`].
+pub fn check_memory(recs: &[Recording], report: bool, max_lag: MaxLag, hint: &str) -> Result<()> {
     let samples = recs.iter().map(Recording::len).max().unwrap_or(0);
-    let need = analysis_bytes(samples, recs.len(), report);
+    let fs = recs.first().map_or(1.0, Recording::fs_hz);
+    let windowed = match max_lag {
+        MaxLag::Full => false,
+        MaxLag::Auto => (MaxLag::AUTO_MIN_S * fs) < samples.saturating_sub(1) as f64,
+        MaxLag::Seconds(s) => (s * fs) < samples.saturating_sub(1) as f64,
+    };
+    let need = analysis_bytes(samples, recs.len(), report, windowed);
     if let Some(have) = available_bytes()? {
         if need > have {
             let gb = |b: f64| b / 1e9;

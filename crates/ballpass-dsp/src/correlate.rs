@@ -187,7 +187,7 @@ fn transform_into(
 /// order, so each accumulator adds at most 128 terms. The `coeff` results
 /// are checked against NumPy by `correlate_matches_numpy_full` (1e-12 of
 /// the peak).
-fn energy(x: &[f64]) -> f64 {
+pub(crate) fn energy(x: &[f64]) -> f64 {
     crate::simd::widest(
         #[inline(always)]
         || {

@@ -2,6 +2,7 @@
 
 mod biquad;
 pub mod correlate;
+pub mod correlate_window;
 pub mod decimate;
 pub mod detrend;
 pub mod error;
@@ -22,6 +23,7 @@ pub mod zoom;
 pub use correlate::{
     correlate, correlation_lags, CorrelateSettings, Correlation, Correlator, Normalization,
 };
+pub use correlate_window::correlate_pairs_window;
 pub use decimate::{decimate, DecimateSettings, Decimator};
 pub use detrend::{detrend, detrend_in_place, DetrendType};
 pub use error::{check_finite, invalid, DspError, Result};

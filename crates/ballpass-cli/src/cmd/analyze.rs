@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight::{self, VelocitySource};
+use ballpass::analysis::MaxLag;
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
 };
@@ -117,6 +118,11 @@ pub struct AnalyzeArgs {
     /// `off` leaves the friction as recorded (a DC-coupled sensor).
     #[arg(long, value_name = "S|auto|off", value_parser = parse_load_cell)]
     load_cell_tau: Option<LoadCellCorrection>,
+    /// Lags of the correlations (and correlations.csv), in seconds, or
+    /// `full` for every lag of the record; `auto` (default) is 100
+    /// predicted ball periods and at least 60 s.
+    #[arg(long, value_name = "S|auto|full", value_parser = parse_max_lag)]
+    max_lag: Option<MaxLag>,
     #[command(flatten)]
     report: ReportArgs,
     /// Print analysis.json to stdout instead of the summary.
@@ -150,6 +156,9 @@ impl AnalyzeArgs {
         }
         if let Some(v) = self.load_cell_tau {
             s.load_cell = v;
+        }
+        if let Some(v) = self.max_lag {
+            s.max_lag = v;
         }
         if self.no_lowpass {
             s.lowpass_hz = None;
@@ -226,6 +235,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     let bearing_name = opts.bearing.clone().unwrap_or_default();
     let geometry = opts.geometry.expect("options() resolves the bearing");
     let out = output::open_dir(&a.out, "analyze")?;
+    let steps = output::steps("reading the records");
     let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
     let window = a.load.window.parsed()?;
     let ctx = Ctx {
@@ -233,6 +243,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         settings: &settings,
         geometry,
         window,
+        steps: steps.clone(),
     };
     let mut done = Vec::new();
     if a.segment.segment {
@@ -275,6 +286,9 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         let analysis = ctx.analyze(recs, stated, out.path())?;
         done.push((None, analysis));
     }
+    if let Some(s) = steps {
+        s.finish_and_clear();
+    }
     let dir = output::commit(out)?;
     let mut out = output::stdout();
     if a.json {
@@ -307,9 +321,17 @@ struct Ctx<'a> {
     settings: &'a AnalyzeSettings,
     geometry: ballpass::bearing::Geometry,
     window: Option<Window>,
+    /// The step shown on a terminal.
+    steps: Option<indicatif::ProgressBar>,
 }
 
 impl Ctx<'_> {
+    fn step(&self, what: &str) {
+        if let Some(s) = &self.steps {
+            s.set_message(what.to_string());
+        }
+    }
+
     /// Checks, analyses and writes one set of repeats into `dir` (staged).
     fn analyze(
         &self,
@@ -322,11 +344,22 @@ impl Ctx<'_> {
         records::check_memory(
             &checked.recordings,
             !a.report.no_report,
+            self.settings.max_lag,
             "analyse a part with --window T0:T1 (and --no-report saves about half)",
         )?;
         let prediction = self
             .geometry
             .predict(checked.velocity_mm_s, self.settings.harmonics)?;
+        self.step(&format!(
+            "analysing {} record(s) of {} samples",
+            checked.recordings.len(),
+            checked
+                .recordings
+                .iter()
+                .map(Recording::len)
+                .max()
+                .unwrap_or(0)
+        ));
         let mut analysis = analysis::analyze(&checked.recordings, &prediction, self.settings)?;
         analysis
             .warnings
@@ -348,7 +381,7 @@ impl Ctx<'_> {
             ),
         ));
         analysis.method_notes.extend(checked.notes.iter().cloned());
-        {
+        let print = || -> std::io::Result<()> {
             let mut err = std::io::stderr().lock();
             for n in &checked.notes {
                 writeln!(err, "note: {}", text::line(n))?;
@@ -356,9 +389,16 @@ impl Ctx<'_> {
             for w in &analysis.warnings {
                 writeln!(err, "warning: {}", text::line(w))?;
             }
+            Ok(())
+        };
+        match &self.steps {
+            Some(s) => s.suspend(print)?,
+            None => print()?,
         }
+        self.step("writing the tables");
         analysis::write_outputs(&analysis, dir)?;
         if !a.report.no_report {
+            self.step("drawing the report");
             let links = ballpass::report::analysis::AnalysisLinks {
                 tables_dir: String::new(),
                 recording: checked
@@ -379,6 +419,20 @@ impl Ctx<'_> {
             a.report.write(&report, dir)?;
         }
         Ok((analysis, checked.velocity_source))
+    }
+}
+
+/// `--max-lag`: seconds, `auto` or `full`.
+fn parse_max_lag(v: &str) -> std::result::Result<MaxLag, String> {
+    match v {
+        "auto" => Ok(MaxLag::Auto),
+        "full" => Ok(MaxLag::Full),
+        _ => match v.parse::<f64>() {
+            Ok(t) if t.is_finite() && t > 0.0 => Ok(MaxLag::Seconds(t)),
+            _ => Err(format!(
+                "expected a lag in seconds (> 0), `auto` or `full`, got `{v}`"
+            )),
+        },
     }
 }
 

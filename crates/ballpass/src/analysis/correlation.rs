@@ -36,7 +36,10 @@ use crate::stats::parabolic_peak;
 pub struct Correlations {
     /// Sampling rate, Hz.
     pub fs_hz: f64,
-    /// Lags, samples: `-(N-1) ..= N-1`.
+    /// Samples per record correlated, `N`.
+    pub samples: usize,
+    /// Lags, samples: `-L ..= L`, with `L = N - 1` for the full range (see
+    /// [`super::MaxLag`]).
     pub lags: Vec<i64>,
     /// Lags, s: `lags / fs`.
     pub lag_s: Vec<f64>,
@@ -66,6 +69,46 @@ impl Correlations {
     pub fn zero_index(&self) -> usize {
         self.lags.iter().position(|&m| m == 0).unwrap_or(0)
     }
+
+    /// Largest lag held, samples (`L`).
+    pub fn max_lag_samples(&self) -> usize {
+        self.lags.last().map_or(0, |&m| m.unsigned_abs() as usize)
+    }
+
+    /// Whether every lag of the record is held (`L = N - 1`).
+    pub fn is_full_range(&self) -> bool {
+        self.max_lag_samples() + 1 >= self.samples
+    }
+}
+
+/// The lag window of the correlations, as `analysis.json` states it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CorrelationWindow {
+    /// The setting (`auto`, `full` or `{"seconds": s}`).
+    pub setting: super::MaxLag,
+    /// Largest lag held, s (`L / fs`).
+    pub max_lag_s: f64,
+    /// Largest lag held, samples (`L`).
+    pub max_lag_samples: usize,
+    /// Predicted ball periods within the window (`L / fs / tau_c`).
+    pub max_lag_periods: f64,
+    /// Whether the window is the record's full range (`L = N - 1`).
+    pub full_range: bool,
+}
+
+impl CorrelationWindow {
+    /// The window `corr` holds, for the predicted period `tau_c_s`.
+    pub fn of(corr: &Correlations, setting: super::MaxLag, tau_c_s: f64) -> Self {
+        let l = corr.max_lag_samples();
+        let s = l as f64 / corr.fs_hz;
+        CorrelationWindow {
+            setting,
+            max_lag_s: s,
+            max_lag_samples: l,
+            max_lag_periods: s / tau_c_s,
+            full_range: corr.is_full_range(),
+        }
+    }
 }
 
 /// The `(x, y)` pairs present for the given signals, in column order.
@@ -79,12 +122,15 @@ pub(crate) fn pairs_for(signals: &[Signal]) -> Vec<(Signal, Signal)> {
     out
 }
 
-/// The six (or fewer) correlations of one prepared record; each signal is
-/// transformed once.
+/// The six (or fewer) correlations of one prepared record over lags
+/// `-max_lag ..= max_lag` samples; each signal is transformed once. The full
+/// range (`max_lag >= N - 1`) is one whole-record transform; a shorter window
+/// is computed block by block ([`ballpass_dsp::correlate_pairs_window`]).
 pub(crate) fn compute(
     p: &Prepared,
     correlator: &mut Correlator,
     settings: &AnalyzeSettings,
+    max_lag: usize,
 ) -> Result<Correlations> {
     debug_assert_eq!(
         correlator.settings(),
@@ -97,9 +143,18 @@ pub(crate) fn compute(
     let idx = |s: Signal| signals.iter().position(|&k| k == s).expect("present");
     let index_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(x, y)| (idx(x), idx(y))).collect();
     let inputs: Vec<&[f64]> = p.signals.iter().map(|(_, v)| v.as_slice()).collect();
-    let mut out = correlator
-        .correlate_pairs(&inputs, &index_pairs)
-        .map_err(|e| Error::dsp("correlations", e))?;
+    let n = inputs.first().map_or(0, |s| s.len());
+    let mut out = if max_lag + 1 >= n {
+        correlator.correlate_pairs(&inputs, &index_pairs)
+    } else {
+        ballpass_dsp::correlate_pairs_window(
+            &inputs,
+            &index_pairs,
+            max_lag,
+            settings.corr_norm.to_dsp(),
+        )
+    }
+    .map_err(|e| Error::dsp("correlations", e))?;
     // Every series has the same lags; keep the first one's.
     let lags = out
         .first_mut()
@@ -108,6 +163,7 @@ pub(crate) fn compute(
     let lag_s = lags.iter().map(|&m| m as f64 / p.fs_hz).collect();
     Ok(Correlations {
         fs_hz: p.fs_hz,
+        samples: n,
         lags,
         lag_s,
         series: pairs
@@ -175,9 +231,13 @@ pub(crate) fn signal_period(
     let r = corr.get(signal, signal)?;
     let fs = corr.fs_hz;
     let zero = corr.zero_index();
-    let n = zero + 1; // record length
-    let half_record_s = (n as f64 / 2.0) / fs;
+    let half_record_s = (corr.samples as f64 / 2.0) / fs;
     let mut k_max = ((half_record_s / tau_pred_s).floor() as usize).max(1);
+    if !corr.is_full_range() {
+        // Only the windows that fit in the lag window.
+        let in_window = corr.max_lag_samples() as f64 / fs / tau_pred_s - settings.period_window;
+        k_max = k_max.min((in_window.floor().max(1.0)) as usize);
+    }
     if let Some(m) = settings.max_period_peaks {
         k_max = k_max.min(m);
     }
@@ -281,6 +341,7 @@ mod tests {
         let lags = r[0].lags.clone();
         Correlations {
             fs_hz: fs,
+            samples: x.len(),
             lag_s: lags.iter().map(|&m| m as f64 / fs).collect(),
             lags,
             series: vec![

@@ -55,7 +55,7 @@ pub mod repeats;
 pub mod spectra;
 mod train_fit;
 
-pub use correlation::{Correlations, MeasuredPeriod, SignalPeriod};
+pub use correlation::{CorrelationWindow, Correlations, MeasuredPeriod, SignalPeriod};
 pub use export::{write_outputs, OutputPaths};
 pub use passage::{detect_passages, PassageAnalysis, PassageSettings};
 pub use passage_table::{PassageFailure, PassageOutput, PassageRow};
@@ -269,6 +269,57 @@ pub struct AnalyzeSettings {
     /// Load-cell DC restoration (see [`load_cell`]). Default: estimate the
     /// discharge from each record and undo it where identified.
     pub load_cell: load_cell::LoadCellCorrection,
+    /// Lags the correlations are computed and exported for (see
+    /// [`MaxLag`]). Default: [`MaxLag::Auto`].
+    pub max_lag: MaxLag,
+}
+
+/// The lag window of the correlations: `-L ..= L`.
+///
+/// A record of `N` samples has lags out to `N - 1`, but the period and the
+/// phases only use the peaks within a few hundred ball periods of zero lag,
+/// and on an hour-long record the full range is millions of lags per series
+/// (gigabytes of memory and of `correlations.csv`). Within the window the
+/// values are those of the whole-record correlation (same sums, same
+/// normalisation with the whole `N`), computed block by block
+/// ([`ballpass_dsp::correlate_pairs_window`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaxLag {
+    /// [`MaxLag::AUTO_PERIODS`] predicted ball periods, and never less
+    /// than [`MaxLag::AUTO_MIN_S`] (so records up to a minute keep every
+    /// lag); the full range when the record is shorter.
+    #[default]
+    Auto,
+    /// Lags out to this many seconds (the full range when the record is
+    /// shorter).
+    Seconds(f64),
+    /// Every lag, `-(N-1) ..= N-1`.
+    Full,
+}
+
+impl MaxLag {
+    /// Ball periods in the [`MaxLag::Auto`] window.
+    pub const AUTO_PERIODS: f64 = 100.0;
+    /// Shortest [`MaxLag::Auto`] window, s.
+    pub const AUTO_MIN_S: f64 = 60.0;
+
+    /// The largest lag `L` in samples for a record of `n` samples at
+    /// `fs_hz` with predicted period `tau_c_s`: at most `n - 1`.
+    pub fn samples(self, n: usize, fs_hz: f64, tau_c_s: f64) -> usize {
+        let full = n.saturating_sub(1);
+        let seconds = match self {
+            MaxLag::Full => return full,
+            MaxLag::Auto => (Self::AUTO_PERIODS * tau_c_s).max(Self::AUTO_MIN_S),
+            MaxLag::Seconds(s) => s,
+        };
+        let l = (seconds * fs_hz).round();
+        if l >= full as f64 {
+            full
+        } else {
+            l as usize
+        }
+    }
 }
 
 impl Default for AnalyzeSettings {
@@ -294,6 +345,7 @@ impl Default for AnalyzeSettings {
             phase_tolerance_deg: 20.0,
             encoder_resolution_um: 0.1,
             load_cell: load_cell::LoadCellCorrection::Auto,
+            max_lag: MaxLag::Auto,
         }
     }
 }
@@ -382,6 +434,14 @@ impl AnalyzeSettings {
             ));
         }
         self.load_cell.validate()?;
+        if let MaxLag::Seconds(s) = self.max_lag {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(Error::setting(
+                    "max-lag",
+                    format!("must be a positive number of s or 'full', got {s}"),
+                ));
+            }
+        }
         if self.hires_q == Some(0) {
             return Err(Error::setting(
                 "hires q",
@@ -491,6 +551,8 @@ pub struct Analysis {
     pub spectrum_hires: SpectrumInfo,
     /// Parameters of the full-range spectrum of the unfiltered signals.
     pub spectrum_unfiltered: SpectrumInfo,
+    /// The lags the correlations hold (and `correlations.csv` exports).
+    pub correlation_window: CorrelationWindow,
     /// Period measured from the autocorrelations.
     pub measured_period: MeasuredPeriod,
     /// Phases of the cross pairs.

@@ -487,6 +487,18 @@ pub(crate) fn run(
             ),
         });
     }
+    let max_lag = settings.max_lag.samples(n, fs, pred.tau_c_s);
+    if max_lag + 1 < n && (max_lag as f64 / fs) < 2.0 * pred.tau_c_s {
+        return Err(Error::setting(
+            "max-lag",
+            format!(
+                "a lag window of {:.3} s holds fewer than 2 ball-pass periods (tau_c = {:.4} s); \
+                 the period and the phases need at least 2",
+                max_lag as f64 / fs,
+                pred.tau_c_s
+            ),
+        ));
+    }
     if periods < 4.0 {
         warnings.push(format!(
             "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
@@ -596,6 +608,9 @@ pub(crate) fn run(
         p.signals.retain(|(s, _)| signals.contains(s));
         p.unfiltered.retain(|(s, _)| signals.contains(s));
         let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
+        // Nothing else reads the unfiltered signals: on a long record they
+        // are three record-length copies.
+        p.unfiltered = Vec::new();
         let (c, (f, h)) = rayon::join(
             || {
                 with_correlator(
@@ -603,7 +618,7 @@ pub(crate) fn run(
                         normalization: settings.corr_norm.to_dsp(),
                     },
                     n,
-                    |c| correlation::compute(&p, c, settings),
+                    |c| correlation::compute(&p, c, settings, max_lag),
                 )
             },
             || {
@@ -615,23 +630,30 @@ pub(crate) fn run(
         );
         Ok((p, c?, f?, h?, u))
     };
-    let (per_record, passages) = rayon::join(
-        || {
-            recs.par_iter()
-                .zip(restored.par_iter())
-                .map(one)
-                .collect::<Vec<_>>()
-                .into_iter()
-                .collect::<Result<Vec<_>>>()
-        },
-        || {
-            if with_passages {
-                super::passage_summaries(recs, pred)
-            } else {
-                Vec::new()
-            }
-        },
-    );
+    let analyse = || {
+        recs.par_iter()
+            .zip(restored.par_iter())
+            .map(one)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<Vec<_>>>()
+    };
+    let passages = || {
+        if with_passages {
+            super::passage_summaries(recs, pred)
+        } else {
+            Vec::new()
+        }
+    };
+    // Side by side, except on long records: there each holds several
+    // record-length buffers, so the passages are detected at the end, after
+    // the prepared signals are dropped (same results, less memory).
+    let (per_record, early_passages) = if n <= SIDE_BY_SIDE_MAX_SAMPLES {
+        let (a, p) = rayon::join(analyse, passages);
+        (a, Some(p))
+    } else {
+        (analyse(), None)
+    };
     let mut prepared = Vec::with_capacity(recs.len());
     let mut corrs = Vec::with_capacity(recs.len());
     let mut fulls = Vec::with_capacity(recs.len());
@@ -692,6 +714,19 @@ pub(crate) fn run(
     } else {
         None
     };
+    let velocity_error = VelocityErrorStats::mean_of(
+        &prepared
+            .iter()
+            .filter_map(|p| p.velocity_error.as_ref())
+            .collect::<Vec<_>>(),
+    );
+    let passages = match early_passages {
+        Some(p) => p,
+        None => {
+            drop(prepared);
+            passages()
+        }
+    };
     notes.push(format!(
         "high-resolution spectrum: {} with q = {}, fs = {} Hz, {}-sample segments, {} overlap, \
          resolution {:.5} Hz",
@@ -710,6 +745,17 @@ pub(crate) fn run(
          the origin"
             .into(),
     );
+    let correlation_window = super::CorrelationWindow::of(&corr, settings.max_lag, pred.tau_c_s);
+    if !correlation_window.full_range {
+        notes.push(format!(
+            "correlations within ±{:.3} s ({:.1} predicted ball periods; the record spans ±{:.3} \
+             s): the values there are the whole-record correlation's, computed block by block; the \
+             period uses the peaks within the window",
+            correlation_window.max_lag_s,
+            correlation_window.max_lag_periods,
+            (n - 1) as f64 / fs
+        ));
+    }
     notes.push(
         "correlation convention Eq. 7.1: R_xy[m] = sum x[n+m] y[n]; a peak at negative lag means y \
          lags x. Phases at f_c: cross spectrum conj(X) Y at the measured f_c (segments of three \
@@ -812,16 +858,12 @@ pub(crate) fn run(
         spectrum_full: full.info.clone(),
         spectrum_hires: hr.info.clone(),
         spectrum_unfiltered: unfiltered.info.clone(),
+        correlation_window,
         measured_period: findings.measured,
         phases: findings.phases,
         harmonics: findings.harmonics,
         coherence: findings.coherence,
-        velocity_error: VelocityErrorStats::mean_of(
-            &prepared
-                .iter()
-                .filter_map(|p| p.velocity_error.as_ref())
-                .collect::<Vec<_>>(),
-        ),
+        velocity_error,
         load_cell,
         stage,
         stage_spectra,
@@ -836,6 +878,10 @@ pub(crate) fn run(
         position,
     })
 }
+
+/// Longest record whose analysis and passage detection run side by side
+/// (2^20 samples, 17 minutes at 1 kHz).
+const SIDE_BY_SIDE_MAX_SAMPLES: usize = 1 << 20;
 
 thread_local! {
     /// The correlator a worker thread used last, kept for its next record:

@@ -297,17 +297,23 @@ pub fn sections(
             CorrNorm::Coeff => ("R (normalised)".to_string(), String::new()),
             _ => ("R".to_string(), product_unit(*x, *y)),
         };
+        let mut fig = kinds::correlation(
+            &id(&format!("corr_{name}")),
+            &title,
+            &c.lag_s,
+            v,
+            Axis::linear(label, unit),
+            Some(tau),
+            3.0,
+        );
+        if !c.is_full_range() {
+            fig.panels[0].title = format!(
+                "(a) lags within ±{} s (the lag window, --max-lag)",
+                kinds::fmt_sig(c.max_lag_samples() as f64 / c.fs_hz, 4)
+            );
+        }
         corr = corr.with_figure(
-            kinds::correlation(
-                &id(&format!("corr_{name}")),
-                &title,
-                &c.lag_s,
-                v,
-                Axis::linear(label, unit),
-                Some(tau),
-                3.0,
-            )
-            .with_caption(format!(
+            fig.with_caption(format!(
                 "Averaged over {n_rec} record{}; (b) within ±3 τc.",
                 if n_rec == 1 { "" } else { "s" }
             ))

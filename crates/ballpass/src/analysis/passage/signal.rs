@@ -102,6 +102,12 @@ pub(super) fn gaussian_kernel(sigma: f64, n: usize) -> (usize, Vec<f64>) {
     (half, k)
 }
 
+/// Longest record smoothed with one whole-record FFT (2^20 samples, 17 min
+/// at 1 kHz); longer ones go in blocks of [`FFT_BLOCK`] outputs.
+pub(super) const FFT_WHOLE_MAX: usize = 1 << 20;
+/// Outputs per block of a long record's FFT smoothing.
+pub(super) const FFT_BLOCK: usize = 1 << 16;
+
 /// Convolution with a unit-area Gaussian of `sigma` samples (truncated at
 /// 4σ), with the signal mirrored at both ends.
 pub(super) fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
@@ -128,11 +134,26 @@ pub(super) fn gaussian_smooth(x: &[f64], sigma: f64) -> Vec<f64> {
         // A long kernel (slow tracking: σ_k = τ_c/200 is 40 samples at
         // 1 mm/s and 1 kHz, 325 taps) by FFT: the mirrored signal
         // correlated with the symmetric kernel, whose lag `i` is output `i`.
-        let padded: Vec<f64> = (0..n + 2 * half)
-            .map(|m| at(m as isize - half as isize))
-            .collect();
-        if let Ok(c) = ballpass_dsp::correlate(&padded, &k, ballpass_dsp::Normalization::None) {
-            return c.values[k.len() - 1..k.len() - 1 + n].to_vec();
+        // A long record in blocks of outputs (each needs `k.len() - 1`
+        // more samples), so that the transforms stay a few megabytes; a
+        // record up to FFT_WHOLE_MAX samples is one block, as it always was.
+        let block = if n <= FFT_WHOLE_MAX { n } else { FFT_BLOCK };
+        let mut c = ballpass_dsp::Correlator::new(ballpass_dsp::CorrelateSettings::default());
+        let mut out = Vec::with_capacity(n);
+        let mut a = 0;
+        while a < n {
+            let b = (a + block).min(n);
+            let padded: Vec<f64> = (a..b + k.len() - 1)
+                .map(|m| at(m as isize - half as isize))
+                .collect();
+            let Ok(r) = c.correlate(&padded, &k) else {
+                break;
+            };
+            out.extend_from_slice(&r.values[k.len() - 1..k.len() - 1 + (b - a)]);
+            a = b;
+        }
+        if out.len() == n {
+            return out;
         }
     }
     // Where the kernel lies inside the signal, outputs `lo..hi` are the

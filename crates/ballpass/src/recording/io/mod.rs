@@ -62,8 +62,23 @@ pub use options::{ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit};
 /// splits into several pieces (use [`load_all`] for those).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Recording> {
     opts.validate()?;
+    if let Some(pieces) = load_streamed(path, opts)? {
+        return one_piece(path, pieces);
+    }
     let bytes = read(path)?;
     load_bytes(path, &bytes, opts)
+}
+
+/// A long text file read in pieces (`csv::parse_streamed`), when it is one.
+fn load_streamed(path: &Path, opts: &LoadOptions) -> Result<Option<Vec<Recording>>> {
+    let format = opts.format.unwrap_or_else(|| Format::from_path(path));
+    if !matches!(format, Format::Csv | Format::Tsv) {
+        return Ok(None);
+    }
+    match csv::parse_streamed(path, format, opts)? {
+        Some(table) => finish::finish(path, table, opts).map(Some),
+        None => Ok(None),
+    }
 }
 
 /// Loads one recording file that [`GapPolicy::split`] may cut into several
@@ -73,6 +88,9 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Recording> {
 /// As [`load`].
 pub fn load_all(path: &Path, opts: &LoadOptions) -> Result<Vec<Recording>> {
     opts.validate()?;
+    if let Some(pieces) = load_streamed(path, opts)? {
+        return Ok(pieces);
+    }
     let bytes = read(path)?;
     load_all_bytes(path, &bytes, opts)
 }
@@ -83,7 +101,11 @@ pub fn load_all(path: &Path, opts: &LoadOptions) -> Result<Vec<Recording>> {
 /// # Errors
 /// As [`load`].
 pub fn load_bytes(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Recording> {
-    let mut pieces = load_all_bytes(path, bytes, opts)?;
+    one_piece(path, load_all_bytes(path, bytes, opts)?)
+}
+
+/// The one recording of a file, or the error for a file split at its gaps.
+fn one_piece(path: &Path, mut pieces: Vec<Recording>) -> Result<Recording> {
     match pieces.len() {
         1 => Ok(pieces.remove(0)),
         n => Err(Error::InvalidRecording {

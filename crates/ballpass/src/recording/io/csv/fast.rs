@@ -50,18 +50,8 @@ pub(super) fn fast_rows(
     d: Dialect,
     n_est: usize,
 ) -> Option<Rows> {
-    let delimiter = d.delimiter;
-    if delimiter == b'\r' || delimiter == b'\n' || delimiter == b'#' || !delimiter.is_ascii() {
-        return None;
-    }
     // Which used value each field feeds: time, channel k, or nothing.
-    let mut role = vec![Role::Unused; ncols];
-    if let Some(ti) = plan.time {
-        role[ti] = Role::Time;
-    }
-    for (k, &(_, idx)) in plan.channels.iter().enumerate() {
-        role[idx] = Role::Channel(k);
-    }
+    let role = roles(ncols, plan, d)?;
     let mid = text.len() / 2;
     let split = (text.len() >= PARALLEL_BYTES)
         .then(|| text[mid..].iter().position(|&b| b == b'\n'))
@@ -94,6 +84,41 @@ pub(super) fn fast_rows(
     a.lines.extend(b.lines.iter().map(|l| l + offset));
     a.time_decimals = a.time_decimals.max(b.time_decimals);
     Some(a)
+}
+
+/// The rows of `text` when every line is a plain row ended by `\n` (no
+/// blank, comment or `\r\n` line; the last may lack its `\n`); `None`
+/// otherwise. One piece of a long file ([`super::stream`]).
+pub(super) fn plain_rows(
+    text: &[u8],
+    first_line: u64,
+    ncols: usize,
+    plan: &Plan,
+    d: Dialect,
+    n_est: usize,
+) -> Option<Rows> {
+    let role = roles(ncols, plan, d)?;
+    match rows_of(text, first_line, &role, d, plan, n_est)? {
+        (rows, true) => Some(rows),
+        (_, false) => None,
+    }
+}
+
+/// What each field feeds, or `None` for a delimiter the fast path does not
+/// handle.
+fn roles(ncols: usize, plan: &Plan, d: Dialect) -> Option<Vec<Role>> {
+    let delimiter = d.delimiter;
+    if delimiter == b'\r' || delimiter == b'\n' || delimiter == b'#' || !delimiter.is_ascii() {
+        return None;
+    }
+    let mut role = vec![Role::Unused; ncols];
+    if let Some(ti) = plan.time {
+        role[ti] = Role::Time;
+    }
+    for (k, &(_, idx)) in plan.channels.iter().enumerate() {
+        role[idx] = Role::Channel(k);
+    }
+    Some(role)
 }
 
 /// The rows of `text` (whole lines; its first line is file line

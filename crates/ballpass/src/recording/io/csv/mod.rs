@@ -33,8 +33,10 @@ use crate::error::{excerpt, excerpt_bytes, Error, Result};
 use crate::recording::Channel;
 
 mod fast;
+mod stream;
 
 use fast::{fast_rows, Dialect};
+pub(crate) use stream::parse_streamed;
 
 /// Canonical name of the time column.
 pub const TIME_COLUMN: &str = "time_s";
@@ -103,15 +105,27 @@ pub(crate) fn parse(
             n_est,
         )
     };
+    let rows = match fast {
+        Some(rows) => rows,
+        None => reader_rows(path, &layout, &plan, n_est)?,
+    };
+    table(path, header, &plan, rows, opts)
+}
+
+/// The raw table of the rows read under `header`.
+fn table(
+    path: &Path,
+    header: &Header,
+    plan: &Plan,
+    rows: Rows,
+    opts: &LoadOptions,
+) -> Result<RawTable> {
     let Rows {
         time: time_vals,
         channels: chan_vals,
         lines,
         time_decimals,
-    } = match fast {
-        Some(rows) => rows,
-        None => reader_rows(path, &layout, &plan, n_est)?,
-    };
+    } = rows;
     if lines.is_empty() {
         return Err(Error::Format {
             path: path.to_path_buf(),

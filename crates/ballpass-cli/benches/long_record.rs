@@ -1,0 +1,220 @@
+//! Time and peak memory of `ballpass analyze` on hour-long records, beside
+//! the SciPy script doing the same steps (`tools/bench_scipy_long.py`).
+//!
+//! ```text
+//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report]
+//! ```
+//!
+//! For each duration (default 2 h) it simulates a record at 1 kHz
+//! (`ballpass simulate`, good bearing, 9 mm/s) into a temporary folder,
+//! runs `ballpass analyze --no-report` (with `--report`: the report too)
+//! and the SciPy script under `/usr/bin/time -v`, and prints the wall time
+//! and peak resident memory of each. Every generated file is removed at the
+//! end (a 24-hour CSV is 5.3 GB). Needs `/usr/bin/time` (GNU time) and,
+//! for the SciPy column, `python3` with tools/requirements.txt. A bench,
+//! not a test: CI builds it and never runs it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Wall time, CPU time and peak resident memory of one process.
+struct Run {
+    seconds: f64,
+    cpu_seconds: f64,
+    peak_mb: f64,
+}
+
+/// Runs `cmd` under GNU time and reads its wall time and peak RSS.
+fn measured(cmd: Command) -> Result<Run, String> {
+    let program = cmd.get_program().to_owned();
+    let args: Vec<_> = cmd.get_args().map(|a| a.to_owned()).collect();
+    let out = Command::new("/usr/bin/time")
+        .arg("-v")
+        .arg(&program)
+        .args(&args)
+        .output()
+        .map_err(|e| format!("cannot run /usr/bin/time: {e}"))?;
+    let err = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        return Err(format!("{program:?} failed: {err}"));
+    }
+    let field = |name: &str| -> Option<&str> {
+        err.lines()
+            .find_map(|l| l.trim().strip_prefix(name))
+            .map(str::trim)
+    };
+    let peak_kb: f64 = field("Maximum resident set size (kbytes):")
+        .and_then(|v| v.parse().ok())
+        .ok_or("no peak RSS in /usr/bin/time's output")?;
+    let wall = field("Elapsed (wall clock) time (h:mm:ss or m:ss):")
+        .ok_or("no wall time in /usr/bin/time's output")?;
+    let seconds = wall
+        .split(':')
+        .try_fold(0.0, |acc, part| part.parse::<f64>().map(|v| acc * 60.0 + v))
+        .map_err(|e| format!("wall time '{wall}': {e}"))?;
+    let cpu = |name: &str| -> Result<f64, String> {
+        field(name)
+            .and_then(|v| v.parse::<f64>().ok())
+            .ok_or_else(|| format!("no '{name}' in /usr/bin/time's output"))
+    };
+    Ok(Run {
+        seconds,
+        cpu_seconds: cpu("User time (seconds):")? + cpu("System time (seconds):")?,
+        peak_mb: peak_kb / 1024.0,
+    })
+}
+
+/// Longest record simulated in one piece (the simulator's 50 million
+/// samples at 1 kHz are 13.9 h).
+const MAX_SIMULATED_HOURS: f64 = 12.0;
+
+/// `ballpass simulate` of `hours` at 1 kHz, 9 mm/s into `out`.
+fn simulate(bin: &Path, hours: f64, out: &Path) -> Result<(), String> {
+    let o = Command::new(bin)
+        .args(["simulate", "--velocity", "9", "--duration"])
+        .arg(format!("{}", hours * 3600.0))
+        .arg("--out")
+        .arg(out)
+        .output()
+        .map_err(|e| format!("simulate: {e}"))?;
+    if o.status.success() {
+        Ok(())
+    } else {
+        Err(format!("simulate: {}", String::from_utf8_lossy(&o.stderr)))
+    }
+}
+
+/// Writes `times` copies of the CSV record `piece` end to end into `out`:
+/// copy `k` has its time shifted by `k` times the piece's duration plus
+/// one sample, and its position by `k` times the piece's travel plus one
+/// sample's, so that time and position run on without a jump.
+fn tile(piece: &Path, out: &Path, times: usize) -> Result<(), String> {
+    use std::io::{BufWriter, Write};
+    let text = std::fs::read_to_string(piece).map_err(|e| format!("{piece:?}: {e}"))?;
+    let mut lines = text.lines();
+    let header = lines.next().ok_or("empty piece")?;
+    let rows: Vec<[f64; 4]> = lines
+        .map(|l| {
+            let mut v = [0.0; 4];
+            for (slot, cell) in v.iter_mut().zip(l.split(',')) {
+                *slot = cell.parse().unwrap_or(f64::NAN);
+            }
+            v
+        })
+        .collect();
+    let (first, last) = (rows[0], rows[rows.len() - 1]);
+    let dt = rows[1][0] - rows[0][0];
+    let step_t = last[0] - first[0] + dt;
+    let step_p = last[2] - first[2] + (rows[1][2] - rows[0][2]);
+    let f = std::fs::File::create(out).map_err(|e| format!("{out:?}: {e}"))?;
+    let mut w = BufWriter::with_capacity(1 << 20, f);
+    let io = |e: std::io::Error| format!("{out:?}: {e}");
+    writeln!(w, "{header}").map_err(io)?;
+    for k in 0..times {
+        let (ot, op) = (k as f64 * step_t, k as f64 * step_p);
+        for r in &rows {
+            writeln!(w, "{},{},{},{}", r[0] + ot, r[1], r[2] + op, r[3]).map_err(io)?;
+        }
+    }
+    w.flush().map_err(io)?;
+    Ok(())
+}
+
+fn main() {
+    let mut hours: Vec<f64> = Vec::new();
+    let mut scipy = true;
+    let mut report = false;
+    for a in std::env::args().skip(1) {
+        match a.as_str() {
+            "--no-scipy" => scipy = false,
+            "--report" => report = true,
+            "--bench" => {}
+            _ => match a.parse::<f64>() {
+                Ok(h) if h > 0.0 => hours.push(h),
+                _ => {
+                    eprintln!("long_record: unknown argument '{a}' (hours, --no-scipy, --report)");
+                    std::process::exit(2);
+                }
+            },
+        }
+    }
+    if hours.is_empty() {
+        hours.push(2.0);
+    }
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_ballpass"));
+    let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools");
+    let dir = std::env::temp_dir().join(format!("ballpass-long-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary folder");
+    let result = run_all(&bin, &tools, &dir, &hours, scipy, report);
+    let _ = std::fs::remove_dir_all(&dir);
+    if let Err(e) = result {
+        eprintln!("long_record: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run_all(
+    bin: &Path,
+    tools: &Path,
+    dir: &Path,
+    hours: &[f64],
+    scipy: bool,
+    report: bool,
+) -> Result<(), String> {
+    println!(
+        "| record | ballpass analyze: wall (CPU) | peak RSS | SciPy script: wall (CPU) | peak RSS | speed-up (wall) |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for &h in hours {
+        let rec = dir.join(format!("rec_{h}h.csv"));
+        if h <= MAX_SIMULATED_HOURS {
+            simulate(bin, h, &rec)?;
+        } else {
+            // The simulator holds at most 50 million samples: a longer
+            // record is a 2-hour one repeated end to end.
+            let piece = dir.join("piece_2h.csv");
+            simulate(bin, 2.0, &piece)?;
+            tile(&piece, &rec, (h / 2.0).ceil() as usize)?;
+            let _ = std::fs::remove_file(&piece);
+        }
+        let mut ours = Command::new(bin);
+        ours.arg("analyze")
+            .arg(&rec)
+            .args(["--velocity", "9", "--out"])
+            .arg(dir.join("bp"));
+        if !report {
+            ours.arg("--no-report");
+        }
+        let ours = measured(ours)?;
+        let theirs = if scipy {
+            let mut py = Command::new("python3");
+            py.arg(tools.join("bench_scipy_long.py"))
+                .arg(&rec)
+                .args(["--velocity", "9", "--max-lag", "90.124", "--out"])
+                .arg(dir.join("scipy"));
+            Some(measured(py)?)
+        } else {
+            None
+        };
+        let _ = std::fs::remove_file(&rec);
+        let _ = std::fs::remove_dir_all(dir.join("bp"));
+        let _ = std::fs::remove_dir_all(dir.join("scipy"));
+        match theirs {
+            Some(t) => println!(
+                "| {h} h at 1 kHz | {:.1} s ({:.1} s) | {:.0} MB | {:.1} s ({:.1} s) | {:.0} MB | {:.1}x |",
+                ours.seconds,
+                ours.cpu_seconds,
+                ours.peak_mb,
+                t.seconds,
+                t.cpu_seconds,
+                t.peak_mb,
+                t.seconds / ours.seconds
+            ),
+            None => println!(
+                "| {h} h at 1 kHz | {:.1} s ({:.1} s) | {:.0} MB | - | - | - |",
+                ours.seconds, ours.cpu_seconds, ours.peak_mb
+            ),
+        }
+    }
+    Ok(())
+}
