@@ -43,8 +43,9 @@ pub use peaks::{
 /// (re-exported from `num_complex` via `rustfft`).
 pub use rustfft::num_complex::Complex64;
 pub use sos::{
-    lfilter, lfilter_with_state, lfilter_zi, sosfilt, sosfilt_with_state, sosfilt_zi, sosfiltfilt,
-    FiltFiltSettings, LfilterOutput, PadLen, PadType, Sos, SosOutput, ZeroPhaseFilter,
+    lfilter, lfilter_with_state, lfilter_zi, sosfilt, sosfilt_fast, sosfilt_fast_with_state,
+    sosfilt_with_state, sosfilt_zi, sosfiltfilt, FiltFiltSettings, LfilterOutput, PadLen, PadType,
+    Sos, SosOutput, ZeroPhaseFilter,
 };
 pub use spectral::{
     coherence, csd, periodogram, welch, Average, Coherence, Csd, PeriodogramSettings, Psd, Scaling,

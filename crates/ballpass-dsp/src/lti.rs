@@ -45,13 +45,6 @@ fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// Horner evaluation with NumPy's `polyval` order (highest power first).
-fn polyval(p: &[f64], s: Complex64) -> Complex64 {
-    p.iter().fold(Complex64::new(0.0, 0.0), |y, &c| {
-        y * s + Complex64::new(c, 0.0)
-    })
-}
-
 /// Frequency response of the analog filter `b(s) / a(s)` (coefficients with
 /// the highest power first), matching `scipy.signal.freqs(b, a, worN=w)`.
 ///
@@ -72,17 +65,57 @@ pub fn freqs(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<AnalogResponse> {
     check_poly("b", b)?;
     check_poly("a", a)?;
     check_finite("w_rad_s", w_rad_s)?;
-    let h = w_rad_s
-        .iter()
-        .map(|&w| {
-            let s = Complex64::new(0.0, w);
-            nc::div(polyval(b, s), polyval(a, s))
-        })
-        .collect();
+    let h = crate::simd::widest(
+        #[inline(always)]
+        || {
+            by_blocks(w_rad_s, |w: &[f64; LANES], h: &mut [Complex64]| {
+                let (br, bi) = polyval_jw(b, w);
+                let (ar, ai) = polyval_jw(a, w);
+                for (k, h) in h.iter_mut().enumerate() {
+                    *h = nc::div(Complex64::new(br[k], bi[k]), Complex64::new(ar[k], ai[k]));
+                }
+            })
+        },
+    );
     Ok(AnalogResponse {
         w_rad_s: w_rad_s.to_vec(),
         h,
     })
+}
+
+/// Points evaluated in lock step: the responses at different frequencies
+/// are independent, so [`LANES`] of them run side by side (in SIMD
+/// registers, the Horner chains of one point no longer waiting on each
+/// other), each lane with exactly the arithmetic of a point on its own.
+const LANES: usize = 8;
+
+/// `eval` on the points `x` in blocks of [`LANES`] (the last block padded
+/// with zeros, its extra results dropped): one result per point.
+#[inline(always)]
+fn by_blocks(x: &[f64], mut eval: impl FnMut(&[f64; LANES], &mut [Complex64])) -> Vec<Complex64> {
+    let mut h = vec![Complex64::new(0.0, 0.0); x.len()];
+    for (xs, hs) in x.chunks(LANES).zip(h.chunks_mut(LANES)) {
+        let mut block = [0.0; LANES];
+        block[..xs.len()].copy_from_slice(xs);
+        eval(&block, hs);
+    }
+    h
+}
+
+/// [`polyval`] at `s = j w` for a block of `w`, as separate real and
+/// imaginary parts, with `polyval`'s operations (`y s` as the complex
+/// product with `s.re = 0`, then `+ (c, 0)`).
+#[inline(always)]
+fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+    let (mut yr, mut yi) = ([0.0; LANES], [0.0; LANES]);
+    for &c in p {
+        for k in 0..LANES {
+            let (r, i) = (yr[k], yi[k]);
+            yr[k] = (r * 0.0 - i * w[k]) + c;
+            yi[k] = (r * w[k] + i * 0.0) + 0.0;
+        }
+    }
+    (yr, yi)
 }
 
 /// `numpy.unwrap` with period `2 pi`: adds multiples of `2 pi` so that
@@ -166,19 +199,44 @@ fn check_freqs(freq_hz: &[f64], fs_hz: f64) -> Result<()> {
     check_finite("freq_hz", freq_hz)
 }
 
-/// `b(z^-1) / a(z^-1)` at `z^-1 = exp(-j 2 pi f / fs)` (NumPy `polyval`
-/// from the lowest power, as SciPy's `freqz`).
-fn freqz_at(b: &[f64], a: &[f64], f: f64, fs_hz: f64) -> Complex64 {
-    let w = 2.0 * std::f64::consts::PI * f / fs_hz;
-    let zm1 = nc::exp(Complex64::new(0.0, -w));
-    let ev = |c: &[f64]| {
-        let mut acc = Complex64::new(c[c.len() - 1], 0.0);
-        for &ci in c.iter().rev().skip(1) {
-            acc = Complex64::new(ci, 0.0) + acc * zm1;
+/// `z^-1 = exp(-j 2 pi f / fs)` for a block of frequencies, as real and
+/// imaginary parts (`exp(0) = 1` times the cosine and sine, as
+/// `Complex::exp` forms it).
+#[inline(always)]
+fn unit_delays(f: &[f64; LANES], fs_hz: f64) -> ([f64; LANES], [f64; LANES]) {
+    let (mut zr, mut zi) = ([0.0; LANES], [0.0; LANES]);
+    for k in 0..LANES {
+        let w = 2.0 * std::f64::consts::PI * f[k] / fs_hz;
+        let z = nc::exp(Complex64::new(0.0, -w));
+        (zr[k], zi[k]) = (z.re, z.im);
+    }
+    (zr, zi)
+}
+
+/// `c(z^-1)` at a block of `z^-1` (NumPy `polyval` from the lowest power,
+/// as SciPy's `freqz`): `acc = (c_k, 0) + acc z^-1` from the last
+/// coefficient down, real and imaginary parts.
+#[inline(always)]
+fn polyval_z(c: &[f64], zr: &[f64; LANES], zi: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+    let (mut ar, mut ai) = ([c[c.len() - 1]; LANES], [0.0; LANES]);
+    for &ci in c.iter().rev().skip(1) {
+        for k in 0..LANES {
+            let (r, i) = (ar[k], ai[k]);
+            let (mr, mi) = (r * zr[k] - i * zi[k], r * zi[k] + i * zr[k]);
+            (ar[k], ai[k]) = (ci + mr, 0.0 + mi);
         }
-        acc
-    };
-    nc::div(ev(b), ev(a))
+    }
+    (ar, ai)
+}
+
+/// `b(z^-1) / a(z^-1)` at a block of `z^-1`, into `h`.
+#[inline(always)]
+fn ratio_z(b: &[f64], a: &[f64], zr: &[f64; LANES], zi: &[f64; LANES], h: &mut [Complex64]) {
+    let (br, bi) = polyval_z(b, zr, zi);
+    let (ar, ai) = polyval_z(a, zr, zi);
+    for (k, h) in h.iter_mut().enumerate() {
+        *h = nc::div(Complex64::new(br[k], bi[k]), Complex64::new(ar[k], ai[k]));
+    }
 }
 
 /// Frequency response of the digital filter `b(z) / a(z)` (coefficients of
@@ -197,7 +255,15 @@ pub fn freqz(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<Digita
     check_freqs(freq_hz, fs_hz)?;
     Ok(DigitalResponse {
         freq_hz: freq_hz.to_vec(),
-        h: freq_hz.iter().map(|&f| freqz_at(b, a, f, fs_hz)).collect(),
+        h: crate::simd::widest(
+            #[inline(always)]
+            || {
+                by_blocks(freq_hz, |f, h| {
+                    let (zr, zi) = unit_delays(f, fs_hz);
+                    ratio_z(b, a, &zr, &zi, h);
+                })
+            },
+        ),
     })
 }
 
@@ -217,16 +283,24 @@ pub fn freqz(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<Digita
 /// As [`freqz`].
 pub fn sosfreqz(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<DigitalResponse> {
     check_freqs(freq_hz, fs_hz)?;
-    let h = freq_hz
-        .iter()
-        .map(|&f| {
-            sos.sections()
-                .iter()
-                .fold(Complex64::new(1.0, 0.0), |acc, s| {
-                    acc * freqz_at(&s[..3], &s[3..], f, fs_hz)
-                })
-        })
-        .collect();
+    // The sections' responses at one frequency share its `z^-1`.
+    let h = crate::simd::widest(
+        #[inline(always)]
+        || {
+            by_blocks(freq_hz, |f, h| {
+                let (zr, zi) = unit_delays(f, fs_hz);
+                let mut hs = [Complex64::new(0.0, 0.0); LANES];
+                let mut acc = [Complex64::new(1.0, 0.0); LANES];
+                for s in sos.sections() {
+                    ratio_z(&s[..3], &s[3..], &zr, &zi, &mut hs);
+                    for (acc, hs) in acc.iter_mut().zip(&hs) {
+                        *acc *= *hs;
+                    }
+                }
+                h.copy_from_slice(&acc[..h.len()]);
+            })
+        },
+    );
     Ok(DigitalResponse {
         freq_hz: freq_hz.to_vec(),
         h,
@@ -236,6 +310,54 @@ pub fn sosfreqz(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<DigitalRespons
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Horner evaluation with NumPy's `polyval` order (highest power
+    /// first), one point at a time: the reference of the blocked kernels.
+    fn polyval(p: &[f64], s: Complex64) -> Complex64 {
+        p.iter().fold(Complex64::new(0.0, 0.0), |y, &c| {
+            y * s + Complex64::new(c, 0.0)
+        })
+    }
+
+    /// `b(z^-1) / a(z^-1)` at one frequency, one point at a time.
+    fn freqz_at(b: &[f64], a: &[f64], f: f64, fs_hz: f64) -> Complex64 {
+        let w = 2.0 * std::f64::consts::PI * f / fs_hz;
+        let zm1 = nc::exp(Complex64::new(0.0, -w));
+        let ev = |c: &[f64]| {
+            let mut acc = Complex64::new(c[c.len() - 1], 0.0);
+            for &ci in c.iter().rev().skip(1) {
+                acc = Complex64::new(ci, 0.0) + acc * zm1;
+            }
+            acc
+        };
+        nc::div(ev(b), ev(a))
+    }
+
+    /// The blocked evaluation is the point-by-point one, bit for bit (the
+    /// lanes only run side by side), at every block position and for a
+    /// length that leaves a partial block.
+    #[test]
+    fn blocks_equal_points_bit_for_bit() {
+        let sos = crate::butter(5, crate::FilterBand::LowPass { cutoff_hz: 20.0 }, 1000.0).unwrap();
+        let (b, a) = ([0.2, -0.1, 0.05, 0.3], [1.0, -1.2, 0.5, -0.05]);
+        let f: Vec<f64> = (0..37).map(|i| i as f64 * 13.7 - 3.0).collect();
+        let w: Vec<f64> = (0..37).map(|i| 10f64.powf(i as f64 / 9.0 - 2.0)).collect();
+        let hs = freqs(&b, &a, &w).unwrap().h;
+        let hz = freqz(&b, &a, &f, 1000.0).unwrap().h;
+        let hsos = sosfreqz(&sos, &f, 1000.0).unwrap().h;
+        for i in 0..f.len() {
+            let s = Complex64::new(0.0, w[i]);
+            assert_eq!(hs[i], nc::div(polyval(&b, s), polyval(&a, s)), "freqs {i}");
+            assert_eq!(hz[i], freqz_at(&b, &a, f[i], 1000.0), "freqz {i}");
+            let want = sos
+                .sections()
+                .iter()
+                .fold(Complex64::new(1.0, 0.0), |acc, s| {
+                    acc * freqz_at(&s[..3], &s[3..], f[i], 1000.0)
+                });
+            assert_eq!(hsos[i], want, "sosfreqz {i}");
+        }
+    }
 
     #[test]
     fn unwrap_removes_jumps() {

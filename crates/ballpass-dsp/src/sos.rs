@@ -165,6 +165,17 @@ pub fn sosfilt(sos: &Sos, x: &[f64]) -> Result<Vec<f64>> {
 /// [`DspError::Empty`] / [`DspError::NonFinite`] for a bad `x` or `zi`;
 /// [`DspError::LengthMismatch`] if `zi` does not have one row per section.
 pub fn sosfilt_with_state(sos: &Sos, x: &[f64], zi: &[[f64; 2]]) -> Result<SosOutput> {
+    run_with_state(sos, x, zi, |y, zf| sosfilt_inplace(&sos.0, y, zf))
+}
+
+/// Checks `x` and `zi` (one finite row per section) and runs `filter` over
+/// a copy of `x` from a copy of `zi`, which it leaves as the final state.
+fn run_with_state(
+    sos: &Sos,
+    x: &[f64],
+    zi: &[[f64; 2]],
+    filter: impl FnOnce(&mut [f64], &mut [[f64; 2]]),
+) -> Result<SosOutput> {
     check_finite("x", x)?;
     if zi.len() != sos.n_sections() {
         return Err(DspError::LengthMismatch {
@@ -176,8 +187,47 @@ pub fn sosfilt_with_state(sos: &Sos, x: &[f64], zi: &[[f64; 2]]) -> Result<SosOu
     check_finite("zi", zi.as_flattened())?;
     let mut y = x.to_vec();
     let mut zf = zi.to_vec();
-    sosfilt_inplace(&sos.0, &mut y, &mut zf);
+    filter(&mut y, &mut zf);
     Ok(SosOutput { y, zf })
+}
+
+/// [`sosfilt`] run by the kernel of the zero-phase filter
+/// ([`ZeroPhaseFilter`]): each section with its feedback terms added last
+/// (half the dependent operations per sample) and a long signal split into
+/// chunks run in SIMD lanes, whose start-up is corrected by the free
+/// response of the state they inherit. The same filter, rounded
+/// differently: equal to [`sosfilt`] (and SciPy) to ~1e-14 of the signal's
+/// scale (2.3e-12 element-wise at worst on the SciPy fixtures), and 3-5x
+/// faster on long signals. For the Python package's
+/// `sosfilt`, which promises SciPy's numbers to 1e-9, not its rounding.
+///
+/// ```
+/// use ballpass_dsp::{butter, sosfilt, sosfilt_fast, FilterBand};
+/// let sos = butter(4, FilterBand::LowPass { cutoff_hz: 20.0 }, 1000.0)?;
+/// let x: Vec<f64> = (0..5000).map(|i| (i as f64 * 0.37).sin()).collect();
+/// let (a, b) = (sosfilt(&sos, &x)?, sosfilt_fast(&sos, &x)?);
+/// assert!(a.iter().zip(&b).all(|(a, b)| (a - b).abs() < 1e-13));
+/// # Ok::<(), ballpass_dsp::DspError>(())
+/// ```
+///
+/// # Errors
+/// As [`sosfilt`].
+pub fn sosfilt_fast(sos: &Sos, x: &[f64]) -> Result<Vec<f64>> {
+    check_finite("x", x)?;
+    let mut y = x.to_vec();
+    let zi = vec![[0.0; 2]; sos.n_sections()];
+    Cascade::new(&sos.0).filter_from(&mut y, &zi, false);
+    Ok(y)
+}
+
+/// [`sosfilt_with_state`] with the grouping of [`sosfilt_fast`] (sample by
+/// sample: the final state needs the whole run).
+///
+/// # Errors
+/// As [`sosfilt_with_state`].
+pub fn sosfilt_fast_with_state(sos: &Sos, x: &[f64], zi: &[[f64; 2]]) -> Result<SosOutput> {
+    let cascade = Cascade::new(&sos.0);
+    run_with_state(sos, x, zi, |y, zf| cascade.filter(y, zf, false))
 }
 
 /// Initial state of each section for a unit-step steady state, matching
@@ -570,16 +620,51 @@ pub fn lfilter_with_state(b: &[f64], a: &[f64], x: &[f64], zi: &[f64]) -> Result
         *d = s / a0;
     }
     let mut z = zi.to_vec();
+    let y = match n {
+        2 => df2t::<2>(&bn, &an, x, &mut z),
+        3 => df2t::<3>(&bn, &an, x, &mut z),
+        4 => df2t::<4>(&bn, &an, x, &mut z),
+        5 => df2t::<5>(&bn, &an, x, &mut z),
+        6 => df2t::<6>(&bn, &an, x, &mut z),
+        7 => df2t::<7>(&bn, &an, x, &mut z),
+        8 => df2t::<8>(&bn, &an, x, &mut z),
+        9 => df2t::<9>(&bn, &an, x, &mut z),
+        _ => {
+            let mut y = Vec::with_capacity(x.len());
+            for &xn in x {
+                let yn = z[0] + bn[0] * xn;
+                for k in 0..n - 2 {
+                    z[k] = z[k + 1] + xn * bn[k + 1] - yn * an[k + 1];
+                }
+                z[n - 2] = xn * bn[n - 1] - yn * an[n - 1];
+                y.push(yn);
+            }
+            y
+        }
+    };
+    Ok(LfilterOutput { y, zf: z })
+}
+
+/// SciPy's direct form II transposed loop for `N` coefficients (`N - 1`
+/// states), with the coefficients and the state in fixed-size arrays so
+/// that they stay in registers: the same operations in the same order as
+/// the general loop of [`lfilter_with_state`], so the same rounding.
+fn df2t<const N: usize>(bn: &[f64], an: &[f64], x: &[f64], zi: &mut [f64]) -> Vec<f64> {
+    let b: [f64; N] = bn.try_into().expect("N coefficients");
+    let a: [f64; N] = an.try_into().expect("N coefficients");
+    let mut z = [0.0; N];
+    z[..N - 1].copy_from_slice(zi);
     let mut y = Vec::with_capacity(x.len());
     for &xn in x {
-        let yn = z[0] + bn[0] * xn;
-        for k in 0..n - 2 {
-            z[k] = z[k + 1] + xn * bn[k + 1] - yn * an[k + 1];
+        let yn = z[0] + b[0] * xn;
+        for k in 0..N - 2 {
+            z[k] = z[k + 1] + xn * b[k + 1] - yn * a[k + 1];
         }
-        z[n - 2] = xn * bn[n - 1] - yn * an[n - 1];
+        z[N - 2] = xn * b[N - 1] - yn * a[N - 1];
         y.push(yn);
     }
-    Ok(LfilterOutput { y, zf: z })
+    zi.copy_from_slice(&z[..N - 1]);
+    y
 }
 
 /// Steady-state initial condition of [`lfilter`] for a unit step, matching
@@ -692,6 +777,38 @@ mod tests {
         assert!(sosfiltfilt(&sos, &[1.0; 19]).is_ok());
         assert!(sosfiltfilt(&sos, &[]).is_err());
         assert!(sosfiltfilt(&sos, &[1.0, f64::NAN]).is_err());
+    }
+
+    /// The fixed-size loops are the general one, bit for bit, for every
+    /// filter length they cover and past it.
+    #[test]
+    fn lfilter_fixed_sizes_equal_the_general_loop() {
+        let x: Vec<f64> = (0..300)
+            .map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0)
+            .collect();
+        for n in 2..=11 {
+            let b: Vec<f64> = (0..n).map(|k| 0.3 / (k as f64 + 1.0)).collect();
+            let mut a: Vec<f64> = (0..n).map(|k| (-0.4f64).powi(k as i32) / 2.0).collect();
+            a[0] = 2.0;
+            let zi: Vec<f64> = (1..n).map(|k| 0.1 * k as f64).collect();
+            let got = lfilter_with_state(&b, &a, &x, &zi).unwrap();
+            let (bn, an): (Vec<f64>, Vec<f64>) = (
+                b.iter().map(|v| v / a[0]).collect(),
+                a.iter().map(|v| v / a[0]).collect(),
+            );
+            let mut z = zi.clone();
+            let mut y = Vec::new();
+            for &xn in &x {
+                let yn = z[0] + bn[0] * xn;
+                for k in 0..n - 2 {
+                    z[k] = z[k + 1] + xn * bn[k + 1] - yn * an[k + 1];
+                }
+                z[n - 2] = xn * bn[n - 1] - yn * an[n - 1];
+                y.push(yn);
+            }
+            assert_eq!(got.y, y, "n = {n}");
+            assert_eq!(got.zf, z, "n = {n}");
+        }
     }
 
     #[test]

@@ -1,10 +1,13 @@
 //! `predict`, `analyze` and `passages`: what the command line's `predict`,
 //! `analyze` and `passage` compute, on recordings already in memory.
 
-use ballpass::analysis::passage_table::{passage_rows, PassageFailure, PassageOutput};
+use ballpass::analysis::passage_table::{
+    checked_passages, passage_rows, PassageFailure, PassageOutput,
+};
 use ballpass::analysis::preflight::{self, PreflightSettings};
 use ballpass::analysis::{self, export, AnalyzeSettings, PassageSettings};
 use ballpass::bearing;
+use ballpass::recording::segment::{self, Window};
 use ballpass::recording::Recording;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -124,33 +127,64 @@ fn analyze<'py>(
 }
 
 /// `ballpass.passages`: the optical ball passages of each recording, as
-/// `ballpass passage` measures them. Returns `(passage.json as a dict,
-/// [passages.csv columns of each measured record])`; a record that fails is
-/// listed in `failed`, and when all fail the first failure is raised.
+/// `ballpass passage` measures them: each recording cut to `window`
+/// (`"T0:T1"`, seconds on its time axis, as `--window`), then the checks
+/// before the analysis (dead channels left out; a velocity, given or the
+/// recording's, checked against the encoder, or measured from it when none
+/// is stated; `force_velocity` as `--force-velocity`), then the detection.
+/// Returns `(passage.json as a dict, [passages.csv columns of each measured
+/// record])`; a record that fails is listed in `failed`, and when all fail
+/// the first failure is raised.
 #[pyfunction]
-#[pyo3(signature = (recordings, bearing=None, settings=None, pool=None))]
+#[pyo3(signature = (recordings, bearing=None, settings=None, pool=None, window=None, force_velocity=false))]
 fn passages<'py>(
     py: Python<'py>,
     recordings: Vec<PyRef<'py, PyRecording>>,
     bearing: Option<&str>,
     settings: Option<&str>,
     pool: Option<Bound<'py, ThreadPool>>,
+    window: Option<&str>,
+    force_velocity: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyList>)> {
     let (name, g) = bearing_args(bearing)?.resolve(None)?;
     let mut s: PassageSettings =
         convert::settings(&PassageSettings::default(), settings, "passage settings")?;
     s.geometry = Some(g);
+    let window = window
+        .map(Window::parse)
+        .transpose()
+        .map_err(errors::domain)?;
+    let pre = PreflightSettings {
+        force_velocity,
+        ..PreflightSettings::default()
+    };
+    // The velocity given to this call guides the detection, as --velocity
+    // does; a recording's own is stated to the checks.
+    let explicit = s.velocity_mm_s;
     let recs: Vec<&Recording> = recordings.iter().map(|r| &r.rec).collect();
     let results = pool::run(py, pool.as_ref(), || {
         recs.iter()
-            .map(|r| analysis::detect_passages(r, &s).map_err(|e| (r.source_name(), e)))
+            .map(|r| {
+                let rec = match &window {
+                    Some(w) => segment::window(r, w),
+                    None => Ok((*r).clone()),
+                };
+                rec.and_then(|rec| {
+                    let stated = explicit.or(rec.meta.velocity_mm_s);
+                    checked_passages(rec, stated, explicit, &s, &g, &pre)
+                })
+                .map_err(|e| (r.source_name(), e))
+            })
             .collect::<Vec<_>>()
     });
-    let (mut done, mut failed) = (Vec::new(), Vec::new());
+    let (mut done, mut failed, mut warnings) = (Vec::new(), Vec::new(), Vec::new());
     let mut first_error = None;
     for r in results {
         match r {
-            Ok(p) => done.push(p),
+            Ok(c) => {
+                warnings.extend(c.warnings);
+                done.push(c.passages);
+            }
             Err((record, e)) => {
                 failed.push(PassageFailure {
                     record,
@@ -170,7 +204,11 @@ fn passages<'py>(
     for r in &done {
         tables.append(convert::columns(py, &passage_rows(r))?)?;
     }
-    let out = PassageOutput::new(name, done, failed);
+    let out = PassageOutput {
+        window,
+        warnings,
+        ..PassageOutput::new(name, done, failed)
+    };
     Ok((convert::serialize(py, &out)?, tables))
 }
 

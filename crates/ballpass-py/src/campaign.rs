@@ -14,6 +14,7 @@ use ballpass::campaign::{
     export, from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind, Manifest,
     ManifestEntry, RecordOutcome, Selection,
 };
+use ballpass::recording::segment::Window;
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -103,7 +104,9 @@ fn campaign_settings(
     lowpass_hz: f64,
     harmonics: usize,
     diagnosis: Option<&DiagnoseSettings>,
-) -> CampaignSettings {
+    window: Option<&str>,
+    force_velocity: bool,
+) -> PyResult<CampaignSettings> {
     let mut s = CampaignSettings::default();
     s.analyze.lowpass_hz = Some(lowpass_hz);
     s.analyze.harmonics = harmonics;
@@ -111,7 +114,15 @@ fn campaign_settings(
         s.low_band_hz = d.low_band_hz;
         s.sticking = d.sticking.clone();
     }
-    s
+    // `--window T0:T1` and `--force-velocity`: each record is cut to the
+    // window before the checks, which refuse a stated velocity the encoder
+    // contradicts unless forced.
+    s.window = window
+        .map(Window::parse)
+        .transpose()
+        .map_err(errors::domain)?;
+    s.preflight.force_velocity = force_velocity;
+    Ok(s)
 }
 
 fn diagnose_settings(json: Option<&str>) -> PyResult<DiagnoseSettings> {
@@ -140,7 +151,7 @@ fn record_to_py<'py>(py: Python<'py>, r: &RecordResult) -> PyResult<Bound<'py, P
 /// `ballpass.process_record`: one recording file of a campaign, loaded and
 /// processed as `ballpass diagnose` processes each record.
 #[pyfunction]
-#[pyo3(signature = (path, bearing, velocity_mm_s, repeat, condition=None, lowpass_hz=20.0, harmonics=5, diagnosis=None, load=None))]
+#[pyo3(signature = (path, bearing, velocity_mm_s, repeat, condition=None, lowpass_hz=20.0, harmonics=5, diagnosis=None, load=None, window=None, force_velocity=false))]
 #[allow(clippy::too_many_arguments)]
 fn process_record<'py>(
     py: Python<'py>,
@@ -153,9 +164,11 @@ fn process_record<'py>(
     harmonics: usize,
     diagnosis: Option<&str>,
     load: Option<&str>,
+    window: Option<&str>,
+    force_velocity: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let ds = diagnose_settings(diagnosis)?;
-    let settings = campaign_settings(lowpass_hz, harmonics, Some(&ds));
+    let settings = campaign_settings(lowpass_hz, harmonics, Some(&ds), window, force_velocity)?;
     let opts = LoadArgs::parse(load)?.options()?;
     let fallback = opts
         .geometry
@@ -251,7 +264,7 @@ fn diagnosis_output<'py>(
 /// `diagnosis.json`. `failures` are `(path, bearing, velocity_mm_s, repeat,
 /// reason)` of records that could not be processed.
 #[pyfunction]
-#[pyo3(signature = (records, failures, source, selection, lowpass_hz=20.0, harmonics=5, diagnosis=None))]
+#[pyo3(signature = (records, failures, source, selection, lowpass_hz=20.0, harmonics=5, diagnosis=None, window=None, force_velocity=false))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose_records<'py>(
     py: Python<'py>,
@@ -262,9 +275,13 @@ fn diagnose_records<'py>(
     lowpass_hz: f64,
     harmonics: usize,
     diagnosis: Option<&str>,
+    window: Option<&str>,
+    force_velocity: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     let ds = diagnose_settings(diagnosis)?;
-    let settings = campaign_settings(lowpass_hz, harmonics, Some(&ds));
+    // The per-record settings are part of diagnosis.json: the window and
+    // the checks the records were processed with.
+    let settings = campaign_settings(lowpass_hz, harmonics, Some(&ds), window, force_velocity)?;
     let mut outcome = BatchOutcome {
         records: Vec::new(),
     };
@@ -296,7 +313,7 @@ fn diagnose_records<'py>(
 /// campaign's answer). Returns `(sweep.json or diagnosis.json as a dict,
 /// extra tables)`.
 #[pyfunction]
-#[pyo3(signature = (kind, source, pattern=None, only_bearings=Vec::new(), only_velocities=Vec::new(), lowpass_hz=20.0, harmonics=5, diagnosis=None, load=None, pool=None))]
+#[pyo3(signature = (kind, source, pattern=None, only_bearings=Vec::new(), only_velocities=Vec::new(), lowpass_hz=20.0, harmonics=5, diagnosis=None, load=None, pool=None, window=None, force_velocity=false))]
 #[allow(clippy::too_many_arguments)]
 fn campaign<'py>(
     py: Python<'py>,
@@ -310,14 +327,17 @@ fn campaign<'py>(
     diagnosis: Option<&str>,
     load: Option<&str>,
     pool: Option<Bound<'py, ThreadPool>>,
+    window: Option<&str>,
+    force_velocity: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     let kind = campaign_kind(kind)?;
     let load = LoadArgs::parse(load)?;
     let ds = diagnose_settings(diagnosis)?;
-    let settings = match kind {
-        CampaignKind::Sweep => campaign_settings(lowpass_hz, harmonics, None),
-        CampaignKind::Diagnose => campaign_settings(lowpass_hz, harmonics, Some(&ds)),
+    let diagnosis = match kind {
+        CampaignKind::Sweep => None,
+        CampaignKind::Diagnose => Some(&ds),
     };
+    let settings = campaign_settings(lowpass_hz, harmonics, diagnosis, window, force_velocity)?;
     let manifest = read_source(&source, pattern, &load)?;
     let Selection { entries, notes } =
         select(&manifest, kind, &only_bearings, &only_velocities).map_err(errors::domain)?;

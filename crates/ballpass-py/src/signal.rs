@@ -287,10 +287,32 @@ fn correlate<'py>(
     y: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<Arr1<'py>> {
     let (xs, ys) = (slice1(&x)?, slice1(&y)?);
-    let c = py
-        .detach(|| dsp::correlate(xs, ys, dsp::Normalization::None))
+    let values = py
+        .detach(|| {
+            CORRELATOR.with_borrow_mut(|(c, out)| {
+                c.correlate_into(xs, ys, out)?;
+                Ok(std::mem::take(&mut out.values))
+            })
+        })
         .map_err(errors::dsp)?;
-    Ok(c.values.into_pyarray(py))
+    Ok(values.into_pyarray(py))
+}
+
+thread_local! {
+    /// Each thread's correlator and its last lags: its FFT buffers (three
+    /// spectra of `len / 2` bins, the scratch) and the lag vector are made
+    /// once per signal length instead of zeroed anew on every call. A
+    /// cache only: every call computes from its own arguments.
+    static CORRELATOR: std::cell::RefCell<(dsp::Correlator, dsp::Correlation)> =
+        std::cell::RefCell::new((
+            dsp::Correlator::new(dsp::CorrelateSettings {
+                normalization: dsp::Normalization::None,
+            }),
+            dsp::Correlation {
+                lags: Vec::new(),
+                values: Vec::new(),
+            },
+        ));
 }
 
 /// `scipy.signal.correlation_lags(nx, ny, mode='full')`.
@@ -377,6 +399,9 @@ fn sos_from(a: &PyReadonlyArray2<'_, f64>) -> PyResult<Sos> {
         return Err(errors::value("sos array must be shape (n_sections, 6)"));
     }
     let (s, m, _) = rows(a)?;
+    if (0..m).any(|i| s[6 * i + 3] != 1.0) {
+        return Err(errors::value("sos[:, 3] should be all ones"));
+    }
     let sections = (0..m)
         .map(|i| {
             let mut r = [0.0; 6];
@@ -401,7 +426,7 @@ fn sosfilt<'py>(
     let (xs, m, n) = rows(&x)?;
     let ns = sos.n_sections();
     let Some(zi) = zi else {
-        let (flat, width) = map_rows(py, xs, m, n, |r| dsp::sosfilt(&sos, r))?;
+        let (flat, width) = map_rows(py, xs, m, n, |r| dsp::sosfilt_fast(&sos, r))?;
         return Ok((stack(py, flat, m, width)?, None));
     };
     if zi.shape() != [m, ns, 2] {
@@ -420,7 +445,7 @@ fn sosfilt<'py>(
                 let z0: Vec<[f64; 2]> = (0..ns)
                     .map(|s| [zs[(i * ns + s) * 2], zs[(i * ns + s) * 2 + 1]])
                     .collect();
-                let o = dsp::sosfilt_with_state(&sos, &xs[i * n..(i + 1) * n], &z0)?;
+                let o = dsp::sosfilt_fast_with_state(&sos, &xs[i * n..(i + 1) * n], &z0)?;
                 y.extend_from_slice(&o.y);
                 zf.extend(o.zf.iter().flatten());
             }
@@ -711,11 +736,11 @@ fn peak_widths<'py>(
     ))
 }
 
-fn complex<'py>(py: Python<'py>, h: &[dsp::Complex64]) -> CArr1<'py> {
-    h.iter()
-        .map(|z| Complex64::new(z.re, z.im))
-        .collect::<Vec<_>>()
-        .into_pyarray(py)
+/// A response as a numpy array: `ballpass_dsp::Complex64` is numpy's
+/// complex128 element (both `num_complex::Complex<f64>`), so the vector
+/// becomes the array without a copy.
+fn complex(py: Python<'_>, h: Vec<dsp::Complex64>) -> CArr1<'_> {
+    h.into_pyarray(py)
 }
 
 /// `scipy.signal.freqs(b, a, worN=w)`: `H(j w)`.
@@ -728,7 +753,7 @@ fn freqs<'py>(
 ) -> PyResult<CArr1<'py>> {
     let (b, a, w) = (slice1(&b)?, slice1(&a)?, slice1(&w)?);
     let r = py.detach(|| dsp::freqs(b, a, w)).map_err(errors::dsp)?;
-    Ok(complex(py, &r.h))
+    Ok(complex(py, r.h))
 }
 
 /// `scipy.signal.freqz(b, a, worN=f, fs=fs)`: `H` at frequencies `f`.
@@ -742,7 +767,7 @@ fn freqz<'py>(
 ) -> PyResult<CArr1<'py>> {
     let (b, a, f) = (slice1(&b)?, slice1(&a)?, slice1(&f)?);
     let r = py.detach(|| dsp::freqz(b, a, f, fs)).map_err(errors::dsp)?;
-    Ok(complex(py, &r.h))
+    Ok(complex(py, r.h))
 }
 
 /// `scipy.signal.freqz_sos(sos, worN=f, fs=fs)`: `H` at frequencies `f`.
@@ -758,7 +783,7 @@ fn sosfreqz<'py>(
     let r = py
         .detach(|| dsp::sosfreqz(&sos, f, fs))
         .map_err(errors::dsp)?;
-    Ok(complex(py, &r.h))
+    Ok(complex(py, r.h))
 }
 
 /// `numpy.gradient` along each row, with a uniform step `h` or sample

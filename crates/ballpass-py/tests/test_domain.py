@@ -128,6 +128,42 @@ def test_passages_equal_the_cli(recs, cli, tmp):
     assert r.count == len(r.table.tau_p_s) and r.tau_c_s.mean > 0
 
 
+def test_passages_take_a_window_and_run_the_checks(recs, cli, tmp):
+    """As `ballpass passage --window T0:T1`: each record cut to the window
+    (passage.json names it and equals the command line's); the checks of
+    `analyze` run first: a velocity the encoder contradicts is an error
+    unless forced (then a warning, and the JSON equals the command
+    line's), and without one the encoder's guides the detection."""
+    cli("passage", recs / "r3.csv", recs / "r4.csv", "--velocity", "9", "--window", "2.5:15",
+        "--no-report", "--out", tmp / "w")
+    p = ballpass.passages([recs / "r3.csv", recs / "r4.csv"], velocity_mm_s=9.0,
+                          window=(2.5, 15))
+    assert p.to_dict() == read_json(tmp / "w" / "passage.json")
+    assert_table_equals_csv(p.table, tmp / "w" / "passages.csv")
+    assert p.window.start_s == 2.5 and p.window.end_s == 15.0
+    times = p.records[0].table.time_s
+    assert times.min() >= 2.5 and times.max() < 15.0
+    # an open end, and the window as the command line's text
+    q = ballpass.passages(recs / "r3.csv", velocity_mm_s=9.0, window=(None, 10))
+    assert q.to_dict() == ballpass.passages(recs / "r3.csv", velocity_mm_s=9.0,
+                                            window=":10").to_dict()
+    assert q.records[0].table.time_s.max() < 10.0
+    with pytest.raises(ValueError, match="window"):
+        ballpass.passages(recs / "r3.csv", velocity_mm_s=9.0, window=(5, 2))
+    rec = ballpass.load(recs / "r3.csv")
+    with pytest.raises(ValueError, match="encoder"):
+        ballpass.passages(rec, velocity_mm_s=12.0)
+    with pytest.warns(ballpass.BallpassWarning, match="as forced"):
+        forced = ballpass.passages(rec, velocity_mm_s=12.0, force_velocity=True)
+    cli("passage", recs / "r3.csv", "--velocity", "12", "--force-velocity", "--no-report",
+        "--out", tmp / "f")
+    assert forced.to_dict() == read_json(tmp / "f" / "passage.json")
+    bare = ballpass.Recording(rec.fs_hz, friction_n=rec.friction_n, position_mm=rec.position_mm,
+                              optical_v=rec.optical_v)
+    measured = ballpass.passages(bare)
+    assert measured.records[0].velocity_source == "measured from the encoder"
+
+
 def test_predict_equals_the_cli(cli):
     out = json.loads(cli("predict", "-v", "1:3:0.5", "--harmonics", "3", "--json"))
     p = ballpass.predict([1.0, 1.5, 2.0, 2.5, 3.0], harmonics=3)
@@ -202,6 +238,29 @@ def test_sweep_and_diagnose_equal_the_cli(fleet, cli, tmp):
     assert_table_equals_csv(d.friction_spectra, tmp / "d" / "friction_spectra.csv")
     verdicts = {b.bearing: b.verdict for b in d.result.bearings}
     assert verdicts["bearing3"] == "bad", verdicts
+
+
+def test_campaigns_take_a_window_and_force_velocity(fleet, cli, tmp):
+    """`sweep`, `diagnose` and the split diagnosis with `--window` and
+    `--force-velocity` equal the command line's (settings included)."""
+    m = fleet / "manifest.csv"
+    cli("sweep", m, "--window", "1:9", "--force-velocity", "--no-report", "--out", tmp / "s")
+    s = ballpass.sweep(m, window=(1, 9), force_velocity=True)
+    assert s.to_dict() == read_json(tmp / "s" / "sweep.json")
+    assert s.settings.window.start_s == 1.0 and s.settings.preflight.force_velocity
+    cli("diagnose", m, "--window", "2:", "--no-report", "--out", tmp / "d")
+    d = ballpass.diagnose(m, window=(2, None))
+    assert d.to_dict() == read_json(tmp / "d" / "diagnosis.json")
+    assert d.to_dict() != ballpass.diagnose(m).to_dict()
+    entries = [e for e in ballpass.read_manifest(m).entries
+               if e.velocity_mm_s == 20 and e.bearing != "sr25w"]
+    parts = [ballpass.process_record(e.path, bearing=e.bearing, velocity_mm_s=e.velocity_mm_s,
+                                     repeat=e.repeat, condition=e.condition, window=(2, None))
+             for e in entries]
+    split = ballpass.diagnose_records(parts, source=d.source, selection=d.selection,
+                                      window=(2, None))
+    for key in ("result", "record_results", "settings"):
+        assert split.to_dict()[key] == d.to_dict()[key], key
 
 
 def test_diagnosis_split_into_records_and_batch_equals_the_whole(fleet):

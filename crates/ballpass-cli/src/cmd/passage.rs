@@ -4,12 +4,12 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
-use ballpass::analysis::passage::{detect_passages, PassageAnalysis, PassageSettings};
-use ballpass::analysis::passage_table::{PassageFailure, PassageOutput};
-use ballpass::analysis::preflight::{check, check_channels, PreflightSettings, VelocitySource};
+use ballpass::analysis::passage::{PassageAnalysis, PassageSettings};
+use ballpass::analysis::passage_table::{checked_passages, PassageFailure, PassageOutput};
+use ballpass::analysis::preflight::PreflightSettings;
 use ballpass::bearing::Geometry;
 use ballpass::recording::io::load_all;
-use ballpass::recording::{Channel, Recording};
+use ballpass::recording::Recording;
 use ballpass::report::{self, Block, Report, Section};
 use clap::Args;
 
@@ -185,26 +185,8 @@ fn one(
     // A plateau's velocity is the encoder's: measured, not stated.
     let file_velocity = rec.meta.velocity_mm_s.filter(|_| !a.segment.segment);
     let stated = a.load.velocity.or(file_velocity);
-    let (rec, velocity, measured, warnings, notes) =
-        if stated.is_none() && rec.channel(Channel::Position).is_none() {
-            let c = check_channels(vec![rec], pre)?;
-            let rec = c.recordings.into_iter().next().expect("one in, one out");
-            (rec, None, false, c.warnings, Vec::new())
-        } else {
-            let c = check(vec![rec], stated, geometry, pre)?;
-            let measured = c.velocity_source == VelocitySource::Measured;
-            let rec = c.recordings.into_iter().next().expect("one in, one out");
-            (rec, Some(c.velocity_mm_s), measured, c.warnings, c.notes)
-        };
-    let s = PassageSettings {
-        velocity_mm_s: if measured { velocity } else { a.load.velocity },
-        ..settings.clone()
-    };
-    let mut r = detect_passages(&rec, &s)?;
-    if measured {
-        r.velocity_source = "measured from the encoder".into();
-    }
-    Ok((rec, r, warnings, notes))
+    let c = checked_passages(rec, stated, a.load.velocity, settings, geometry, pre)?;
+    Ok((c.recording, c.passages, c.warnings, c.notes))
 }
 
 fn build_report(

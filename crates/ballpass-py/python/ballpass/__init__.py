@@ -138,6 +138,20 @@ def _settings_json(settings: dict | None, overrides: dict) -> str | None:
     return json.dumps(merged) if merged else None
 
 
+def _window(window) -> str | None:
+    """A time window as the command line's ``--window T0:T1``: ``(t0, t1)``
+    in seconds on the records' time axis (``None`` leaves an end open), or
+    that text itself."""
+    if window is None or isinstance(window, str):
+        return window
+    try:
+        t0, t1 = window
+    except (TypeError, ValueError):
+        raise ValueError(f"window: expected (t0, t1) in seconds or 'T0:T1', got {window!r}") from None
+    ends = ["" if t is None else repr(float(t)) for t in (t0, t1)]
+    return f"{ends[0]}:{ends[1]}"
+
+
 def _warn(data: dict) -> None:
     for w in data.get("warnings", ()):
         warnings.warn(w, BallpassWarning, stacklevel=3)
@@ -279,6 +293,7 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
 
 def passages(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
              ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
+             window=None, force_velocity: bool = False,
              settings: dict | None = None, threads=None, **setting_overrides) -> Result:
     """Ball passages seen by the optical sensor, per recording, as
     ``ballpass passage``: periods ``tau_c_s``, widths at half prominence
@@ -287,7 +302,14 @@ def passages(recordings, *, velocity_mm_s: float | None = None, bearing: str | N
     ``rectangular_order``, ...). ``to_dict()`` equals ``passage.json``;
     ``.table`` equals ``passages.csv`` and each ``.records[i].table`` holds
     that record's rows. A recording that fails is listed in ``failed``;
-    when all fail, the first failure is raised."""
+    when all fail, the first failure is raised.
+
+    ``window=(t0, t1)`` (s, on each record's time axis; ``None`` leaves an
+    end open) measures only that part, as ``--window T0:T1``. The command
+    line's checks run first, as for :func:`analyze`: dead channels are left
+    out (with a warning), and a velocity (``velocity_mm_s`` or the
+    recording's own) that the encoder contradicts is an error unless
+    ``force_velocity``; without one, the encoder's is used."""
     load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing}
     recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
     over = dict(setting_overrides)
@@ -295,8 +317,9 @@ def passages(recordings, *, velocity_mm_s: float | None = None, bearing: str | N
         over["velocity_mm_s"] = velocity_mm_s
     data, tables = _native.passages(
         recs, _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
-        _settings_json(settings, over), _pool(threads),
+        _settings_json(settings, over), _pool(threads), _window(window), bool(force_velocity),
     )
+    _warn(data)
     per = [Table(t) for t in tables]
     whole = {}
     if per and per[0].columns:
@@ -359,15 +382,19 @@ def _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm):
 
 def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
           only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
-          harmonics: int = 5, threads=None, **load_options) -> Result:
+          harmonics: int = 5, window=None, force_velocity: bool = False, threads=None,
+          **load_options) -> Result:
     """A velocity sweep over a campaign, as ``ballpass sweep``: velocity-error
     trend, tau_c and tau_p against velocity, d_avg. ``source`` is a manifest
     CSV or a folder with ``pattern``; by default the bearing recorded at the
-    most velocities. ``to_dict()`` equals ``sweep.json``."""
+    most velocities. ``window=(t0, t1)`` (s) uses only that part of each
+    record (``--window``); each record's velocity is checked against its
+    encoder as :func:`analyze` does (``force_velocity``:
+    ``--force-velocity``). ``to_dict()`` equals ``sweep.json``."""
     data, _ = _native.campaign(
         "sweep", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics), None,
-        _load_json(load_options), _pool(threads),
+        _load_json(load_options), _pool(threads), _window(window), bool(force_velocity),
     )
     return Result(data, kind="Sweep")
 
@@ -375,8 +402,8 @@ def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = 
 def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
              only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
              harmonics: int = 5, low_band_hz: float = 25.0, spike_spreads: float = 8.0,
-             bad_false_alarm: float = 1e-4, settings: dict | None = None, threads=None,
-             **load_options) -> Result:
+             bad_false_alarm: float = 1e-4, settings: dict | None = None, window=None,
+             force_velocity: bool = False, threads=None, **load_options) -> Result:
     """A batch of bearings, as ``ballpass diagnose``: friction spectra,
     harmonics, the friction of each ball-pass period and a verdict per
     bearing (worst first in ``.result.bearings``). ``source`` is a manifest
@@ -388,14 +415,16 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
     (``--bad-false-alarm``: false-alarm probability per good bearing of the
     spike count for "bad"); ``settings`` sets any ``DiagnoseSettings`` field
     (e.g. ``{"suspect_false_alarm": 0.01, "sticking": {"smoothing_periods":
-    0.01}}``) and wins over the keywords. ``to_dict()`` equals ``diagnosis.json``;
+    0.01}}``) and wins over the keywords. ``window=(t0, t1)`` (s) and
+    ``force_velocity`` are ``--window`` and ``--force-velocity``, as for
+    :func:`sweep`. ``to_dict()`` equals ``diagnosis.json``;
     ``.friction_spectra`` is ``friction_spectra.csv`` (columns
     ``psd_friction_<bearing>_n2_per_hz``)."""
     data, spectra = _native.campaign(
         "diagnose", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics),
         _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm),
-        _load_json(load_options), _pool(threads),
+        _load_json(load_options), _pool(threads), _window(window), bool(force_velocity),
     )
     return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
 
@@ -403,18 +432,20 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
 def process_record(path, *, bearing: str, velocity_mm_s: float, repeat: int = 1,
                    condition: str | None = None, lowpass_hz: float = 20.0, harmonics: int = 5,
                    low_band_hz: float = 25.0, spike_spreads: float = 8.0,
-                   settings: dict | None = None, **load_options) -> RecordResult:
+                   settings: dict | None = None, window=None, force_velocity: bool = False,
+                   **load_options) -> RecordResult:
     """One record of a campaign, loaded and processed exactly as
     ``ballpass diagnose`` processes each record (analysis, passages, the
     friction of each ball-pass period, friction spectrum): the per-record
     half of :func:`diagnose`, for executors of a distributed engine. Give it
-    the ``low_band_hz`` and ``spike_spreads`` the batch half gets. The
+    the ``low_band_hz`` and ``spike_spreads`` the batch half gets, and the
+    same ``window`` and ``force_velocity`` as :func:`diagnose_records`. The
     result pickles."""
     data, freq, psd, heights = _native.process_record(
         os.fspath(path), bearing, float(velocity_mm_s), int(repeat), condition,
         float(lowpass_hz), int(harmonics),
         _diagnosis_json(settings, low_band_hz, spike_spreads, 1e-4),
-        _load_json(load_options),
+        _load_json(load_options), _window(window), bool(force_velocity),
     )
     return RecordResult(data, freq, psd, heights)
 
@@ -423,7 +454,8 @@ def diagnose_records(records: Iterable[RecordResult], *, failures: Iterable[tupl
                      source: str = "records", selection: Iterable[str] = (),
                      lowpass_hz: float = 20.0, harmonics: int = 5, low_band_hz: float = 25.0,
                      spike_spreads: float = 8.0, bad_false_alarm: float = 1e-4,
-                     settings: dict | None = None) -> Result:
+                     settings: dict | None = None, window=None,
+                     force_velocity: bool = False) -> Result:
     """The batch half of :func:`diagnose`: verdicts from records processed
     by :func:`process_record` (anywhere), with the same thresholds.
     ``failures`` are ``(path, bearing, velocity_mm_s, repeat, reason)`` of
@@ -434,6 +466,7 @@ def diagnose_records(records: Iterable[RecordResult], *, failures: Iterable[tupl
         states, [tuple(f) for f in failures], str(source), list(selection),
         float(lowpass_hz), int(harmonics),
         _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm),
+        _window(window), bool(force_velocity),
     )
     return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
 

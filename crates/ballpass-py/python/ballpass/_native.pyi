@@ -123,6 +123,8 @@ def passages(
     bearing: str | None = None,
     settings: str | None = None,
     pool: ThreadPool | None = None,
+    window: str | None = None,
+    force_velocity: bool = False,
 ) -> tuple[dict[str, Any], list[dict[str, Any]]]: ...
 def manifest(source: str, pattern: str | None = None, load: str | None = None) -> dict[str, Any]: ...
 def selection(kind: str, source: str, pattern: str | None = None,
@@ -138,6 +140,8 @@ def process_record(
     harmonics: int = 5,
     diagnosis: str | None = None,
     load: str | None = None,
+    window: str | None = None,
+    force_velocity: bool = False,
 ) -> tuple[dict[str, Any], F64, F64, F64]: ...
 def diagnose_records(
     records: list[tuple[str, F64, F64, F64]],
@@ -147,6 +151,8 @@ def diagnose_records(
     lowpass_hz: float = 20.0,
     harmonics: int = 5,
     diagnosis: str | None = None,
+    window: str | None = None,
+    force_velocity: bool = False,
 ) -> tuple[dict[str, Any], dict[str, F64]]: ...
 def campaign(
     kind: str,
@@ -159,6 +165,8 @@ def campaign(
     diagnosis: str | None = None,
     load: str | None = None,
     pool: ThreadPool | None = None,
+    window: str | None = None,
+    force_velocity: bool = False,
 ) -> tuple[dict[str, Any], dict[str, F64]]: ...
 def model_signals(model: str | None = None, settings: str | None = None) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]: ...
 def model_pulses(settings: str | None = None) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]: ...

@@ -521,6 +521,15 @@ def sosfilt(sos, x, axis=-1, zi=None):
     """Filters ``x`` along ``axis`` with second-order sections
     (``scipy.signal.sosfilt``, direct form II transposed). With ``zi`` (shape
     ``(n_sections, ..., 2, ...)``) returns ``(y, zf)``."""
+    if (zi is None and type(x) is np.ndarray and x.ndim == 1 and x.dtype == np.float64
+            and x.flags.c_contiguous and axis in (-1, 0) and type(sos) is np.ndarray
+            and sos.dtype == np.float64 and sos.ndim == 2 and sos.shape[1] == 6
+            and sos.flags.c_contiguous):
+        # The common call, sosfilt(sos, x) of one float64 signal: straight
+        # to the kernel, which checks the sections (a0 = 1, SciPy's message)
+        # and the samples.
+        y, _ = _native.sosfilt(sos, x.reshape(1, -1))
+        return y.reshape(-1)
     x = _x(x)
     sos = _sos(sos)
     ns = sos.shape[0]

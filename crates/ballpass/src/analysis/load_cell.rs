@@ -46,6 +46,7 @@
 
 use std::borrow::Cow;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -162,7 +163,8 @@ pub fn fit_discharge(y: &[f64], fs_hz: f64, period_s: f64) -> Option<DischargeFi
     let grid: Vec<f64> = (0..=240)
         .map(|k| (tau_lo.ln() + (tau_hi / tau_lo).ln() * k as f64 / 240.0).exp())
         .collect();
-    let rss: Vec<f64> = grid.iter().map(|&t| blocks.fit(t).2).collect();
+    // The grid's fits are independent: in parallel (rayon), in order.
+    let rss: Vec<f64> = grid.par_iter().map(|&t| blocks.fit(t).2).collect();
     let best = (0..grid.len()).min_by(|&a, &b| rss[a].total_cmp(&rss[b]))?;
     let tau = golden_min(
         grid[best.saturating_sub(1)].ln(),
@@ -207,7 +209,7 @@ pub fn fit_discharge(y: &[f64], fs_hz: f64, period_s: f64) -> Option<DischargeFi
             } else {
                 f64::INFINITY
             };
-            let profile: Vec<f64> = grid.iter().map(|&t| coarse.fit(t).2).collect();
+            let profile: Vec<f64> = grid.par_iter().map(|&t| coarse.fit(t).2).collect();
             let limit = rss_c * (1.0 + f_ppf(0.95, 1.0, n - 3.0) / (n - 3.0));
             (
                 n > 6.0 && f > f_ppf(0.999, 2.0, n - 3.0),
@@ -256,6 +258,8 @@ fn golden_min(mut a: f64, mut b: f64, f: impl Fn(f64) -> f64) -> f64 {
 /// discharge model averaged the same way.
 struct Blocks {
     s: Vec<f64>,
+    /// Mean of `s` (every fit uses it).
+    s_mean: f64,
     /// Block width, s.
     dt: f64,
     /// `1 / (fs)`, s, and samples per block.
@@ -268,8 +272,9 @@ impl Blocks {
         let s = y
             .chunks_exact(w)
             .map(|c| c.iter().sum::<f64>() / w as f64)
-            .collect();
+            .collect::<Vec<f64>>();
         Self {
+            s_mean: s.iter().sum::<f64>() / s.len() as f64,
             s,
             dt: w as f64 / fs,
             fs,
@@ -278,7 +283,9 @@ impl Blocks {
     }
 
     /// `e^{-t/τ}` averaged over each block.
-    fn basis(&self, tau: f64) -> Vec<f64> {
+    /// With its sum, accumulated as it is made (in the order and from the
+    /// `-0.0` of `Iterator::sum`).
+    fn basis_and_sum(&self, tau: f64) -> (Vec<f64>, f64) {
         let a = 1.0 / (self.fs * tau);
         let wf = self.w as f64;
         // mean_{j<w} e^{-a j} = (1 - e^{-a w}) / (w (1 - e^{-a})), via expm1.
@@ -289,21 +296,25 @@ impl Blocks {
         };
         let r = (-a * wf).exp();
         let mut v = g;
-        self.s
+        let mut sum = -0.0;
+        let b = self
+            .s
             .iter()
             .map(|_| {
                 let out = v;
+                sum += out;
                 v *= r;
                 out
             })
-            .collect()
+            .collect();
+        (b, sum)
     }
 
     /// Least squares of `s = c + A b_τ`: `(c, A, RSS)`.
     fn fit(&self, tau: f64) -> (f64, f64, f64) {
-        let b = self.basis(tau);
+        let (b, sum_b) = self.basis_and_sum(tau);
         let m = b.len() as f64;
-        let (mb, ms) = (b.iter().sum::<f64>() / m, self.s.iter().sum::<f64>() / m);
+        let (mb, ms) = (sum_b / m, self.s_mean);
         let (mut sbb, mut sbs) = (0.0, 0.0);
         for (bi, si) in b.iter().zip(&self.s) {
             sbb += (bi - mb) * (bi - mb);
@@ -379,12 +390,14 @@ impl Blocks {
         let per = ((period_s / self.dt).round() as usize)
             .max(1)
             .min((self.s.len() / 20).max(1));
+        let s: Vec<f64> = self
+            .s
+            .chunks_exact(per)
+            .map(|c| c.iter().sum::<f64>() / per as f64)
+            .collect();
         Blocks {
-            s: self
-                .s
-                .chunks_exact(per)
-                .map(|c| c.iter().sum::<f64>() / per as f64)
-                .collect(),
+            s_mean: s.iter().sum::<f64>() / s.len() as f64,
+            s,
             dt: self.dt * per as f64,
             fs: self.fs,
             w: self.w * per,

@@ -130,3 +130,65 @@ pub fn passage_rows(r: &PassageAnalysis) -> Vec<PassageRow> {
         })
         .collect()
 }
+
+/// One record measured as `ballpass passage` measures it: the record as the
+/// checks left it, its passages, and the checks' warnings and notes.
+#[derive(Debug, Clone)]
+pub struct CheckedPassages {
+    /// The record after the checks (dead channels left out).
+    pub recording: crate::recording::Recording,
+    /// Its passages.
+    pub passages: PassageAnalysis,
+    /// Warnings of the checks (a forced velocity, a dead channel).
+    pub warnings: Vec<String>,
+    /// Notes of the checks (the velocity measured from the encoder).
+    pub notes: Vec<String>,
+}
+
+/// The checks before the analysis, then the passages of one record, as
+/// `ballpass passage` runs them: with a velocity (`stated`: the caller's
+/// explicit one, else the file's or profile's) or an encoder, the velocity
+/// is checked against the encoder (or measured from it when none is
+/// stated) by [`super::preflight::check`]; with neither, only the dead
+/// channels are left out. `explicit` is the velocity the caller gave
+/// itself, which guides the detection; a measured velocity guides it too.
+///
+/// # Errors
+/// The checks' errors (a velocity the encoder contradicts without
+/// `force_velocity`, a ball-pass frequency above Nyquist, no live
+/// channel) and [`super::passage::detect_passages`]'.
+pub fn checked_passages(
+    rec: crate::recording::Recording,
+    stated: Option<f64>,
+    explicit: Option<f64>,
+    settings: &super::passage::PassageSettings,
+    geometry: &crate::bearing::Geometry,
+    pre: &super::preflight::PreflightSettings,
+) -> Result<CheckedPassages> {
+    use super::preflight::{check, check_channels, VelocitySource};
+    let no_encoder = rec.channel(crate::recording::Channel::Position).is_none();
+    let (recording, velocity, measured, warnings, notes) = if stated.is_none() && no_encoder {
+        let c = check_channels(vec![rec], pre)?;
+        let rec = c.recordings.into_iter().next().expect("one in, one out");
+        (rec, None, false, c.warnings, Vec::new())
+    } else {
+        let c = check(vec![rec], stated, geometry, pre)?;
+        let measured = c.velocity_source == VelocitySource::Measured;
+        let rec = c.recordings.into_iter().next().expect("one in, one out");
+        (rec, Some(c.velocity_mm_s), measured, c.warnings, c.notes)
+    };
+    let s = super::passage::PassageSettings {
+        velocity_mm_s: if measured { velocity } else { explicit },
+        ..settings.clone()
+    };
+    let mut passages = super::passage::detect_passages(&recording, &s)?;
+    if measured {
+        passages.velocity_source = "measured from the encoder".into();
+    }
+    Ok(CheckedPassages {
+        recording,
+        passages,
+        warnings,
+        notes,
+    })
+}

@@ -421,6 +421,93 @@ fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
     }
 }
 
+/// The stage, identified from every record's friction → velocity-error
+/// response pooled (one segment length for all: the shortest record's);
+/// `None` without a record holding both channels.
+fn identify_stage(
+    recs: &[Recording],
+    restored: &[super::Restored<'_>],
+    fs: f64,
+    pred: &Prediction,
+) -> Result<
+    Option<(
+        crate::model::identify::StageIdentification,
+        crate::model::identify::StageSpectra,
+    )>,
+> {
+    let n_min = recs.iter().map(Recording::len).min().unwrap_or(0);
+    let nperseg = crate::model::identify::nperseg_for(n_min, fs);
+    let mut pooled = crate::model::identify::StageSpectra::default();
+    for (r, fr) in recs.iter().zip(restored) {
+        if let (Some((f, _)), Some(p)) = (fr, r.channel(Channel::Position)) {
+            let sp = crate::model::identify::StageSpectra::of_signals(
+                f,
+                p,
+                fs,
+                pred.velocity_mm_s,
+                nperseg,
+            )?;
+            pooled.add(&sp);
+        }
+    }
+    Ok((pooled.records > 0).then(|| (crate::model::identify::identify(&pooled), pooled)))
+}
+
+/// One record's preparation, correlations, and full, high-resolution and
+/// unfiltered spectra.
+type PerRecord = (Prepared, Correlations, Spectra, Spectra, Spectra);
+
+/// [`PerRecord`] of every record, all in parallel (rayon), in record order:
+/// `(trim, n)` are the samples trimmed from the start and the samples kept.
+#[allow(clippy::too_many_arguments)]
+fn per_record(
+    recs: &[Recording],
+    restored: &[super::Restored<'_>],
+    pred: &Prediction,
+    settings: &AnalyzeSettings,
+    filter: Option<&ballpass_dsp::ZeroPhaseFilter>,
+    plan: &spectra::HiresPlan,
+    (trim, n): (usize, usize),
+    signals: &[Signal],
+    max_lag: usize,
+) -> Result<Vec<PerRecord>> {
+    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<PerRecord> {
+        let friction = fr.as_ref().map(|(f, _)| f.as_ref());
+        let mut p =
+            preprocess::prepare(r, pred.velocity_mm_s, settings, filter, trim, n, friction)?;
+        p.signals.retain(|(s, _)| signals.contains(s));
+        p.unfiltered.retain(|(s, _)| signals.contains(s));
+        let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
+        // Nothing else reads the unfiltered signals: on a long record they
+        // are three record-length copies.
+        p.unfiltered = Vec::new();
+        let (c, (f, h)) = rayon::join(
+            || {
+                with_correlator(
+                    CorrelateSettings {
+                        normalization: settings.corr_norm.to_dsp(),
+                    },
+                    n,
+                    |c| correlation::compute(&p, c, settings, max_lag),
+                )
+            },
+            || {
+                rayon::join(
+                    || spectra::full(&p, settings),
+                    || spectra::hires(&p, settings, plan),
+                )
+            },
+        );
+        Ok((p, c?, f?, h?, u))
+    };
+    recs.par_iter()
+        .zip(restored.par_iter())
+        .map(one)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect()
+}
+
 /// [`analyze`](super::analyze).
 pub(crate) fn run(
     recs: &[Recording],
@@ -538,21 +625,73 @@ pub(crate) fn run(
             needed_for: "analyze (no friction, position or optical channel)",
         });
     }
-    // The load-cell correction of each record (given by a caller that needs
-    // the restored friction itself, else made here).
-    let restored: Vec<super::Restored<'_>> = match restored {
-        Some(r) => r,
-        None => recs
-            .par_iter()
-            .map(|r| {
-                r.channel(Channel::Friction)
-                    .map(|f| {
-                        super::load_cell::restore_friction(f, fs, pred.tau_c_s, settings.load_cell)
-                    })
-                    .transpose()
-            })
-            .collect::<Result<Vec<_>>>()?,
+    // The filter and the high-resolution plan first (cheap; the plan's
+    // warnings are reported after the load cell's, as they always were).
+    let filter = preprocess::lowpass_filter(settings, fs);
+    let mut plan_warnings = Vec::new();
+    let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut plan_warnings);
+    // Three independent branches run in parallel (rayon): the passages of
+    // every record (they read the raw optical channel only); the load-cell
+    // correction of each record and then the stage identification from it;
+    // and, on the corrected friction, each record's correlations and
+    // spectra. Their results are taken in the order of a sequential pass,
+    // so the numbers, the warnings and the first error reported are that
+    // pass's.
+    // On long records the passages are detected at the end instead, after
+    // the prepared signals are dropped: each branch holds several
+    // record-length buffers (same results, less memory).
+    let side_by_side = n <= SIDE_BY_SIDE_MAX_SAMPLES;
+    let detect = || {
+        if with_passages {
+            super::passage_summaries(recs, pred)
+        } else {
+            Vec::new()
+        }
     };
+    let (main, early_passages) = rayon::join(
+        || {
+            // The load-cell correction of each record (given by a caller
+            // that needs the restored friction itself, else made here).
+            let restored: Vec<super::Restored<'_>> = match restored {
+                Some(r) => r,
+                None => recs
+                    .par_iter()
+                    .map(|r| {
+                        r.channel(Channel::Friction)
+                            .map(|f| {
+                                super::load_cell::restore_friction(
+                                    f,
+                                    fs,
+                                    pred.tau_c_s,
+                                    settings.load_cell,
+                                )
+                            })
+                            .transpose()
+                    })
+                    .collect::<Result<Vec<_>>>()?,
+            };
+            let (stage, per_record) = rayon::join(
+                || identify_stage(recs, &restored, fs, pred),
+                || match (&filter, &plan) {
+                    (Ok(filter), Ok(plan)) => Some(per_record(
+                        recs,
+                        &restored,
+                        pred,
+                        settings,
+                        filter.as_ref(),
+                        plan,
+                        (trim, n),
+                        &signals,
+                        max_lag,
+                    )),
+                    _ => None,
+                },
+            );
+            Ok::<_, Error>((restored, stage, per_record))
+        },
+        || side_by_side.then(detect),
+    );
+    let (restored, stage, per_record) = main?;
     let load_cell: Vec<super::load_cell::DcRestoration> =
         restored.iter().flatten().map(|(_, d)| d.clone()).collect();
     if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
@@ -563,97 +702,14 @@ pub(crate) fn run(
             notes.push(format!("{}: {}", r.source_name(), d.note));
         }
     }
-    // The stage, identified from every record's friction → velocity-error
-    // response pooled (one segment length for all: the shortest record's).
-    let stage = {
-        let n_min = recs.iter().map(Recording::len).min().unwrap_or(0);
-        let nperseg = crate::model::identify::nperseg_for(n_min, fs);
-        let mut pooled = crate::model::identify::StageSpectra::default();
-        for (r, fr) in recs.iter().zip(&restored) {
-            if let (Some((f, _)), Some(p)) = (fr, r.channel(Channel::Position)) {
-                let sp = crate::model::identify::StageSpectra::of_signals(
-                    f,
-                    p,
-                    fs,
-                    pred.velocity_mm_s,
-                    nperseg,
-                )?;
-                pooled.add(&sp);
-            }
-        }
-        (pooled.records > 0).then(|| (crate::model::identify::identify(&pooled), pooled))
-    };
-    let (stage, stage_spectra) = match stage {
+    let (stage, stage_spectra) = match stage? {
         Some((id, sp)) => (Some(id), Some(sp)),
         None => (None, None),
     };
-    let filter = preprocess::lowpass_filter(settings, fs)?;
-    let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut warnings)?;
-    // Each record's correlations, full and high-resolution spectra are
-    // independent of each other and of the other records', and the passage
-    // detection of all of them: all run in parallel (rayon), and the
-    // results are taken in record order, so they and the first error
-    // reported are those of a sequential pass.
-    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<(Prepared, Correlations, Spectra, Spectra, Spectra)> {
-        let friction = fr.as_ref().map(|(f, _)| f.as_ref());
-        let mut p = preprocess::prepare(
-            r,
-            pred.velocity_mm_s,
-            settings,
-            filter.as_ref(),
-            trim,
-            n,
-            friction,
-        )?;
-        p.signals.retain(|(s, _)| signals.contains(s));
-        p.unfiltered.retain(|(s, _)| signals.contains(s));
-        let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
-        // Nothing else reads the unfiltered signals: on a long record they
-        // are three record-length copies.
-        p.unfiltered = Vec::new();
-        let (c, (f, h)) = rayon::join(
-            || {
-                with_correlator(
-                    CorrelateSettings {
-                        normalization: settings.corr_norm.to_dsp(),
-                    },
-                    n,
-                    |c| correlation::compute(&p, c, settings, max_lag),
-                )
-            },
-            || {
-                rayon::join(
-                    || spectra::full(&p, settings),
-                    || spectra::hires(&p, settings, &plan),
-                )
-            },
-        );
-        Ok((p, c?, f?, h?, u))
-    };
-    let analyse = || {
-        recs.par_iter()
-            .zip(restored.par_iter())
-            .map(one)
-            .collect::<Vec<_>>()
-            .into_iter()
-            .collect::<Result<Vec<_>>>()
-    };
-    let passages = || {
-        if with_passages {
-            super::passage_summaries(recs, pred)
-        } else {
-            Vec::new()
-        }
-    };
-    // Side by side, except on long records: there each holds several
-    // record-length buffers, so the passages are detected at the end, after
-    // the prepared signals are dropped (same results, less memory).
-    let (per_record, early_passages) = if n <= SIDE_BY_SIDE_MAX_SAMPLES {
-        let (a, p) = rayon::join(analyse, passages);
-        (a, Some(p))
-    } else {
-        (analyse(), None)
-    };
+    let filter = filter?;
+    let plan = plan?;
+    warnings.extend(plan_warnings);
+    let per_record = per_record.expect("filter and plan are Ok");
     let mut prepared = Vec::with_capacity(recs.len());
     let mut corrs = Vec::with_capacity(recs.len());
     let mut fulls = Vec::with_capacity(recs.len());
@@ -724,7 +780,7 @@ pub(crate) fn run(
         Some(p) => p,
         None => {
             drop(prepared);
-            passages()
+            detect()
         }
     };
     notes.push(format!(

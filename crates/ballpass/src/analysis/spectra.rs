@@ -61,6 +61,7 @@ use ballpass_dsp::{
     polyphase_average_csd, polyphase_average_psd, Complex64, DecimateSettings, Decimator, Welch,
     WelchSettings,
 };
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::correlation::pairs_for;
@@ -893,35 +894,41 @@ pub(crate) fn harmonics(
 ) -> Vec<HarmonicRow> {
     let ctx = TestContext::new(s, settings);
     let alpha = 1.0 - settings.confidence;
-    let mut rows = Vec::new();
-    for (sig, psd) in &s.auto {
-        let meas = f_meas.filter(|(_, from)| from != sig).map(|(f, _)| f);
-        let mut mine: Vec<HarmonicRow> = (1..=settings.harmonics)
-            .map(|k| {
-                let kf = k as f64;
-                let predicted = harmonic_value(s, psd, kf * f_pred, f_pred, false, ctx);
-                let measured = meas.and_then(|f| harmonic_value(s, psd, kf * f, f, true, ctx));
-                let tested = if measured.is_some() {
-                    Some("measured".to_string())
-                } else if predicted.is_some() {
-                    Some("predicted".to_string())
-                } else {
-                    None
-                };
-                HarmonicRow {
-                    signal: *sig,
-                    k,
-                    predicted,
-                    measured,
-                    tested,
-                    significant: None,
-                }
-            })
-            .collect();
-        holm(&mut mine, alpha);
-        rows.extend(mine);
-    }
-    rows
+    // Every (signal, k) test is independent of the others: all run in
+    // parallel (rayon), collected in order, then corrected per signal.
+    let per_signal: Vec<Vec<HarmonicRow>> = s
+        .auto
+        .par_iter()
+        .map(|(sig, psd)| {
+            let meas = f_meas.filter(|(_, from)| from != sig).map(|(f, _)| f);
+            let mut mine: Vec<HarmonicRow> = (1..=settings.harmonics)
+                .into_par_iter()
+                .map(|k| {
+                    let kf = k as f64;
+                    let predicted = harmonic_value(s, psd, kf * f_pred, f_pred, false, ctx);
+                    let measured = meas.and_then(|f| harmonic_value(s, psd, kf * f, f, true, ctx));
+                    let tested = if measured.is_some() {
+                        Some("measured".to_string())
+                    } else if predicted.is_some() {
+                        Some("predicted".to_string())
+                    } else {
+                        None
+                    };
+                    HarmonicRow {
+                        signal: *sig,
+                        k,
+                        predicted,
+                        measured,
+                        tested,
+                        significant: None,
+                    }
+                })
+                .collect();
+            holm(&mut mine, alpha);
+            mine
+        })
+        .collect();
+    per_signal.into_iter().flatten().collect()
 }
 
 /// Holm's step-down correction over one signal's harmonics: sorted by
