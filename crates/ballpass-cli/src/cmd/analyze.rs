@@ -56,7 +56,7 @@ pub struct AnalyzeArgs {
     #[command(flatten)]
     load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
-    /// spectra_hires.csv, spectra_unfiltered.csv, the report and
+    /// spectra_hires.csv, spectra_unfiltered.csv, sync_average.csv, the report and
     /// ballpass-run.json (written last: the folder holds a complete run
     /// exactly when it is there).
     #[arg(long, short = 'o', value_name = "DIR")]

@@ -22,6 +22,11 @@
 //!   (`psd_friction_n2_per_hz`), then per cross pair
 //!   `csd_<pair>_re_<unit>_per_hz`, `csd_<pair>_im_<unit>_per_hz` and the
 //!   coherence `coh_<pair>`.
+//! - `sync_average.csv` (when the analysis has a synchronous average,
+//!   [`super::sync`]): `phase` (fraction of the ball-pass period after phase
+//!   0), then `friction_mean_n`, `friction_band_low_n`,
+//!   `friction_band_high_n`, `velocity_error_mean_um_s`,
+//!   `velocity_error_band_low_um_s`, `velocity_error_band_high_um_s`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -43,6 +48,8 @@ pub struct OutputPaths {
     pub spectra_hires: PathBuf,
     /// `spectra_unfiltered.csv`.
     pub spectra_unfiltered: PathBuf,
+    /// `sync_average.csv`, when the analysis has a synchronous average.
+    pub sync: Option<PathBuf>,
 }
 
 /// Unit token of a signal in column names (`n`, `mm_s`, `v`).
@@ -305,6 +312,7 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
         spectra: dir.join("spectra.csv"),
         spectra_hires: dir.join("spectra_hires.csv"),
         spectra_unfiltered: dir.join("spectra_unfiltered.csv"),
+        sync: a.sync.as_ref().map(|_| dir.join("sync_average.csv")),
     };
     // The large correlations.csv beside the four small files.
     let (corr, rest) = rayon::join(
@@ -313,6 +321,9 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
             write_spectra(&paths.spectra, &a.spectra)?;
             write_spectra(&paths.spectra_hires, &a.spectra_hires)?;
             write_spectra(&paths.spectra_unfiltered, &a.spectra_unfiltered)?;
+            if let (Some(s), Some(p)) = (&a.sync, &paths.sync) {
+                s.write_csv(p)?;
+            }
             write_atomic_with(&paths.json, |w| {
                 serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;
                 w.write_all(b"\n")

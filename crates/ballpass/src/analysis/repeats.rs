@@ -743,6 +743,26 @@ pub(crate) fn run(
             }
         }
     }
+    let (passages, passage_times): (Vec<_>, Vec<_>) = passages.into_iter().unzip();
+    let sync = if with_passages {
+        let sync_settings = super::sync::SyncSettings::default();
+        match super::sync::records::for_records(
+            recs,
+            &prepared,
+            &passage_times,
+            pred,
+            trim,
+            &sync_settings,
+        ) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                warnings.push(format!("no synchronous average: {e}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
     let verdict = verdict(pred, &findings);
     Ok(Analysis {
         schema: SCHEMA,
@@ -793,6 +813,7 @@ pub(crate) fn run(
         repeats,
         verdict,
         passages,
+        sync,
         warnings,
         correlations: corr,
         spectra: full,

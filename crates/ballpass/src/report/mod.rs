@@ -86,6 +86,7 @@ mod page;
 pub mod passage;
 mod prepare;
 mod spec;
+mod sync;
 mod text;
 mod ticks;
 
