@@ -19,8 +19,9 @@ use crate::{output, text};
 /// Arguments of `ballpass compensate`.
 #[derive(Debug, Args)]
 pub struct CompensateArgs {
-    /// Recording files at one velocity (repeats are averaged); they need
-    /// friction, encoder position and the optical sensor.
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF
+    /// .mf4, at one velocity (repeats are averaged); they need friction,
+    /// encoder position and the optical sensor.
     #[arg(required = true, value_name = "REC")]
     recs: Vec<PathBuf>,
     #[command(flatten)]
