@@ -90,3 +90,39 @@ fn without_an_identified_stage_or_gains_it_says_what_to_give() {
         Err(e) => assert!(e.to_string().contains("give the loop gains"), "{e}"),
     }
 }
+
+#[test]
+fn a_stage_that_nearly_stalls_is_flagged() {
+    // A sticking bearing at 1.5 mm/s: velocity-error std near the velocity.
+    let s = SimSettings {
+        velocity_mm_s: 1.5,
+        duration_s: 220.0,
+        condition: Condition::Sticking,
+        seed: 15,
+        ..Default::default()
+    };
+    let sim = simulate(&s).unwrap();
+    let pred = s.geometry.predict(1.5, 5).unwrap();
+    let gains =
+        PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m).unwrap();
+    let c = compensate(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &Default::default(),
+        Some(gains),
+    )
+    .unwrap();
+    let stalls =
+        c.prediction.std_before_um_s * 1e-3 / 1.5 > ballpass::model::compensate::STALL_FRACTION;
+    assert_eq!(
+        c.warnings.first().is_some_and(|w| w.contains("stalls")),
+        stalls,
+        "{:?}",
+        c.warnings
+    );
+    assert!(
+        stalls,
+        "std {} µm/s at 1.5 mm/s",
+        c.prediction.std_before_um_s
+    );
+}

@@ -8,14 +8,6 @@ use crate::analysis::Signal;
 use crate::bearing::Prediction;
 use crate::recording::{Channel, Recording};
 
-/// `N_B` of the recording's catalog bearing, when its geometry is the one
-/// the prediction used (a profile's own geometry is not in the catalog).
-fn balls_in_circuit(rec: &Recording, pred: &Prediction) -> Option<u32> {
-    let entry = crate::bearing::lookup(rec.meta.bearing.as_deref()?)?;
-    let d = entry.geometry.d_avg_mm();
-    ((d - pred.d_avg_mm).abs() <= 1e-9 * d).then_some(entry.geometry.balls_in_race)
-}
-
 /// The average over `recs` (prepared as `prepared`, `trim` samples dropped
 /// at the start); `passage_times_s[i]` are record `i`'s optical passages
 /// (s, on the record's own clock) or why there are none. `Err` says in
@@ -88,10 +80,7 @@ pub(crate) fn for_records(
             ),
         );
     }
-    let balls = recs
-        .first()
-        .and_then(|r| balls_in_circuit(r, pred))
-        .filter(|_| recs.iter().all(|r| balls_in_circuit(r, pred).is_some()));
+    let balls = pred.balls_in_race;
     let key = if optical {
         SyncKey::OpticalPassage
     } else {
