@@ -390,7 +390,7 @@ fn parse_load_cell(v: &str) -> std::result::Result<LoadCellCorrection, String> {
 
 /// The stated velocity: the flag, else the records' metadata when they
 /// all agree; `None` (measured from the encoder) when none has one.
-fn stated_velocity(flag: Option<f64>, recs: &[Recording]) -> Result<Option<f64>> {
+pub(crate) fn stated_velocity(flag: Option<f64>, recs: &[Recording]) -> Result<Option<f64>> {
     if flag.is_some() {
         return Ok(flag);
     }

@@ -61,15 +61,7 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
     };
     let out = output::open_dir(&a.out, "compensate")?;
     let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
-    let stated = match a.load.velocity {
-        Some(v) => Some(v),
-        None => {
-            let vs: Vec<f64> = recs.iter().filter_map(|r| r.meta.velocity_mm_s).collect();
-            (vs.len() == recs.len() && vs.windows(2).all(|w| w[0] == w[1]))
-                .then(|| vs.first().copied())
-                .flatten()
-        }
-    };
+    let stated = super::analyze::stated_velocity(a.load.velocity, &recs)?;
     let checked = preflight::check(recs, stated, &geometry, &a.check.preflight())?;
     let settings = AnalyzeSettings::default();
     let prediction = geometry.predict(checked.velocity_mm_s, settings.harmonics)?;
