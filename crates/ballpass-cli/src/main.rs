@@ -37,6 +37,8 @@ enum Command {
     /// Show what a recording holds before analysing it: duration, rate,
     /// channels, ranges, clipping, dropouts, load-cell drift.
     Inspect(Box<cmd::inspect::InspectArgs>),
+    /// Feedforward compensation table (force against ball-pass phase) and its predicted benefit.
+    Compensate(Box<cmd::compensate::CompensateArgs>),
     /// Signal and stage models of thesis chapter 6, with its formulas corrected (docs/methods.md), as tables.
     Model(cmd::model::ModelArgs),
     /// Ball passages seen by the optical sensor: periods, widths, artefacts, fits.
@@ -91,6 +93,7 @@ fn main() -> ExitCode {
         Command::Sweep(a) => cmd::campaign::run_sweep(&a),
         Command::Diagnose(a) => cmd::campaign::run_diagnose(&a),
         Command::Inspect(a) => cmd::inspect::run(&a),
+        Command::Compensate(a) => cmd::compensate::run(&a),
         Command::Model(a) => cmd::model::run(&a),
         Command::Passage(a) => cmd::passage::run(&a),
         Command::Simulate(a) => cmd::simulate::run(&a),

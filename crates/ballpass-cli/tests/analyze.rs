@@ -61,6 +61,9 @@ fn writes_the_four_outputs_and_a_summary() {
     ));
     assert_eq!(head("spectra_hires.csv"), head("spectra.csv"));
     assert_eq!(head("spectra_unfiltered.csv"), head("spectra.csv"));
+    assert!(head("sync_average.csv").starts_with(
+        "phase,friction_mean_n,friction_band_low_n,friction_band_high_n,velocity_error_mean_um_s"
+    ));
     // The report: the page and one figure per correlation, spectra, coherence.
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("ball-pass frequency found"), "report summary");
@@ -70,13 +73,14 @@ fn writes_the_four_outputs_and_a_summary() {
         "spectra",
         "spectra_hires",
         "coherence",
+        "sync_average",
     ] {
         assert!(
             out.join("figures").join(format!("{fig}.svg")).exists(),
             "{fig}"
         );
     }
-    // --no-report: exactly the four data files, no temporary files left.
+    // --no-report: exactly the data files, no temporary files left.
     let bare = scratch("bare");
     let (ok, _, stderr) = run(&[
         "analyze",
@@ -102,7 +106,8 @@ fn writes_the_four_outputs_and_a_summary() {
             "spectra.csv",
             "spectra_hires.csv",
             "spectra_position.csv",
-            "spectra_unfiltered.csv"
+            "spectra_unfiltered.csv",
+            "sync_average.csv"
         ]
     );
     std::fs::remove_dir_all(&out).unwrap();

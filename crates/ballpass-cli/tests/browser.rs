@@ -101,7 +101,8 @@ fn every_exported_column_names_its_unit() {
         "_s_per_m", "_mm3_s2",
     ];
     // counts, ratios, fractions, flags, names: no unit
-    const PLAIN: [&str; 24] = [
+    const PLAIN: [&str; 25] = [
+        "phase",
         "periods",
         "spikes",
         "spikes_for_bad",

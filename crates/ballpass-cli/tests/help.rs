@@ -6,8 +6,9 @@ mod common;
 
 use common::run;
 
-const COMMANDS: [&[&str]; 12] = [
+const COMMANDS: [&[&str]; 13] = [
     &["predict"],
+    &["compensate"],
     &["inspect"],
     &["analyze"],
     &["passage"],
@@ -124,6 +125,7 @@ fn every_command_that_reads_recordings_names_the_formats() {
         &["passage"],
         &["sweep"],
         &["diagnose"],
+        &["compensate"],
     ] {
         let h = help(cmd);
         assert!(

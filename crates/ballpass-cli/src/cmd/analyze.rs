@@ -58,7 +58,7 @@ pub struct AnalyzeArgs {
     load: LoadArgs,
     /// Output folder for analysis.json, correlations.csv, spectra.csv,
     /// spectra_hires.csv, spectra_unfiltered.csv, spectra_position.csv
-    /// (with a position channel), the report and
+    /// (with a position channel), sync_average.csv, the report and
     /// ballpass-run.json (written last: the folder holds a complete run
     /// exactly when it is there).
     #[arg(long, short = 'o', value_name = "DIR")]
@@ -452,7 +452,7 @@ fn parse_load_cell(v: &str) -> std::result::Result<LoadCellCorrection, String> {
 
 /// The stated velocity: the flag, else the records' metadata when they
 /// all agree; `None` (measured from the encoder) when none has one.
-fn stated_velocity(flag: Option<f64>, recs: &[Recording]) -> Result<Option<f64>> {
+pub(crate) fn stated_velocity(flag: Option<f64>, recs: &[Recording]) -> Result<Option<f64>> {
     if flag.is_some() {
         return Ok(flag);
     }

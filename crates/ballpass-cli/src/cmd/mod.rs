@@ -2,6 +2,7 @@
 
 pub mod analyze;
 pub mod campaign;
+pub mod compensate;
 pub mod demo;
 pub mod inspect;
 pub mod model;

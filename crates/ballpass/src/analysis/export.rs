@@ -27,6 +27,11 @@
 //!   coherence `coh_<pair>`, then per auto-spectrum its confidence band
 //!   `psd_<signal>_lower_<unit²>_per_hz`, `psd_<signal>_upper_<unit²>_per_hz`
 //!   (level and degrees of freedom in `analysis.json`, `spectrum_*.band`).
+//! - `sync_average.csv` (when the analysis has a synchronous average,
+//!   [`super::sync`]): `phase` (fraction of the ball-pass period after phase
+//!   0), then `friction_mean_n`, `friction_band_low_n`,
+//!   `friction_band_high_n`, `velocity_error_mean_um_s`,
+//!   `velocity_error_band_low_um_s`, `velocity_error_band_high_um_s`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -50,6 +55,8 @@ pub struct OutputPaths {
     pub spectra_unfiltered: PathBuf,
     /// `spectra_position.csv`, when there are position-domain spectra.
     pub spectra_position: Option<PathBuf>,
+    /// `sync_average.csv`, when the analysis has a synchronous average.
+    pub sync: Option<PathBuf>,
 }
 
 /// Unit token of a signal in column names (`n`, `mm_s`, `v`).
@@ -317,6 +324,7 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
             .position
             .as_ref()
             .map(|_| dir.join("spectra_position.csv")),
+        sync: a.sync.as_ref().map(|_| dir.join("sync_average.csv")),
     };
     // The large correlations.csv beside the four small files.
     let (corr, rest) = rayon::join(
@@ -334,6 +342,9 @@ pub fn write_outputs(a: &Analysis, dir: &Path) -> Result<OutputPaths> {
                         columns: super::position::position_columns(p),
                     },
                 )?;
+            }
+            if let (Some(s), Some(p)) = (&a.sync, &paths.sync) {
+                s.write_csv(p)?;
             }
             write_atomic_with(&paths.json, |w| {
                 serde_json::to_writer_pretty(&mut *w, a).map_err(std::io::Error::other)?;

@@ -53,6 +53,7 @@ pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
+pub mod sync;
 mod train_fit;
 
 pub use correlation::{CorrelationWindow, Correlations, MeasuredPeriod, SignalPeriod};
@@ -583,6 +584,10 @@ pub struct Analysis {
     /// Ball passages of each record (optical sensor), in brief; the full
     /// table with fits is `ballpass passage`.
     pub passages: Vec<PassageSummary>,
+    /// Synchronous average of friction and velocity error over the
+    /// ball-pass period ([`sync`]; `None` when none could be made, see the
+    /// warnings, or for a campaign's records), exported as `sync_average.csv`.
+    pub sync: Option<sync::SyncAverage>,
     /// Everything the user should know about the numbers.
     pub warnings: Vec<String>,
     /// Correlations (averaged over repeats), exported as `correlations.csv`.
@@ -664,9 +669,13 @@ pub struct PassageSummary {
     pub note: Option<String>,
 }
 
+/// A record's passage times (s, on its own clock), or why there are none.
+pub(crate) type PassageTimes = std::result::Result<Vec<f64>, String>;
+
 /// Detects the passages of each record (no pulse-train fits) with the
-/// prediction's velocity guiding the period; failures become notes.
-fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<PassageSummary> {
+/// prediction's velocity guiding the period; failures become notes. The
+/// passage times go with each summary (for the synchronous average).
+fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<(PassageSummary, PassageTimes)> {
     let settings = PassageSettings {
         velocity_mm_s: Some(pred.velocity_mm_s),
         fit_pulses: 0,
@@ -685,20 +694,26 @@ fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<PassageSummar
                 note: Some(note),
             };
             if r.channel(crate::recording::Channel::Optical).is_none() {
-                return empty("no optical channel".into());
+                return (
+                    empty("no optical channel".into()),
+                    Err("no optical channel".into()),
+                );
             }
             match detect_passages(r, &settings) {
-                Ok(p) => PassageSummary {
-                    source: r.source_name(),
-                    count: Some(p.count),
-                    f_c_hz: Some(p.f_c_measured_hz).filter(|f| f.is_finite()),
-                    tau_c_s: Some(p.tau_c_s),
-                    tau_p_s: Some(p.tau_p_s),
-                    tau_p_over_tau_c: Some(p.tau_p_over_tau_c),
-                    conditions: p.conditions.iter().map(|c| c.message.clone()).collect(),
-                    note: None,
-                },
-                Err(e) => empty(e.to_string()),
+                Ok(p) => (
+                    PassageSummary {
+                        source: r.source_name(),
+                        count: Some(p.count),
+                        f_c_hz: Some(p.f_c_measured_hz).filter(|f| f.is_finite()),
+                        tau_c_s: Some(p.tau_c_s),
+                        tau_p_s: Some(p.tau_p_s),
+                        tau_p_over_tau_c: Some(p.tau_p_over_tau_c),
+                        conditions: p.conditions.iter().map(|c| c.message.clone()).collect(),
+                        note: None,
+                    },
+                    Ok(p.passages.iter().map(|q| q.time_s).collect()),
+                ),
+                Err(e) => (empty(e.to_string()), Err(e.to_string())),
             }
         })
         .collect()

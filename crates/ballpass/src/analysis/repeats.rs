@@ -776,12 +776,11 @@ pub(crate) fn run(
             .filter_map(|p| p.velocity_error.as_ref())
             .collect::<Vec<_>>(),
     );
+    // (The prepared signals stay: the synchronous average below reads them
+    // with the passages.)
     let passages = match early_passages {
         Some(p) => p,
-        None => {
-            drop(prepared);
-            detect()
-        }
+        None => detect(),
     };
     notes.push(format!(
         "high-resolution spectrum: {} with q = {}, fs = {} Hz, {}-sample segments, {} overlap, \
@@ -848,6 +847,26 @@ pub(crate) fn run(
             }
         }
     }
+    let (passages, passage_times): (Vec<_>, Vec<_>) = passages.into_iter().unzip();
+    let sync = if with_passages {
+        let sync_settings = super::sync::SyncSettings::default();
+        match super::sync::records::for_records(
+            recs,
+            &prepared,
+            &passage_times,
+            pred,
+            trim,
+            &sync_settings,
+        ) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                warnings.push(format!("no synchronous average: {e}"));
+                None
+            }
+        }
+    } else {
+        None
+    };
     let verdict = verdict(pred, &findings);
     // Position-domain spectra for `analyze` itself; the campaigns (which
     // detect the passages themselves, `with_passages` false) do not use
@@ -926,6 +945,7 @@ pub(crate) fn run(
         repeats,
         verdict,
         passages,
+        sync,
         warnings,
         correlations: corr,
         spectra: full,

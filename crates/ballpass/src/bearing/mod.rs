@@ -105,6 +105,7 @@ impl Geometry {
             f_single_spacing_low_hz: min_single,
             f_single_spacing_high_hz: max_single,
             harmonics_hz: (1..=harmonics).map(|k| k as f64 * f_c).collect(),
+            balls_in_race: Some(self.balls_in_race),
         })
     }
 }
@@ -147,6 +148,11 @@ pub struct Prediction {
     pub f_single_spacing_high_hz: f64,
     /// `k f_c` for k = 1..=K, Hz.
     pub harmonics_hz: Vec<f64>,
+    /// Balls in the circuit `N_B` of the geometry (`None` when read from a
+    /// file written before it was recorded); the synchronous average tells
+    /// the balls apart with it.
+    #[serde(default)]
+    pub balls_in_race: Option<u32>,
 }
 
 /// Predictions of one bearing over several velocities: what

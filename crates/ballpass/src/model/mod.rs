@@ -6,6 +6,7 @@
 //! all three evaluated on grids as the tables `ballpass model` writes
 //! ([`tables`]).
 
+pub mod compensate;
 pub mod identify;
 pub mod pulse_train;
 pub mod signals;

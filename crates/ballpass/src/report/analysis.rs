@@ -493,6 +493,11 @@ pub fn sections(
         }
         out.push(sec);
     }
+    out.extend(super::sync::section(
+        a,
+        &id("sync_average"),
+        &table("sync_average.csv"),
+    ));
 
     let mut settings = Section::new("Settings and method").with(Block::settings(&a.settings)?);
     if !a.method_notes.is_empty() {

@@ -87,6 +87,7 @@ pub mod passage;
 mod position;
 mod prepare;
 mod spec;
+mod sync;
 mod text;
 mod ticks;
 

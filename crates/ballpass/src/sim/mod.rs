@@ -82,6 +82,7 @@ use crate::recording::{Channels, Metadata, Recording};
 
 pub mod balls;
 pub mod campaign;
+pub mod feedforward;
 pub mod profile;
 pub mod rng;
 pub mod sensors;
@@ -427,6 +428,7 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let travel = |x: f64| (x - x_init) * 1e3 / 2.0;
     let mut friction_cross = Crossings::new(entries.clone(), 0.0);
     let mut optical_cross = Crossings::new(optical_centres, 0.0);
+    let feedforward = s.feedforward.as_ref();
 
     let mut friction_out = Vec::with_capacity(n_out);
     let mut position_out = Vec::with_capacity(n_out);
@@ -513,9 +515,23 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
         lcl.step(lc_hp_out);
         ol.step(opt_hp_out);
 
+        // Feedforward from the compensation table, at this step's phase.
+        let u = feedforward.map_or(0.0, |ff| {
+            use feedforward::FeedforwardKey;
+            match ff.key {
+                FeedforwardKey::OpticalPassage => match optical_cross.next {
+                    0 => 0.0,
+                    j => ff.force_at((sb - optical_cross.centres_mm[j - 1]) / d_avg),
+                },
+                FeedforwardKey::RailPosition { x0_mm, pitch_mm } => {
+                    ff.force_at((x * 1e3 - x0_mm) / pitch_mm)
+                }
+            }
+        });
+
         // Stage, with the step-average reference acceleration.
         let (_, rdot1) = reference(t + dt);
-        stage.step(friction, (rdot1 - rdot) / dt);
+        stage.step(friction - u, (rdot1 - rdot) / dt);
         let (r1, _) = reference(t + dt);
         let x1 = r1 + stage.deviation_m();
 

@@ -264,6 +264,11 @@ pub struct SimSettings {
     /// and absent from the JSON) for one constant velocity.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub profile: Option<SpeedProfile>,
+    /// A compensation table the controller applies as feedforward force
+    /// (see [`super::feedforward`]); `None` (the default, absent from the
+    /// JSON): no feedforward.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedforward: Option<super::feedforward::Feedforward>,
 }
 
 impl Default for SimSettings {
@@ -286,6 +291,7 @@ impl Default for SimSettings {
             encoder: EncoderSettings::default(),
             optical: OpticalSettings::default(),
             profile: None,
+            feedforward: None,
         }
     }
 }
@@ -396,6 +402,9 @@ impl SimSettings {
                     self.velocity_mm_s, self.duration_s
                 ),
             ));
+        }
+        if let Some(f) = &self.feedforward {
+            f.validate()?;
         }
         if let Some(p) = &self.profile {
             p.validate(10.0 * band)?;

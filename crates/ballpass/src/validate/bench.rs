@@ -509,6 +509,7 @@ impl Bench {
             encoder: Default::default(),
             optical: self.optical,
             profile: None,
+            feedforward: None,
         }
     }
 }

@@ -4,6 +4,7 @@
 //! detection rates with their binomial intervals).
 
 pub mod bench;
+pub mod compensation;
 pub mod estimate;
 pub mod fleets;
 pub mod passages;

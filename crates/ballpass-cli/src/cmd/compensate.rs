@@ -1,0 +1,114 @@
+//! `ballpass compensate`: a feedforward compensation table from the
+//! synchronous average of recordings, and its predicted benefit (glue over
+//! [`ballpass::model::compensate`]).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use ballpass::analysis::preflight;
+use ballpass::analysis::AnalyzeSettings;
+use ballpass::model::compensate::{compensate, StageSource};
+use ballpass::model::stage::PdLoop;
+use clap::Args;
+
+use crate::args::LoadArgs;
+use crate::records::{self, CheckArgs};
+use crate::{output, text};
+
+/// Arguments of `ballpass compensate`.
+#[derive(Debug, Args)]
+pub struct CompensateArgs {
+    /// Recording files: CSV/TSV, MATLAB .mat (v5/v7/v7.3), NI .tdms or MDF
+    /// .mf4, at one velocity (repeats are averaged); they need friction,
+    /// encoder position and the optical sensor.
+    #[arg(required = true, value_name = "REC")]
+    recs: Vec<PathBuf>,
+    #[command(flatten)]
+    load: LoadArgs,
+    /// Output folder for compensation.json, compensation_phase.csv and
+    /// (when the passages lock to the rail) compensation_rail.csv.
+    #[arg(long, short = 'o', value_name = "DIR")]
+    out: PathBuf,
+    /// Moving mass m, kg: with --kkp and --kkd, the stage used when it
+    /// cannot be identified from the records.
+    #[arg(long, value_name = "KG", requires_all = ["kkp", "kkd"])]
+    mass: Option<f64>,
+    /// Loop stiffness K·K_P, N/m (with --mass).
+    #[arg(long, value_name = "N/M", requires = "mass")]
+    kkp: Option<f64>,
+    /// Loop damping K·K_D, N·s/m (with --mass).
+    #[arg(long, value_name = "N·S/M", requires = "mass")]
+    kkd: Option<f64>,
+    /// Print compensation.json to stdout instead of the summary.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    check: CheckArgs,
+}
+
+/// Runs `ballpass compensate`.
+pub fn run(a: &CompensateArgs) -> Result<()> {
+    let mut opts = a.load.options()?;
+    if a.load.min_periods.is_none() {
+        opts.min_periods = opts.min_periods.min(2.0);
+    }
+    let geometry = opts.geometry.expect("options() resolves the bearing");
+    let gains = match (a.mass, a.kkp, a.kkd) {
+        (Some(m), Some(kp), Some(kd)) => Some(PdLoop::from_products(m, kp, kd)?),
+        (None, None, None) => None,
+        _ => bail!("give --mass, --kkp and --kkd together"),
+    };
+    let out = output::open_dir(&a.out, "compensate")?;
+    let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
+    let stated = super::analyze::stated_velocity(a.load.velocity, &recs)?;
+    let checked = preflight::check(recs, stated, &geometry, &a.check.preflight())?;
+    let settings = AnalyzeSettings::default();
+    let prediction = geometry.predict(checked.velocity_mm_s, settings.harmonics)?;
+    let comp = compensate(&checked.recordings, &prediction, &settings, gains)?;
+    {
+        let mut err = std::io::stderr().lock();
+        for w in checked.warnings.iter().chain(&comp.warnings) {
+            writeln!(err, "warning: {}", text::line(w))?;
+        }
+    }
+    comp.write(out.path())?;
+    let dir = output::commit(out)?;
+    let mut so = output::stdout();
+    if a.json {
+        serde_json::to_writer_pretty(&mut so, &comp)?;
+        writeln!(so)?;
+    } else {
+        let p = &comp.prediction;
+        let range = |v: &[f64]| {
+            v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - v.iter().copied().fold(f64::INFINITY, f64::min)
+        };
+        writeln!(
+            so,
+            "table: {} bins per ball-pass period ({:.4} s, {} periods averaged), {:.4} N peak to peak",
+            comp.bins,
+            comp.period_s,
+            comp.periods_used,
+            range(&comp.force_n)
+        )?;
+        writeln!(so, "phase 0: {}", comp.phase_reference)?;
+        writeln!(so, "rail: {}", comp.rail_note)?;
+        writeln!(
+            so,
+            "stage: {}",
+            match comp.stage_source {
+                StageSource::Identified => "identified from the records",
+                StageSource::GivenGains => "the gains given (not identified from the records)",
+            }
+        )?;
+        writeln!(
+            so,
+            "predicted: f_c component {:.2} -> {:.2} µm/s, velocity-error std (low-passed) {:.1} -> {:.1} µm/s",
+            p.f_c_before_um_s, p.f_c_after_um_s, p.std_before_um_s, p.std_after_um_s
+        )?;
+        writeln!(so, "wrote {}", text::path(&dir))?;
+    }
+    so.flush()?;
+    Ok(())
+}

@@ -1,0 +1,123 @@
+//! Closed-loop check of the compensation table on simulated benches:
+//! simulate, build the table ([`crate::model::compensate`]), simulate the
+//! same bench (same seed: same balls, roughness and noise) with the table
+//! applied as feedforward ([`crate::sim::feedforward`]), and measure the
+//! velocity error again with the same analysis.
+
+use serde::Serialize;
+
+use crate::analysis::{analyze, AnalyzeSettings, Signal};
+use crate::error::{Error, Result};
+use crate::model::compensate::{compensate, StageSource};
+use crate::model::stage::PdLoop;
+use crate::sim::{simulate, Condition, SimSettings};
+
+/// One bench's figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CompensationCheck {
+    /// Commanded velocity, mm/s.
+    pub velocity_mm_s: f64,
+    /// Bearing condition.
+    pub condition: Condition,
+    /// Seed of the bench.
+    pub seed: u64,
+    /// Where the prediction's stage came from.
+    pub stage_source: StageSource,
+    /// f_c component of the velocity error without the table, µm/s.
+    pub f_c_before_um_s: f64,
+    /// The same with the table, simulated, µm/s.
+    pub f_c_after_um_s: f64,
+    /// The same with the table, predicted, µm/s.
+    pub f_c_predicted_um_s: f64,
+    /// Low-passed velocity-error std without the table, µm/s.
+    pub std_before_um_s: f64,
+    /// The same with the table, simulated, µm/s.
+    pub std_after_um_s: f64,
+    /// The same with the table, predicted, µm/s.
+    pub std_predicted_um_s: f64,
+}
+
+impl CompensationCheck {
+    /// `1 − after / before` of the f_c component.
+    pub fn f_c_reduction(&self) -> f64 {
+        1.0 - self.f_c_after_um_s / self.f_c_before_um_s
+    }
+
+    /// `|predicted − simulated| / simulated` of the f_c component after.
+    pub fn f_c_prediction_error(&self) -> f64 {
+        (self.f_c_predicted_um_s - self.f_c_after_um_s).abs() / self.f_c_after_um_s
+    }
+
+    /// `|predicted − simulated| / simulated` of the std after.
+    pub fn std_prediction_error(&self) -> f64 {
+        (self.std_predicted_um_s - self.std_after_um_s).abs() / self.std_after_um_s
+    }
+}
+
+/// Runs the check on the bench `s` (its duration as given). The gains
+/// given to the compensation, used only when the stage is not identified
+/// from the record, are the simulated stage's.
+///
+/// # Errors
+/// The simulator's, the analysis' and the compensation's errors.
+pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
+    let sim = simulate(s)?;
+    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
+    let settings = AnalyzeSettings::default();
+    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let comp = compensate(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &settings,
+        Some(gains),
+    )?;
+    let mut s1 = s.clone();
+    s1.feedforward = Some(comp.feedforward());
+    let sim1 = simulate(&s1)?;
+    let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
+    let ve = a1
+        .sync
+        .as_ref()
+        .and_then(|y| y.waveform(Signal::VelocityError))
+        .ok_or_else(|| Error::InvalidRecording {
+            source_name: sim1.recording.source_name(),
+            reason: "no synchronous average of the compensated run".into(),
+        })?;
+    let p = &comp.prediction;
+    Ok(CompensationCheck {
+        velocity_mm_s: s.velocity_mm_s,
+        condition: s.condition,
+        seed: s.seed,
+        stage_source: comp.stage_source,
+        f_c_before_um_s: p.f_c_before_um_s,
+        f_c_after_um_s: ve.fundamental_amplitude,
+        f_c_predicted_um_s: p.f_c_after_um_s,
+        std_before_um_s: p.std_before_um_s,
+        std_after_um_s: a1
+            .velocity_error
+            .as_ref()
+            .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
+        std_predicted_um_s: p.std_after_um_s,
+    })
+}
+
+/// The bench of draw `i` of a run seeded `seed`: velocity log-uniform in
+/// 1–20 mm/s, good and sticking alternately, at least 30 s and 40
+/// ball-pass periods.
+pub fn bench(seed: u64, i: u64) -> SimSettings {
+    let mut rng = crate::sim::rng::Rng::stream(crate::sim::rng::derive_seed(seed, i), 77);
+    let v = (20f64.ln() * rng.uniform()).exp();
+    let mut s = SimSettings {
+        velocity_mm_s: v,
+        seed: crate::sim::rng::derive_seed(seed, i),
+        condition: if i % 2 == 0 {
+            Condition::Good
+        } else {
+            Condition::Sticking
+        },
+        ..Default::default()
+    };
+    let tau_c = 2.0 * s.geometry.d_avg_mm() / v;
+    s.duration_s = (40.0 * tau_c).max(30.0).ceil();
+    s
+}

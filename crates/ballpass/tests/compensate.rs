@@ -1,0 +1,128 @@
+//! The compensation table in closed loop on the simulator (issue 17); the
+//! randomized rates are measured by `benches/compensate.rs`.
+
+use ballpass::model::compensate::compensate;
+use ballpass::model::stage::PdLoop;
+use ballpass::sim::{simulate, Condition, SimSettings};
+use ballpass::validate::compensation::check;
+
+fn bench(condition: Condition, seed: u64) -> SimSettings {
+    SimSettings {
+        velocity_mm_s: 20.0,
+        condition,
+        seed,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn the_table_cancels_a_good_bearings_ripple_in_closed_loop() {
+    let c = check(&bench(Condition::Good, 11)).unwrap();
+    // The issue's goals on one good bench: ≥ 80 % of the f_c component
+    // gone, the std down, the std predicted within 20 %.
+    assert!(c.f_c_reduction() >= 0.8, "{c:?}");
+    assert!(c.std_after_um_s < c.std_before_um_s, "{c:?}");
+    assert!(c.std_prediction_error() <= 0.2, "{c:?}");
+}
+
+#[test]
+fn a_sticking_bearings_mean_spike_is_compensated_too() {
+    // The random part of the spikes stays; the mean at f_c goes. Half is
+    // a floor well below what the benches show (0.74–0.94), above what a
+    // table at the wrong phase could give (it would add, not remove).
+    let c = check(&bench(Condition::Sticking, 12)).unwrap();
+    assert!(c.f_c_reduction() >= 0.5, "{c:?}");
+}
+
+#[test]
+fn the_table_is_written_with_its_units_and_spacing() {
+    let s = bench(Condition::Good, 13);
+    let sim = simulate(&s).unwrap();
+    let pred = s.geometry.predict(20.0, 5).unwrap();
+    let gains =
+        PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m).unwrap();
+    let comp = compensate(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &Default::default(),
+        Some(gains),
+    )
+    .unwrap();
+    assert_eq!(comp.force_n.len(), comp.bins);
+    assert!((comp.phase_spacing * comp.bins as f64 - 1.0).abs() < 1e-12);
+    // Zero mean: the table carries the ripple only.
+    assert!(comp.force_n.iter().sum::<f64>().abs() < 1e-9);
+    let dir = std::env::temp_dir().join(format!("ballpass-compensate-{}", std::process::id()));
+    let files = comp.write(&dir).unwrap();
+    let csv = std::fs::read_to_string(dir.join("compensation_phase.csv")).unwrap();
+    assert!(
+        csv.starts_with("phase,force_n,velocity_error_after_um_s\n"),
+        "{csv}"
+    );
+    assert_eq!(csv.lines().count(), comp.bins + 1);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&files[0]).unwrap()).unwrap();
+    assert_eq!(json["schema"], "ballpass.compensation/1");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn without_an_identified_stage_or_gains_it_says_what_to_give() {
+    // 1 mm/s for 30 s: the friction barely excites the 1.1 Hz resonance.
+    let s = SimSettings {
+        velocity_mm_s: 1.0,
+        duration_s: 400.0,
+        seed: 14,
+        ..Default::default()
+    };
+    let sim = simulate(&s).unwrap();
+    let pred = s.geometry.predict(1.0, 5).unwrap();
+    match compensate(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &Default::default(),
+        None,
+    ) {
+        Ok(c) => assert_eq!(
+            c.stage_source,
+            ballpass::model::compensate::StageSource::Identified
+        ),
+        Err(e) => assert!(e.to_string().contains("give the loop gains"), "{e}"),
+    }
+}
+
+#[test]
+fn a_stage_that_nearly_stalls_is_flagged() {
+    // A sticking bearing at 1.5 mm/s: velocity-error std near the velocity.
+    let s = SimSettings {
+        velocity_mm_s: 1.5,
+        duration_s: 220.0,
+        condition: Condition::Sticking,
+        seed: 15,
+        ..Default::default()
+    };
+    let sim = simulate(&s).unwrap();
+    let pred = s.geometry.predict(1.5, 5).unwrap();
+    let gains =
+        PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m).unwrap();
+    let c = compensate(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &Default::default(),
+        Some(gains),
+    )
+    .unwrap();
+    let stalls =
+        c.prediction.std_before_um_s * 1e-3 / 1.5 > ballpass::model::compensate::STALL_FRACTION;
+    assert_eq!(
+        c.warnings.first().is_some_and(|w| w.contains("stalls")),
+        stalls,
+        "{:?}",
+        c.warnings
+    );
+    assert!(
+        stalls,
+        "std {} µm/s at 1.5 mm/s",
+        c.prediction.std_before_um_s
+    );
+}
