@@ -350,8 +350,11 @@ def test_threads_setting_gives_the_same_numbers():
 def test_the_gil_is_released_while_computing():
     """A Python thread keeps running while another is inside ballpass: the
     longest pause between its loop iterations stays far below the length of
-    the native call (with the GIL held it would be the whole call)."""
-    x = np.random.default_rng(0).standard_normal(4_000_000)
+    the native call (with the GIL held it would be the whole call). The call
+    is long (16 M samples, some 0.1-0.5 s) so that an OS scheduling stall of
+    a few tens of ms on a loaded machine stays far below half of it (with
+    4 M samples a 32 ms stall under load 9 once failed it)."""
+    x = np.random.default_rng(0).standard_normal(16_000_000)
     t0 = time.perf_counter()
     bs.welch(x, nperseg=4096)
     call = time.perf_counter() - t0
