@@ -158,33 +158,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
         &file.data_groups()[it.dg].channel_groups[it.cg].channels[it.ch]
     };
     // Which items feed which channel.
-    let mut used: Vec<(Channel, usize)> = Vec::new();
-    for c in Channel::ALL {
-        let want = opts
-            .source(c)
-            .name
-            .clone()
-            .unwrap_or_else(|| c.column_name().to_string());
-        match names::find(&cands, &want).map_err(err)? {
-            Some(k) => used.push((c, k)),
-            None if opts.source(c).name.is_some() => {
-                return Err(err(format!(
-                    "no channel '{}' for {}; the file has: {}",
-                    excerpt(&want),
-                    c.column_name(),
-                    has()
-                )))
-            }
-            None => {}
-        }
-    }
-    if used.is_empty() {
-        return Err(err(format!(
-            "no channel found; expected friction_N, position_mm or optical_V (or mapped \
-             names); the file has: {}",
-            has()
-        )));
-    }
+    let used = names::map_channels(&cands, opts, "").map_err(err)?;
     let groups: Vec<usize> = used.iter().map(|&(_, k)| k).collect();
     // Channels of different groups must share their time axis.
     let first = &items[groups[0]];

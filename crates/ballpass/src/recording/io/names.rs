@@ -7,6 +7,7 @@
 //! error listing both, never a guess.
 
 use crate::error::excerpt;
+use crate::recording::{Channel, LoadOptions};
 
 /// Something in a file that may feed a channel.
 #[derive(Debug, Clone)]
@@ -67,6 +68,46 @@ pub(crate) fn find(cands: &[Candidate], want: &str) -> Result<Option<usize>, Str
     }
 }
 
+/// The candidate feeding each channel: its mapped name (`opts`), else the
+/// channel's default column name. A mapped name that matches nothing is an
+/// error, and so is a file where no channel is found (`hint` follows the
+/// expected names in that message).
+///
+/// # Errors
+/// The reason, listing what the file has.
+pub(crate) fn map_channels(
+    cands: &[Candidate],
+    opts: &LoadOptions,
+    hint: &str,
+) -> Result<Vec<(Channel, usize)>, String> {
+    let has = || list(&cands.iter().map(|c| c.full.clone()).collect::<Vec<_>>());
+    let mut used = Vec::new();
+    for c in Channel::ALL {
+        let mapped = opts.source(c).name.as_deref();
+        let want = mapped.unwrap_or(c.column_name());
+        match find(cands, want)? {
+            Some(k) => used.push((c, k)),
+            None if mapped.is_some() => {
+                return Err(format!(
+                    "no channel '{}' for {}; the file has: {}",
+                    excerpt(want),
+                    c.column_name(),
+                    has()
+                ))
+            }
+            None => {}
+        }
+    }
+    if used.is_empty() {
+        return Err(format!(
+            "no channel found; expected friction_N, position_mm or optical_V (or mapped \
+             names{hint}); the file has: {}",
+            has()
+        ));
+    }
+    Ok(used)
+}
+
 /// Names for a message: `'a', 'b', 'c'`, at most 20, then how many more.
 pub(crate) fn list(names: &[String]) -> String {
     if names.is_empty() {
@@ -109,5 +150,37 @@ mod tests {
         let names: Vec<String> = (0..100).map(|i| format!("v{i}")).collect();
         let l = list(&names);
         assert!(l.ends_with("and 80 more"), "{l}");
+    }
+
+    /// Default names by their short form, a mapped name, and the two
+    /// errors: a mapped name that matches nothing, and no channel at all.
+    #[test]
+    fn channels_map_by_default_or_given_names() {
+        let cands: Vec<Candidate> = ["Bench/friction_N", "Bench/Encoder", "Bench/Other"]
+            .into_iter()
+            .map(Candidate::new)
+            .collect();
+        let mut o = LoadOptions::default();
+        assert_eq!(
+            map_channels(&cands, &o, "").unwrap(),
+            vec![(Channel::Friction, 0)]
+        );
+        o.source_mut(Channel::Position).name = Some("encoder".into());
+        assert_eq!(
+            map_channels(&cands, &o, "").unwrap(),
+            vec![(Channel::Friction, 0), (Channel::Position, 1)]
+        );
+        o.source_mut(Channel::Optical).name = Some("Light".into());
+        let e = map_channels(&cands, &o, "").unwrap_err();
+        assert!(
+            e.contains("no channel 'Light' for optical_V") && e.contains("'Bench/Other'"),
+            "{e}"
+        );
+        let none = [Candidate::new("G/x")];
+        let e = map_channels(&none, &LoadOptions::default(), ", as Group/Channel").unwrap_err();
+        assert!(
+            e.contains("no channel found") && e.contains("names, as Group/Channel)"),
+            "{e}"
+        );
     }
 }

@@ -33,7 +33,6 @@ use std::path::Path;
 use super::names::{self, Candidate};
 use super::{LoadOptions, Locator, RawColumn, RawTable};
 use crate::error::{excerpt, Error, Result};
-use crate::recording::Channel;
 
 const LEAD_IN: usize = 28;
 const TOC_META: u32 = 1 << 1;
@@ -1046,34 +1045,9 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
     };
     let mut channels = Vec::new();
     let mut used = Vec::new();
-    for c in Channel::ALL {
-        let want = opts
-            .source(c)
-            .name
-            .clone()
-            .unwrap_or_else(|| c.column_name().to_string());
-        match names::find(&cands, &want).map_err(err)? {
-            Some(k) => {
-                used.push(ids[k]);
-                channels.push((c, column(ids[k])?));
-            }
-            None if opts.source(c).name.is_some() => {
-                return Err(err(format!(
-                    "no channel '{}' for {}; the file has: {}",
-                    excerpt(&want),
-                    c.column_name(),
-                    has()
-                )))
-            }
-            None => {}
-        }
-    }
-    if channels.is_empty() {
-        return Err(err(format!(
-            "no channel found; expected friction_N, position_mm or optical_V (or mapped \
-             names, as Group/Channel or Channel); the file has: {}",
-            has()
-        )));
+    for (c, k) in names::map_channels(&cands, opts, ", as Group/Channel or Channel").map_err(err)? {
+        used.push(ids[k]);
+        channels.push((c, column(ids[k])?));
     }
     let time_name = opts
         .time
