@@ -344,18 +344,7 @@ mod tests {
         crate::bearing::lookup("sr25w").unwrap().geometry
     }
 
-    /// Noise in [-0.5, 0.5), seeded.
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect()
-    }
+    use crate::stats::test_noise::uniform as noise;
 
     fn rec(friction: Vec<f64>, v: f64, seed: u64) -> Recording {
         let n = friction.len();

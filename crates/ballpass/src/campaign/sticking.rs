@@ -254,23 +254,7 @@ pub fn passage_heights(
 mod tests {
     use super::*;
 
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        // splitmix64 → two uniforms → Box–Muller; fixed seed.
-        let mut s = seed;
-        let mut next = || {
-            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = s;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| {
-                let (u, v) = (next().max(1e-300), next());
-                (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-            })
-            .collect()
-    }
+    use crate::stats::test_noise::gaussian as noise;
 
     /// A regular ripple far above the noise, on a decaying load cell: no
     /// period is a spike (the old rule called every one of them a spike).

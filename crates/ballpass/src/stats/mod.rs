@@ -306,12 +306,12 @@ pub fn parabolic_peak(a: f64, b: f64, c: f64) -> (f64, f64) {
     (d, b - 0.25 * (a - c) * d)
 }
 
+/// Seeded noise for the unit tests of several modules (one generator each,
+/// so every test's data stay what they were).
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        // splitmix64 → two uniforms → Box–Muller; fixed seed.
+pub(crate) mod test_noise {
+    /// Standard normal noise: splitmix64 → two uniforms → Box–Muller.
+    pub(crate) fn gaussian(n: usize, seed: u64) -> Vec<f64> {
         let mut s = seed;
         let mut next = || {
             s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -327,6 +327,26 @@ mod tests {
             })
             .collect()
     }
+
+    /// Uniform noise in [-0.5, 0.5) from a 64-bit LCG.
+    pub(crate) fn uniform(n: usize, seed: u64) -> Vec<f64> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use super::test_noise::gaussian as noise;
 
     /// The selection median and robust σ (`crate::stats`, by order keys)
     /// equal the sorting ones bit for bit (odd and even counts, ties, NaN
