@@ -359,57 +359,34 @@ impl LoadArgs {
         if let Some(d) = &self.delimiter {
             o.delimiter = Some(parse_delimiter(d).map_err(errors::domain)?);
         }
-        if self.fs_hz.is_some() {
-            o.fs_hz = self.fs_hz;
+        rec::LoadOverrides {
+            fs_hz: self.fs_hz,
+            time: self.time_col.clone(),
+            ignore_time: self.ignore_time,
+            sources: [
+                (
+                    &self.friction_col,
+                    self.friction_scale,
+                    self.friction_offset,
+                ),
+                (
+                    &self.position_col,
+                    self.position_scale,
+                    self.position_offset,
+                ),
+                (&self.optical_col, self.optical_scale, self.optical_offset),
+            ]
+            .map(|(name, scale, offset)| rec::SourceOverride {
+                name: name.clone(),
+                scale,
+                offset,
+            }),
+            velocity_mm_s: self.velocity_mm_s,
+            test_id: self.test_id.clone(),
+            min_periods: self.min_periods,
         }
-        if self.time_col.is_some() {
-            o.time = self.time_col.clone();
-        }
-        o.ignore_time |= self.ignore_time;
-        for (src, col, scale, offset) in [
-            (
-                &mut o.friction,
-                &self.friction_col,
-                self.friction_scale,
-                self.friction_offset,
-            ),
-            (
-                &mut o.position,
-                &self.position_col,
-                self.position_scale,
-                self.position_offset,
-            ),
-            (
-                &mut o.optical,
-                &self.optical_col,
-                self.optical_scale,
-                self.optical_offset,
-            ),
-        ] {
-            if col.is_some() {
-                src.name = col.clone();
-            }
-            if let Some(s) = scale {
-                src.scale = s;
-            }
-            if let Some(x) = offset {
-                src.offset = x;
-            }
-        }
-        if self.velocity_mm_s.is_some() {
-            o.velocity_mm_s = self.velocity_mm_s;
-        }
-        if self.test_id.is_some() {
-            o.test_id = self.test_id.clone();
-        }
-        if let Some(m) = self.min_periods {
-            o.min_periods = m;
-        }
-        let fallback = match (&o.bearing, o.geometry) {
-            (Some(name), Some(g)) => Some((name.clone(), g)),
-            _ => None,
-        };
-        let (name, g) = self.bearing.resolve(fallback)?;
+        .apply(&mut o);
+        let (name, g) = self.bearing.resolve(o.bearing_fallback())?;
         o.bearing = Some(name);
         o.geometry = Some(g);
         o.validate().map_err(errors::domain)?;

@@ -16,7 +16,8 @@ pub mod profile;
 pub mod segment;
 
 pub use io::{
-    load, load_all, write_csv, write_mat, ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit,
+    load, load_all, write_csv, write_mat, ChannelSource, Format, GapPolicy, LoadOptions,
+    LoadOverrides, SourceOverride, TimeUnit,
 };
 pub use profile::Profile;
 

@@ -45,7 +45,9 @@ pub(crate) mod units;
 
 pub use finish::{prepare_for_inspection, Gap, GapCause, Prepared};
 pub use mat::write_mat;
-pub use options::{ChannelSource, Format, GapPolicy, LoadOptions, TimeUnit};
+pub use options::{
+    ChannelSource, Format, GapPolicy, LoadOptions, LoadOverrides, SourceOverride, TimeUnit,
+};
 
 /// Loads one recording file.
 ///

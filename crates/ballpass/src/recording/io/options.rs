@@ -282,6 +282,73 @@ impl Default for LoadOptions {
     }
 }
 
+/// One channel's values given on top of a profile (a command-line flag, a
+/// Python keyword): each one given replaces the profile's.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SourceOverride {
+    /// Column / variable / signal name.
+    pub name: Option<String>,
+    /// Multiplier.
+    pub scale: Option<f64>,
+    /// Offset added after scaling.
+    pub offset: Option<f64>,
+}
+
+/// The loading values given on top of a profile's [`LoadOptions`] (the
+/// command line's flags, the Python keywords): each one given replaces the
+/// profile's; `ignore_time` can only switch the time column off.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadOverrides {
+    /// Sampling rate, Hz.
+    pub fs_hz: Option<f64>,
+    /// Time column / variable.
+    pub time: Option<String>,
+    /// Ignore the time column.
+    pub ignore_time: bool,
+    /// Friction, position and optical, in [`Channel::ALL`] order.
+    pub sources: [SourceOverride; 3],
+    /// Tracking velocity, mm/s.
+    pub velocity_mm_s: Option<f64>,
+    /// Test identifier.
+    pub test_id: Option<String>,
+    /// Fewest ball-pass periods a recording must span.
+    pub min_periods: Option<f64>,
+}
+
+impl LoadOverrides {
+    /// Writes the values given into `o`.
+    pub fn apply(&self, o: &mut LoadOptions) {
+        if self.fs_hz.is_some() {
+            o.fs_hz = self.fs_hz;
+        }
+        if self.time.is_some() {
+            o.time.clone_from(&self.time);
+        }
+        o.ignore_time |= self.ignore_time;
+        for (c, given) in Channel::ALL.into_iter().zip(&self.sources) {
+            let src = o.source_mut(c);
+            if given.name.is_some() {
+                src.name.clone_from(&given.name);
+            }
+            if let Some(s) = given.scale {
+                src.scale = s;
+            }
+            if let Some(x) = given.offset {
+                src.offset = x;
+            }
+        }
+        if self.velocity_mm_s.is_some() {
+            o.velocity_mm_s = self.velocity_mm_s;
+        }
+        if self.test_id.is_some() {
+            o.test_id.clone_from(&self.test_id);
+        }
+        if let Some(m) = self.min_periods {
+            o.min_periods = m;
+        }
+    }
+}
+
 impl LoadOptions {
     /// The source of one channel.
     pub fn source(&self, c: Channel) -> &ChannelSource {
@@ -298,6 +365,15 @@ impl LoadOptions {
             Channel::Friction => &mut self.friction,
             Channel::Position => &mut self.position,
             Channel::Optical => &mut self.optical,
+        }
+    }
+
+    /// The profile's bearing and geometry when it names both (the base a
+    /// caller's bearing choice falls back to).
+    pub fn bearing_fallback(&self) -> Option<(String, crate::bearing::Geometry)> {
+        match (&self.bearing, self.geometry) {
+            (Some(name), Some(g)) => Some((name.clone(), g)),
+            _ => None,
         }
     }
 
@@ -373,5 +449,50 @@ impl LoadOptions {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What is given replaces the profile's value; what is not keeps it;
+    /// `ignore_time` only switches the time column off.
+    #[test]
+    fn overrides_replace_only_what_is_given() {
+        let mut profile = LoadOptions {
+            fs_hz: Some(500.0),
+            time: Some("t".into()),
+            ignore_time: true,
+            velocity_mm_s: Some(3.0),
+            ..LoadOptions::default()
+        };
+        profile.position.name = Some("enc".into());
+        profile.position.scale = 1e-4;
+        profile.optical.offset = 0.5;
+        let mut o = profile.clone();
+        LoadOverrides::default().apply(&mut o);
+        assert_eq!(o, profile);
+        let mut given = LoadOverrides {
+            fs_hz: Some(1000.0),
+            min_periods: Some(5.0),
+            ..LoadOverrides::default()
+        };
+        given.sources[1].scale = Some(2.0);
+        given.sources[2].name = Some("light".into());
+        given.apply(&mut o);
+        assert_eq!(o.fs_hz, Some(1000.0));
+        assert_eq!(o.time.as_deref(), Some("t"));
+        assert!(o.ignore_time);
+        assert_eq!(o.velocity_mm_s, Some(3.0));
+        assert_eq!(o.min_periods, 5.0);
+        assert_eq!(
+            (o.position.name.as_deref(), o.position.scale),
+            (Some("enc"), 2.0)
+        );
+        assert_eq!(
+            (o.optical.name.as_deref(), o.optical.offset),
+            (Some("light"), 0.5)
+        );
     }
 }
