@@ -209,8 +209,7 @@ mod tests {
     #[test]
     fn the_domain_holds_the_bench_the_records_came_from() {
         let grid = Domain::default();
-        let mut tried = 0;
-        for seed in 9_100_000..9_100_040u64 {
+        for seed in 9_100_000..9_100_006u64 {
             let mut b = grid.draw(seed);
             // Short records keep the test fast; the duration is checked as given.
             b.duration_s = b.duration_s.min(30.0);
@@ -256,11 +255,6 @@ mod tests {
                     s.optical.width_ratio
                 );
             }
-            tried += 1;
-            if tried == 6 {
-                break;
-            }
         }
-        assert_eq!(tried, 6);
     }
 }
