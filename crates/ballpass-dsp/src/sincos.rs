@@ -156,5 +156,12 @@ mod tests {
             "{}",
             s[1]
         );
+        // A block with an argument beyond the reduction's range is the C
+        // library's, every lane.
+        let x = [1e7, 3.0, -2.5e9, 0.1];
+        let (c, s) = sincos(&x);
+        for k in 0..4 {
+            assert_eq!((c[k], s[k]), (x[k].cos(), x[k].sin()), "{}", x[k]);
+        }
     }
 }
