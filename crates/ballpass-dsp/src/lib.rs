@@ -15,6 +15,7 @@ pub mod lti;
 mod npcomplex;
 pub mod peaks;
 mod simd;
+mod sincos;
 pub mod sos;
 pub mod spectral;
 pub mod window;

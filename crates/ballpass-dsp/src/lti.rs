@@ -69,11 +69,7 @@ pub fn freqs(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<AnalogResponse> {
         #[inline(always)]
         || {
             by_blocks(w_rad_s, |w: &[f64; LANES], h: &mut [Complex64]| {
-                let (br, bi) = polyval_jw(b, w);
-                let (ar, ai) = polyval_jw(a, w);
-                for (k, h) in h.iter_mut().enumerate() {
-                    *h = nc::div(Complex64::new(br[k], bi[k]), Complex64::new(ar[k], ai[k]));
-                }
+                div_lanes(polyval_jw(b, w), polyval_jw(a, w), h);
             })
         },
     );
@@ -199,18 +195,51 @@ fn check_freqs(freq_hz: &[f64], fs_hz: f64) -> Result<()> {
     check_finite("freq_hz", freq_hz)
 }
 
-/// `z^-1 = exp(-j 2 pi f / fs)` for a block of frequencies, as real and
-/// imaginary parts (`exp(0) = 1` times the cosine and sine, as
-/// `Complex::exp` forms it).
+/// `z^-1 = exp(-j 2 pi f / fs) = (cos(-w), sin(-w))` for a block of
+/// frequencies, as real and imaginary parts: the cosine and sine of the
+/// block in SIMD lanes ([`crate::sincos`], within 2 ulp of the C
+/// library's that NumPy's `exp` calls).
 #[inline(always)]
 fn unit_delays(f: &[f64; LANES], fs_hz: f64) -> ([f64; LANES], [f64; LANES]) {
-    let (mut zr, mut zi) = ([0.0; LANES], [0.0; LANES]);
+    let mut minus_w = [0.0; LANES];
     for k in 0..LANES {
-        let w = 2.0 * std::f64::consts::PI * f[k] / fs_hz;
-        let z = nc::exp(Complex64::new(0.0, -w));
-        (zr[k], zi[k]) = (z.re, z.im);
+        minus_w[k] = -(2.0 * std::f64::consts::PI * f[k] / fs_hz);
     }
-    (zr, zi)
+    crate::sincos::sincos(&minus_w)
+}
+
+/// `a / b` for a block, lane by lane with [`nc::div`]'s operations (NumPy's
+/// Smith division, bit for bit) written as selects instead of branches, so
+/// the lanes run in SIMD.
+#[inline(always)]
+fn div_lanes(
+    (ar, ai): ([f64; LANES], [f64; LANES]),
+    (br, bi): ([f64; LANES], [f64; LANES]),
+    h: &mut [Complex64],
+) {
+    let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+    for k in 0..LANES {
+        let (br_abs, bi_abs) = (br[k].abs(), bi[k].abs());
+        let real_larger = br_abs >= bi_abs;
+        let (p, q) = if real_larger {
+            (bi[k], br[k])
+        } else {
+            (br[k], bi[k])
+        };
+        let rat = p / q;
+        let scl = 1.0 / (q + p * rat);
+        let (x, y) = if real_larger {
+            ((ar[k] + ai[k] * rat) * scl, (ai[k] - ar[k] * rat) * scl)
+        } else {
+            ((ar[k] * rat + ai[k]) * scl, (ai[k] * rat - ar[k]) * scl)
+        };
+        let zero = br_abs == 0.0 && bi_abs == 0.0;
+        re[k] = if zero { ar[k] / br_abs } else { x };
+        im[k] = if zero { ai[k] / br_abs } else { y };
+    }
+    for (k, h) in h.iter_mut().enumerate() {
+        *h = Complex64::new(re[k], im[k]);
+    }
 }
 
 /// `c(z^-1)` at a block of `z^-1` (NumPy `polyval` from the lowest power,
@@ -232,11 +261,7 @@ fn polyval_z(c: &[f64], zr: &[f64; LANES], zi: &[f64; LANES]) -> ([f64; LANES], 
 /// `b(z^-1) / a(z^-1)` at a block of `z^-1`, into `h`.
 #[inline(always)]
 fn ratio_z(b: &[f64], a: &[f64], zr: &[f64; LANES], zi: &[f64; LANES], h: &mut [Complex64]) {
-    let (br, bi) = polyval_z(b, zr, zi);
-    let (ar, ai) = polyval_z(a, zr, zi);
-    for (k, h) in h.iter_mut().enumerate() {
-        *h = nc::div(Complex64::new(br[k], bi[k]), Complex64::new(ar[k], ai[k]));
-    }
+    div_lanes(polyval_z(b, zr, zi), polyval_z(a, zr, zi), h);
 }
 
 /// Frequency response of the digital filter `b(z) / a(z)` (coefficients of
@@ -322,7 +347,8 @@ mod tests {
     /// `b(z^-1) / a(z^-1)` at one frequency, one point at a time.
     fn freqz_at(b: &[f64], a: &[f64], f: f64, fs_hz: f64) -> Complex64 {
         let w = 2.0 * std::f64::consts::PI * f / fs_hz;
-        let zm1 = nc::exp(Complex64::new(0.0, -w));
+        let (c, s) = crate::sincos::sincos(&[-w]);
+        let zm1 = Complex64::new(c[0], s[0]);
         let ev = |c: &[f64]| {
             let mut acc = Complex64::new(c[c.len() - 1], 0.0);
             for &ci in c.iter().rev().skip(1) {
@@ -356,6 +382,40 @@ mod tests {
                     acc * freqz_at(&s[..3], &s[3..], f[i], 1000.0)
                 });
             assert_eq!(hsos[i], want, "sosfreqz {i}");
+        }
+    }
+
+    /// The division in lanes is NumPy's, bit for bit, in both branches and
+    /// for a zero denominator (infinities and NaN as NumPy gives them).
+    #[test]
+    fn lane_division_is_numpys() {
+        let mut ar = [0.0; LANES];
+        let mut ai = [0.0; LANES];
+        let mut br = [0.0; LANES];
+        let mut bi = [0.0; LANES];
+        let cases = [
+            (1.5, -2.0, -0.25, 3.0),
+            (1.5, -2.0, 3.0, -0.25),
+            (0.3, 0.7, 2.0, 2.0),
+            (1.0, 2.0, 0.0, 0.0),
+            (0.0, 0.0, 0.0, 0.0),
+            (-1.0, 0.0, 0.0, 0.0),
+            (1e-300, 1e300, 1e-10, -1e10),
+            (4.0, 5.0, -0.0, 1.0),
+        ];
+        for (k, c) in cases.iter().enumerate() {
+            (ar[k], ai[k], br[k], bi[k]) = *c;
+        }
+        let mut h = [Complex64::new(0.0, 0.0); LANES];
+        div_lanes((ar, ai), (br, bi), &mut h);
+        for k in 0..LANES {
+            let want = nc::div(Complex64::new(ar[k], ai[k]), Complex64::new(br[k], bi[k]));
+            for (g, w) in [(h[k].re, want.re), (h[k].im, want.im)] {
+                assert!(
+                    g.to_bits() == w.to_bits() || (g.is_nan() && w.is_nan()),
+                    "{k}"
+                );
+            }
         }
     }
 

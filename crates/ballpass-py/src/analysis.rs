@@ -17,7 +17,7 @@ use crate::errors;
 use crate::pool::{self, ThreadPool};
 use crate::recording::{BearingArgs, PyRecording};
 
-fn bearing_args(json: Option<&str>) -> PyResult<BearingArgs> {
+pub(crate) fn bearing_args(json: Option<&str>) -> PyResult<BearingArgs> {
     match json {
         None => Ok(BearingArgs::default()),
         Some(t) => serde_json::from_str(t).map_err(|e| errors::value(format!("bearing: {e}"))),
@@ -43,7 +43,7 @@ fn predict<'py>(
 /// The velocity stated for an analysis, as `ballpass analyze` takes it: the
 /// argument, else the one all recordings' metadata agree on, else none (the
 /// checks then measure it from the encoder).
-fn stated_velocity(recs: &[Recording], given: Option<f64>) -> PyResult<Option<f64>> {
+pub(crate) fn stated_velocity(recs: &[Recording], given: Option<f64>) -> PyResult<Option<f64>> {
     if given.is_some() {
         return Ok(given);
     }
@@ -67,10 +67,27 @@ fn spectra_columns<'py>(py: Python<'py>, s: &analysis::Spectra) -> PyResult<Boun
     Ok(d)
 }
 
+/// A table as `{column: array}`: the index column, then the others.
+pub(crate) fn table<'py>(
+    py: Python<'py>,
+    index_name: &str,
+    index: &[f64],
+    columns: Vec<(String, Vec<f64>)>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item(index_name, convert::array(py, index.to_vec()))?;
+    for (name, v) in columns {
+        d.set_item(name, convert::array(py, v))?;
+    }
+    Ok(d)
+}
+
 /// `ballpass.analyze`: the analysis of one recording or several repeats at
 /// one velocity. Returns `(analysis.json as a dict, correlations,
-/// spectra, spectra_hires, spectra_unfiltered)`, the tables as
-/// `{column: array}` with the CSV files' columns (units in their names).
+/// spectra, spectra_hires, spectra_unfiltered, spectra_position,
+/// sync_average)`, the tables as `{column: array}` with the CSV files'
+/// columns (units in their names); the last two are `None` when the
+/// command line writes no such file.
 /// The checks before the analysis are the command line's (dead channels
 /// left out, the velocity checked against the encoder or measured from it
 /// when none is stated, Nyquist); their warnings and notes join the
@@ -92,6 +109,8 @@ fn analyze<'py>(
     Bound<'py, PyDict>,
     Bound<'py, PyDict>,
     Bound<'py, PyDict>,
+    Option<Bound<'py, PyDict>>,
+    Option<Bound<'py, PyDict>>,
 )> {
     let s: AnalyzeSettings =
         convert::settings(&AnalyzeSettings::default(), settings, "analysis settings")?;
@@ -117,12 +136,31 @@ fn analyze<'py>(
     for (name, v) in export::correlation_columns(&a.correlations, a.settings.corr_norm) {
         corr.set_item(name, convert::array(py, v.to_vec()))?;
     }
+    let position = a
+        .position
+        .as_ref()
+        .map(|p| {
+            table(
+                py,
+                "freq_per_mm",
+                &p.freq_per_mm,
+                analysis::position::position_columns(p),
+            )
+        })
+        .transpose()?;
+    let sync = a
+        .sync
+        .as_ref()
+        .map(|s| table(py, "phase", &s.phases(), s.csv_columns()))
+        .transpose()?;
     Ok((
         convert::serialize(py, &a)?,
         corr,
         spectra_columns(py, &a.spectra)?,
         spectra_columns(py, &a.spectra_hires)?,
         spectra_columns(py, &a.spectra_unfiltered)?,
+        position,
+        sync,
     ))
 }
 

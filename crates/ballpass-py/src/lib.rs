@@ -25,6 +25,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod analysis;
 mod campaign;
+mod compensate;
 mod convert;
 mod errors;
 mod model;
@@ -40,6 +41,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     recording::register(m)?;
     analysis::register(m)?;
     campaign::register(m)?;
+    compensate::register(m)?;
     model::register(m)?;
     pool::register(m)?;
     Ok(())

@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import json
 import pickle
+import subprocess
 import threading
 import time
 
@@ -16,6 +17,7 @@ import pytest
 
 import ballpass
 from ballpass import signal as bs
+from conftest import ballpass_bin
 
 
 def read_json(path):
@@ -89,9 +91,19 @@ def test_analyze_equals_the_cli(recs, cli, tmp):
         assert_table_equals_csv(a.spectra, out / "spectra.csv")
         assert_table_equals_csv(a.spectra_hires, out / "spectra_hires.csv")
         assert_table_equals_csv(a.spectra_unfiltered, out / "spectra_unfiltered.csv")
+        # The position-domain PSDs and the synchronous average, when the
+        # command line writes them (it does for these records: below).
+        for name in ("spectra_position", "sync_average"):
+            if (out / f"{name}.csv").exists():
+                assert_table_equals_csv(getattr(a, name), out / f"{name}.csv")
+            else:
+                assert getattr(a, name) is None, name
         assert a.schema == "ballpass.analysis/2"
     # paths work too, and the attributes are the JSON's fields
     b = ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0)
+    assert isinstance(b.spectra_position.psd_friction_n2_mm, np.ndarray)
+    assert b.spectra_position.freq_per_mm.shape == b.spectra_position.psd_friction_n2_mm.shape
+    assert b.sync_average.friction_mean_n.shape == b.sync_average.phase.shape == (b.sync.bins,)
     assert b.prediction.f_c_hz == pytest.approx(9.0 / (2 * (4 + 2 / 36)), rel=1e-12)
     assert isinstance(b.prediction.harmonics_hz, np.ndarray)
     assert b.verdict.text and b.correlations.lag_s.shape == (39999,)
@@ -116,6 +128,51 @@ def test_analyze_runs_the_command_lines_checks(recs, cli, tmp):
     assert any("measured from the encoder" in n for n in measured.method_notes)
     # The simulated stage tracks 9 mm/s to far better than 1 %.
     assert measured.prediction.f_c_hz == pytest.approx(9.0 / (2 * (4 + 2 / 36)), rel=1e-2)
+
+
+def _cli_error(*args) -> str:
+    """Runs the ballpass binary expecting a failure; returns its stderr."""
+    r = subprocess.run([str(ballpass_bin()), *map(str, args)], capture_output=True, text=True)
+    assert r.returncode != 0, f"ballpass {' '.join(map(str, args))} succeeded"
+    return r.stderr
+
+
+def test_compensate_equals_the_cli(recs, cli, tmp):
+    """`ballpass.compensate` is `ballpass compensate`: compensation.json and
+    both tables exactly, one record and two repeats; the same errors (a
+    stage the records do not identify and no gains, no optical sensor);
+    the loop gains go together."""
+    stage = read_json(recs / "r3.truth.json")["settings"]["stage"]
+    m, kp, kd = stage["mass_kg"], stage["kkp_n_per_m"], stage["kkd_n_s_per_m"]
+    for files in (["r3.csv"], ["r3.csv", "r4.csv"]):
+        out = tmp / f"c{len(files)}"
+        cli("compensate", *[recs / f for f in files], "--velocity", "9", "--mass", m,
+            "--kkp", kp, "--kkd", kd, "--out", out)
+        c = ballpass.compensate([recs / f for f in files], velocity_mm_s=9.0, mass_kg=m,
+                                kkp=kp, kkd=kd)
+        assert c.to_dict() == read_json(out / "compensation.json")
+        assert_table_equals_csv(c.table, out / "compensation_phase.csv")
+        if (out / "compensation_rail.csv").exists():
+            assert_table_equals_csv(c.rail_table, out / "compensation_rail.csv")
+        else:
+            assert c.rail_table is None
+        assert c.force_n.shape == (c.bins,) and c.prediction.f_c_after_um_s >= 0
+    # These 20 s records do not identify the stage: without the gains both
+    # refuse, with the same words.
+    stderr = _cli_error("compensate", recs / "r3.csv", "--velocity", "9", "--out", tmp / "x")
+    with pytest.raises(ValueError) as e:
+        ballpass.compensate(recs / "r3.csv", velocity_mm_s=9.0)
+    assert "identified" in str(e.value) and str(e.value) in stderr, (str(e.value), stderr)
+    with pytest.raises(ValueError, match="together"):
+        ballpass.compensate(recs / "r3.csv", velocity_mm_s=9.0, mass_kg=m)
+    rec = ballpass.load(recs / "r3.csv")
+    ballpass.Recording(rec.fs_hz, friction_n=rec.friction_n, position_mm=rec.position_mm,
+                       velocity_mm_s=9.0).to_csv(tmp / "no_optical.csv")
+    stderr = _cli_error("compensate", tmp / "no_optical.csv", "--velocity", "9", "--mass", m,
+                        "--kkp", kp, "--kkd", kd, "--out", tmp / "y")
+    with pytest.raises(ValueError) as e:
+        ballpass.compensate(tmp / "no_optical.csv", velocity_mm_s=9.0, mass_kg=m, kkp=kp, kkd=kd)
+    assert str(e.value) in stderr, (str(e.value), stderr)
 
 
 def test_passages_equal_the_cli(recs, cli, tmp):

@@ -51,6 +51,7 @@ __all__ = [
     "predict",
     "analyze",
     "passages",
+    "compensate",
     "read_manifest",
     "select",
     "sweep",
@@ -273,11 +274,17 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     ``spectra_hires`` and ``spectra_unfiltered`` (``freq_hz`` then PSDs
     such as ``psd_friction_n2_per_hz``, cross spectra ``csd_<pair>_re_<unit>``
     and ``csd_<pair>_im_<unit>``, coherence ``coh_<pair>``) equal the CSV
-    files. The analysis' warnings are also issued as
+    files, and so do ``spectra_position`` (``freq_per_mm`` in cycles/mm,
+    then the position-domain PSDs such as ``psd_friction_n2_mm`` in
+    unit²·mm and their confidence bands; ``None`` without position-domain
+    spectra) and ``sync_average`` (``phase`` in periods after the optical
+    passage, then ``<signal>_mean_<unit>``, ``<signal>_band_low_<unit>``,
+    ``<signal>_band_high_<unit>`` in N and µm/s; ``None`` without a
+    synchronous average). The analysis' warnings are also issued as
     :class:`BallpassWarning`."""
     load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
     recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
-    data, corr, spectra, hires, unfiltered = _native.analyze(
+    data, corr, spectra, hires, unfiltered, position, sync = _native.analyze(
         recs, velocity_mm_s,
         _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
         _settings_json(settings, setting_overrides), _pool(threads), bool(force_velocity),
@@ -286,8 +293,54 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     return Result(
         data,
         {"correlations": Table(corr), "spectra": Table(spectra), "spectra_hires": Table(hires),
-         "spectra_unfiltered": Table(unfiltered)},
+         "spectra_unfiltered": Table(unfiltered),
+         "spectra_position": None if position is None else Table(position),
+         "sync_average": None if sync is None else Table(sync)},
         "Analysis",
+    )
+
+
+def compensate(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
+               ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
+               mass_kg: float | None = None, kkp: float | None = None, kkd: float | None = None,
+               force_velocity: bool = False, threads=None) -> Result:
+    """A feedforward compensation table (force in N against ball-pass
+    phase, and against rail position in mm when the passages lock to the
+    rail) from the synchronous average of recordings at one velocity, and
+    the velocity error (µm/s) it is predicted to leave, as ``ballpass
+    compensate``. The recordings need friction, encoder position and the
+    optical sensor (Recording objects or file paths); the command line's
+    checks run first, as for :func:`analyze`, with the default analysis
+    settings. The stage is identified from the records; when that fails,
+    give the loop as ``mass_kg`` (kg), ``kkp`` (K·K_P, N/m) and ``kkd``
+    (K·K_D, N·s/m), all three.
+
+    ``to_dict()`` equals ``compensation.json``; ``table`` equals
+    ``compensation_phase.csv`` (``phase`` in periods after phase 0,
+    ``force_n``, ``velocity_error_after_um_s``) and ``rail_table``
+    ``compensation_rail.csv`` (``position_mm``, ``force_n``; ``None``
+    without a rail table). The checks' warnings and the result's are
+    issued as :class:`BallpassWarning`."""
+    gains = (mass_kg, kkp, kkd)
+    if all(g is None for g in gains):
+        gains = None
+    elif any(g is None for g in gains):
+        raise ValueError("give mass_kg, kkp and kkd together")
+    else:
+        gains = tuple(float(g) for g in gains)
+    load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
+    recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
+    data, phase, rail, checks = _native.compensate(
+        recs, velocity_mm_s,
+        _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
+        gains, _pool(threads), bool(force_velocity),
+    )
+    _warn({"warnings": checks})
+    _warn(data)
+    return Result(
+        data,
+        {"table": Table(phase), "rail_table": None if rail is None else Table(rail)},
+        "Compensation",
     )
 
 

@@ -117,7 +117,16 @@ def analyze(
     settings: str | None = None,
     pool: ThreadPool | None = None,
     force_velocity: bool = False,
-) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64], dict[str, F64], dict[str, F64]]: ...
+) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64], dict[str, F64], dict[str, F64],
+           dict[str, F64] | None, dict[str, F64] | None]: ...
+def compensate(
+    recordings: list[Recording],
+    velocity_mm_s: float | None = None,
+    bearing: str | None = None,
+    gains: tuple[float, float, float] | None = None,
+    pool: ThreadPool | None = None,
+    force_velocity: bool = False,
+) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64] | None, list[str]]: ...
 def passages(
     recordings: list[Recording],
     bearing: str | None = None,

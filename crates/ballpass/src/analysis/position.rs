@@ -44,6 +44,7 @@ use ballpass_dsp::{
     gradient, DecimateSettings, Decimator, DetrendType, Spacing, Welch, WelchSettings,
     ZeroPhaseFilter,
 };
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::confidence::{psd_band, PsdBand};
@@ -594,32 +595,66 @@ impl LineScan {
         }
     }
 
-    /// Mean power of the segments of `s` at `f` (cycles/mm).
-    fn power(&self, s: Signal, f: f64) -> f64 {
-        let step = std::f64::consts::TAU * f * self.dx;
-        let (c, sn) = (step.cos(), step.sin());
-        let mut total = 0.0;
-        let mut count = 0usize;
-        for (_, seg) in self.segments.iter().filter(|(t, _)| *t == s) {
-            // Rotating phasor e^{−i step n}, renormalised every 256 points.
-            let (mut re, mut im) = (0.0, 0.0);
-            let (mut pr, mut pi) = (1.0f64, 0.0f64);
-            for (n, v) in seg.iter().enumerate() {
-                re += v * pr;
-                im -= v * pi;
-                let t = pr * c - pi * sn;
-                pi = pr * sn + pi * c;
-                pr = t;
-                if n % 256 == 255 {
-                    let a = (pr * pr + pi * pi).sqrt();
-                    pr /= a;
-                    pi /= a;
+    /// Mean power of the segments of `s` at each frequency of `freqs`
+    /// (cycles/mm), `L` frequencies in lock step.
+    ///
+    /// Per frequency, exactly the arithmetic of one frequency alone
+    /// ([`tests::power_alone`] is the reference, checked bit for bit): a
+    /// phasor `e^{−i step n}` rotated sample by sample and renormalised
+    /// every 256 points, and per segment `Σ v·pr`, `−Σ v·pi` in sample
+    /// order. The phasor does not depend on the segment, so it is made
+    /// once for all of them, and `L` independent frequencies keep the
+    /// processor busy where one is a chain of dependent multiplications.
+    fn powers<const L: usize>(&self, s: Signal, freqs: &[f64]) -> Vec<f64> {
+        let n = self.window.len();
+        let segs: Vec<&[f64]> = self
+            .segments
+            .iter()
+            .filter(|(t, _)| *t == s)
+            .map(|(_, v)| v.as_slice())
+            .collect();
+        let count = segs.len().max(1) as f64;
+        let mut table = vec![([0.0f64; L], [0.0f64; L]); n];
+        let mut out = Vec::with_capacity(freqs.len());
+        for chunk in freqs.chunks(L) {
+            // Unused lanes rotate by zero (cos 1, sin 0) and are dropped.
+            let (mut c, mut sn) = ([1.0f64; L], [0.0f64; L]);
+            for (j, f) in chunk.iter().enumerate() {
+                let step = std::f64::consts::TAU * f * self.dx;
+                (c[j], sn[j]) = (step.cos(), step.sin());
+            }
+            let (mut pr, mut pi) = ([1.0f64; L], [0.0f64; L]);
+            for (k, slot) in table.iter_mut().enumerate() {
+                *slot = (pr, pi);
+                for j in 0..L {
+                    let t = pr[j] * c[j] - pi[j] * sn[j];
+                    pi[j] = pr[j] * sn[j] + pi[j] * c[j];
+                    pr[j] = t;
+                }
+                if k % 256 == 255 {
+                    for j in 0..L {
+                        let a = (pr[j] * pr[j] + pi[j] * pi[j]).sqrt();
+                        pr[j] /= a;
+                        pi[j] /= a;
+                    }
                 }
             }
-            total += re * re + im * im;
-            count += 1;
+            let mut total = [0.0f64; L];
+            for seg in &segs {
+                let (mut re, mut im) = ([0.0f64; L], [0.0f64; L]);
+                for (v, (pr, pi)) in seg.iter().zip(&table) {
+                    for j in 0..L {
+                        re[j] += v * pr[j];
+                        im[j] -= v * pi[j];
+                    }
+                }
+                for j in 0..L {
+                    total[j] += re[j] * re[j] + im[j] * im[j];
+                }
+            }
+            out.extend(total[..chunk.len()].iter().map(|t| t / count));
         }
-        total / count.max(1) as f64
+        out
     }
 
     /// Frequency of the largest mean power in `[lo, hi]`: a grid of 64
@@ -628,15 +663,19 @@ impl LineScan {
     fn peak(&self, s: Signal, lo: f64, hi: f64) -> f64 {
         let n = 64;
         let h = (hi - lo) / n as f64;
+        let grid: Vec<f64> = (0..=n).map(|j| lo + j as f64 * h).collect();
+        let p = self.powers::<8>(s, &grid);
+        // The last of equal maxima, as `Iterator::max_by` picks.
         let best = (0..=n)
-            .map(|j| lo + j as f64 * h)
-            .max_by(|a, b| self.power(s, *a).total_cmp(&self.power(s, *b)))
+            .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+            .map(|j| grid[j])
             .expect("grid");
         let (mut a, mut b) = ((best - h).max(lo), (best + h).min(hi));
         let g = 0.5 * (5f64.sqrt() - 1.0);
         while b - a > 1e-4 * h {
             let (c, d) = (b - g * (b - a), a + g * (b - a));
-            if self.power(s, c) >= self.power(s, d) {
+            let p = self.powers::<2>(s, &[c, d]);
+            if p[0] >= p[1] {
                 b = d;
             } else {
                 a = c;
@@ -646,23 +685,30 @@ impl LineScan {
     }
 }
 
-/// The line and harmonics of every signal (module docs).
+/// The line and harmonics of every signal (module docs), each line in
+/// parallel (rayon; the order is that of a sequential pass).
 fn lines(p: &PositionSpectra, harmonics: usize, scan: &LineScan) -> Vec<PositionLine> {
     let df = p.resolution_per_mm;
-    let mut out = Vec::new();
-    for (s, psd) in &p.auto {
-        for k in 1..=harmonics {
+    let wanted: Vec<(Signal, &[f64], usize)> = p
+        .auto
+        .iter()
+        .flat_map(|(s, psd)| (1..=harmonics).map(move |k| (*s, psd.as_slice(), k)))
+        .collect();
+    wanted
+        .into_par_iter()
+        .filter_map(|(s, psd, k)| {
+            let s = &s;
             let f = k as f64 * p.line_per_mm;
             let lo = ((0.75 * f / df).ceil() as usize).max(1);
             let hi = ((1.25 * f / df).floor() as usize).min(psd.len().saturating_sub(3));
             if lo + 2 > hi {
-                continue;
+                return None;
             }
             let i = (lo..=hi)
                 .max_by(|&a, &b| psd[a].total_cmp(&psd[b]))
                 .expect("non-empty");
             if psd[i] <= 0.0 {
-                continue;
+                return None;
             }
             let measured = scan.peak(*s, (i as f64 - 1.0) * df, (i as f64 + 1.0) * df);
             // Floor: the bins within ±50 % of k·f_line, more than 2 bins
@@ -680,7 +726,7 @@ fn lines(p: &PositionSpectra, harmonics: usize, scan: &LineScan) -> Vec<Position
             let power: f64 = (i.saturating_sub(2)..=(i + 2).min(psd.len() - 1))
                 .map(|j| (psd[j] - floor).max(0.0) * df)
                 .sum();
-            out.push(PositionLine {
+            Some(PositionLine {
                 signal: *s,
                 k,
                 predicted_per_mm: f,
@@ -694,10 +740,9 @@ fn lines(p: &PositionSpectra, harmonics: usize, scan: &LineScan) -> Vec<Position
                 } else {
                     f64::INFINITY
                 },
-            });
-        }
-    }
-    out
+            })
+        })
+        .collect()
 }
 
 /// Position-domain spectra of records of one bearing with average ball
@@ -736,4 +781,85 @@ pub fn position_spectra(
         all.push((r, None, trim..r.len()));
     }
     compute(&all, settings, filter.as_ref(), d_avg_mm)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The mean power of the segments of `s` at `f`, one frequency and one
+    /// segment at a time: the reference [`LineScan::powers`] must equal
+    /// bit for bit.
+    pub(super) fn power_alone(scan: &LineScan, s: Signal, f: f64) -> f64 {
+        let step = std::f64::consts::TAU * f * scan.dx;
+        let (c, sn) = (step.cos(), step.sin());
+        let mut total = 0.0;
+        let mut count = 0usize;
+        for (_, seg) in scan.segments.iter().filter(|(t, _)| *t == s) {
+            let (mut re, mut im) = (0.0, 0.0);
+            let (mut pr, mut pi) = (1.0f64, 0.0f64);
+            for (n, v) in seg.iter().enumerate() {
+                re += v * pr;
+                im -= v * pi;
+                let t = pr * c - pi * sn;
+                pi = pr * sn + pi * c;
+                pr = t;
+                if n % 256 == 255 {
+                    let a = (pr * pr + pi * pi).sqrt();
+                    pr /= a;
+                    pi /= a;
+                }
+            }
+            total += re * re + im * im;
+            count += 1;
+        }
+        total / count.max(1) as f64
+    }
+
+    #[test]
+    fn powers_in_lock_step_equal_one_frequency_at_a_time_bit_for_bit() {
+        // Two signals, runs of 2600 and 1100 points (several segments of
+        // 1024, one run with one): a line near 0.123 cycles/mm plus
+        // deterministic noise.
+        let dx = 0.127;
+        let w = ballpass_dsp::Window::Hann.values(1024).unwrap();
+        let mut scan = LineScan::new(&w, dx);
+        let mut state = 7u64;
+        let mut noise = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for (s, len) in [
+            (Signal::Friction, 2600),
+            (Signal::VelocityError, 2600),
+            (Signal::Friction, 1100),
+        ] {
+            let x: Vec<f64> = (0..len)
+                .map(|i| (std::f64::consts::TAU * 0.123 * i as f64 * dx).sin() + 0.3 * noise())
+                .collect();
+            scan.add(s, &x);
+        }
+        let freqs: Vec<f64> = (0..37).map(|j| 0.05 + 0.0071 * j as f64).collect();
+        for s in [Signal::Friction, Signal::VelocityError, Signal::Optical] {
+            let alone: Vec<u64> = freqs
+                .iter()
+                .map(|&f| power_alone(&scan, s, f).to_bits())
+                .collect();
+            let eight: Vec<u64> = scan
+                .powers::<8>(s, &freqs)
+                .iter()
+                .map(|p| p.to_bits())
+                .collect();
+            let two: Vec<u64> = scan
+                .powers::<2>(s, &freqs)
+                .iter()
+                .map(|p| p.to_bits())
+                .collect();
+            assert_eq!(eight, alone, "{s:?}");
+            assert_eq!(two, alone, "{s:?}");
+        }
+        // The peak search finds the line (the grid is 1/(1024 dx) wide per bin).
+        let f = scan.peak(Signal::Friction, 0.11, 0.135);
+        assert!((f - 0.123).abs() < 0.1 / (1024.0 * dx), "{f}");
+    }
 }

@@ -648,6 +648,22 @@ pub(crate) fn run(
             Vec::new()
         }
     };
+    // Position-domain spectra for `analyze` itself; the campaigns (which
+    // detect the passages themselves, `with_passages` false) do not use
+    // them and skip their cost. They read the corrected friction only, so
+    // they run beside the stage identification and the per-record step
+    // (at the end on long records, as the passages).
+    let position = |restored: &[super::Restored<'_>],
+                    filter: Option<&ballpass_dsp::ZeroPhaseFilter>| {
+        (with_passages && signals.contains(&Signal::VelocityError)).then(|| {
+            let parts: Vec<super::position::RecordPart<'_>> = recs
+                .iter()
+                .zip(restored)
+                .map(|(r, fr)| (r, fr.as_ref().map(|(f, _)| f.as_ref()), trim..trim + n))
+                .collect();
+            super::position::compute(&parts, settings, filter, pred.d_avg_mm)
+        })
+    };
     let (main, early_passages) = rayon::join(
         || {
             // The load-cell correction of each record (given by a caller
@@ -670,28 +686,36 @@ pub(crate) fn run(
                     })
                     .collect::<Result<Vec<_>>>()?,
             };
-            let (stage, per_record) = rayon::join(
-                || identify_stage(recs, &restored, fs, pred),
-                || match (&filter, &plan) {
-                    (Ok(filter), Ok(plan)) => Some(per_record(
-                        recs,
-                        &restored,
-                        pred,
-                        settings,
-                        filter.as_ref(),
-                        plan,
-                        (trim, n),
-                        &signals,
-                        max_lag,
-                    )),
+            let ((stage, per_record), position) = rayon::join(
+                || {
+                    rayon::join(
+                        || identify_stage(recs, &restored, fs, pred),
+                        || match (&filter, &plan) {
+                            (Ok(filter), Ok(plan)) => Some(per_record(
+                                recs,
+                                &restored,
+                                pred,
+                                settings,
+                                filter.as_ref(),
+                                plan,
+                                (trim, n),
+                                &signals,
+                                max_lag,
+                            )),
+                            _ => None,
+                        },
+                    )
+                },
+                || match &filter {
+                    Ok(filter) if side_by_side => position(&restored, filter.as_ref()),
                     _ => None,
                 },
             );
-            Ok::<_, Error>((restored, stage, per_record))
+            Ok::<_, Error>((restored, stage, per_record, position))
         },
         || side_by_side.then(detect),
     );
-    let (restored, stage, per_record) = main?;
+    let (restored, stage, per_record, early_position) = main?;
     let load_cell: Vec<super::load_cell::DcRestoration> =
         restored.iter().flatten().map(|(_, d)| d.clone()).collect();
     if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
@@ -868,16 +892,9 @@ pub(crate) fn run(
         None
     };
     let verdict = verdict(pred, &findings);
-    // Position-domain spectra for `analyze` itself; the campaigns (which
-    // detect the passages themselves, `with_passages` false) do not use
-    // them and skip their cost.
-    let position = if with_passages && signals.contains(&Signal::VelocityError) {
-        let parts: Vec<super::position::RecordPart<'_>> = recs
-            .iter()
-            .zip(&restored)
-            .map(|(r, fr)| (r, fr.as_ref().map(|(f, _)| f.as_ref()), trim..trim + n))
-            .collect();
-        match super::position::compute(&parts, settings, filter.as_ref(), pred.d_avg_mm) {
+    let position = match early_position.or_else(|| position(&restored, filter.as_ref())) {
+        None => None,
+        Some(computed) => match computed {
             Ok(p) => {
                 notes.push(format!(
                     "position-domain spectra: {} runs of one direction, {:.0} mm of travel on a \
@@ -896,9 +913,7 @@ pub(crate) fn run(
                 warnings.push(format!("no position-domain spectra: {e}"));
                 None
             }
-        }
-    } else {
-        None
+        },
     };
     Ok(Analysis {
         schema: SCHEMA,

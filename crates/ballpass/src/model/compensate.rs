@@ -398,10 +398,71 @@ fn rail_table(recs: &[Recording], a: &Analysis, bins: usize) -> (Option<RailTabl
     }
 }
 
+/// One of the compensation's tables, as its CSV file holds it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompensationTable {
+    /// First column's name (`phase`, `position_mm`).
+    pub index_name: &'static str,
+    /// First column.
+    pub index: Vec<f64>,
+    /// The other columns, named with their units.
+    pub columns: Vec<(String, Vec<f64>)>,
+}
+
+impl CompensationTable {
+    fn write(&self, path: &std::path::Path) -> Result<()> {
+        crate::analysis::export::write_csv(
+            path,
+            &crate::analysis::export::Table {
+                index_name: self.index_name,
+                index: &self.index,
+                columns: self.columns.clone(),
+            },
+        )
+    }
+}
+
 impl Compensation {
-    /// Writes `compensation.json`, `compensation_phase.csv` (`phase`,
-    /// `force_n`, `velocity_error_after_um_s`) and, with a rail table,
-    /// `compensation_rail.csv` (`position_mm`, `force_n`) into `dir`.
+    /// Phase of each bin, periods after phase 0 (`j / B`).
+    fn phases(&self) -> Vec<f64> {
+        (0..self.bins)
+            .map(|j| j as f64 / self.bins as f64)
+            .collect()
+    }
+
+    /// The table against phase, `compensation_phase.csv`: `phase`,
+    /// `force_n`, `velocity_error_after_um_s`.
+    pub fn phase_table(&self) -> CompensationTable {
+        CompensationTable {
+            index_name: "phase",
+            index: self.phases(),
+            columns: vec![
+                ("force_n".into(), self.force_n.clone()),
+                (
+                    "velocity_error_after_um_s".into(),
+                    self.prediction.waveform_after_um_s.clone(),
+                ),
+            ],
+        }
+    }
+
+    /// The table against rail position, `compensation_rail.csv`
+    /// (`position_mm`, `force_n`), when the passages lock to the rail.
+    pub fn rail_table(&self) -> Option<CompensationTable> {
+        self.rail.as_ref().map(|r| CompensationTable {
+            index_name: "position_mm",
+            index: self
+                .phases()
+                .iter()
+                .map(|p| r.x0_mm + p * r.pitch_mm)
+                .collect(),
+            columns: vec![("force_n".into(), self.force_n.clone())],
+        })
+    }
+
+    /// Writes `compensation.json`, `compensation_phase.csv`
+    /// ([`Compensation::phase_table`]) and, with a rail table,
+    /// `compensation_rail.csv` ([`Compensation::rail_table`]) into `dir`.
     ///
     /// # Errors
     /// [`Error::Io`] naming the file or folder.
@@ -410,39 +471,15 @@ impl Compensation {
             path: dir.to_path_buf(),
             source,
         })?;
-        let phase: Vec<f64> = (0..self.bins)
-            .map(|j| j as f64 / self.bins as f64)
-            .collect();
         let mut out = vec![
             dir.join("compensation.json"),
             dir.join("compensation_phase.csv"),
         ];
         crate::fsutil::write_json_pretty(&out[0], self)?;
-        crate::analysis::export::write_csv(
-            &out[1],
-            &crate::analysis::export::Table {
-                index_name: "phase",
-                index: &phase,
-                columns: vec![
-                    ("force_n".into(), self.force_n.clone()),
-                    (
-                        "velocity_error_after_um_s".into(),
-                        self.prediction.waveform_after_um_s.clone(),
-                    ),
-                ],
-            },
-        )?;
-        if let Some(r) = &self.rail {
-            let x: Vec<f64> = phase.iter().map(|p| r.x0_mm + p * r.pitch_mm).collect();
+        self.phase_table().write(&out[1])?;
+        if let Some(t) = self.rail_table() {
             let path = dir.join("compensation_rail.csv");
-            crate::analysis::export::write_csv(
-                &path,
-                &crate::analysis::export::Table {
-                    index_name: "position_mm",
-                    index: &x,
-                    columns: vec![("force_n".into(), self.force_n.clone())],
-                },
-            )?;
+            t.write(&path)?;
             out.push(path);
         }
         Ok(out)

@@ -1,0 +1,77 @@
+//! `compensate`: what `ballpass compensate` computes, on recordings already
+//! in memory (glue over [`ballpass::model::compensate`]).
+
+use ballpass::analysis::preflight::{self, PreflightSettings};
+use ballpass::analysis::AnalyzeSettings;
+use ballpass::model::compensate::{compensate as compensation, CompensationTable};
+use ballpass::model::stage::PdLoop;
+use ballpass::recording::Recording;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::analysis::{bearing_args, stated_velocity, table};
+use crate::errors;
+use crate::pool::{self, ThreadPool};
+use crate::recording::PyRecording;
+
+fn columns<'py>(py: Python<'py>, t: CompensationTable) -> PyResult<Bound<'py, PyDict>> {
+    table(py, t.index_name, &t.index, t.columns)
+}
+
+/// `ballpass.compensate`: the feedforward compensation table of recordings
+/// at one velocity and its predicted benefit, as `ballpass compensate`:
+/// the command line's checks first (their warnings returned apart, as the
+/// command line prints them apart from `compensation.json`), the default
+/// analysis settings, the stage identified from the records or, when that
+/// fails, the loop `gains = (mass kg, K·K_P N/m, K·K_D N·s/m)`. Returns
+/// `(compensation.json as a dict, compensation_phase.csv's columns,
+/// compensation_rail.csv's columns or None, the checks' warnings)`.
+#[pyfunction]
+#[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, gains=None, pool=None, force_velocity=false))]
+#[allow(clippy::type_complexity)]
+fn compensate<'py>(
+    py: Python<'py>,
+    recordings: Vec<PyRef<'py, PyRecording>>,
+    velocity_mm_s: Option<f64>,
+    bearing: Option<&str>,
+    gains: Option<(f64, f64, f64)>,
+    pool: Option<Bound<'py, ThreadPool>>,
+    force_velocity: bool,
+) -> PyResult<(
+    Bound<'py, PyAny>,
+    Bound<'py, PyDict>,
+    Option<Bound<'py, PyDict>>,
+    Vec<String>,
+)> {
+    let (_, g) = bearing_args(bearing)?.resolve(None)?;
+    let gains = gains
+        .map(|(m, kp, kd)| PdLoop::from_products(m, kp, kd))
+        .transpose()
+        .map_err(errors::domain)?;
+    let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
+    let stated = stated_velocity(&recs, velocity_mm_s)?;
+    let pre = PreflightSettings {
+        force_velocity,
+        ..PreflightSettings::default()
+    };
+    let (comp, warnings) = pool::run(py, pool.as_ref(), || {
+        let checked = preflight::check(recs, stated, &g, &pre)?;
+        let settings = AnalyzeSettings::default();
+        let prediction = g.predict(checked.velocity_mm_s, settings.harmonics)?;
+        let comp = compensation(&checked.recordings, &prediction, &settings, gains)?;
+        Ok::<_, ballpass::Error>((comp, checked.warnings))
+    })
+    .map_err(errors::domain)?;
+    let rail = comp.rail_table().map(|t| columns(py, t)).transpose()?;
+    Ok((
+        crate::convert::serialize(py, &comp)?,
+        columns(py, comp.phase_table())?,
+        rail,
+        warnings,
+    ))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(compensate, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,129 @@
+//! Where `analyze`'s time goes, stage by stage, on the record
+//! `tools/bench_python.py` times (`ballpass.simulate(9.0, seed=1)`: 30 s at
+//! 1 kHz, friction, encoder and optical, the default bearing):
+//!
+//! ```sh
+//! GLIBC_TUNABLES=glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=1073741824 \
+//!   RAYON_NUM_THREADS=1 cargo bench -p ballpass --bench analyze_stages -- [--repeat 60]
+//! ```
+//!
+//! (The tunables are the command line's `mallopt` settings, freed blocks
+//! kept for reuse; the Python extension brings mimalloc for the same
+//! reason. Without them every large buffer is mapped and zeroed anew and
+//! the passages and checks take 1.5-3x longer.)
+//!
+//! Each stage is timed on its own (best of `--repeat` runs, wall time; run
+//! with one rayon thread so that the figures add up): the checks before the
+//! analysis (`preflight::check`, what the command line and Python run
+//! first), the load-cell correction, the optical passage detection with
+//! `analyze`'s settings, the position-domain spectra, and the whole
+//! `analyze`; "the rest" is the whole less those three stages inside it
+//! (low-pass, correlations, the three spectra, stage identification,
+//! period, phases, harmonic tests, synchronous average).
+//!
+//! Measured on the shared 2-core machine at load average 7-9 (best of 60,
+//! the best of three runs; the whole varied from 19.6 to 37 ms between
+//! runs with the load): checks 0.15 ms, load-cell correction 1.29 ms,
+//! optical passages 6.6 ms, position-domain spectra 3.8 ms, the rest
+//! 7.9 ms, analyze 19.6 ms.
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use ballpass::analysis::load_cell::restore_friction;
+use ballpass::analysis::position::position_spectra;
+use ballpass::analysis::preflight::{check, PreflightSettings};
+use ballpass::analysis::{analyze, detect_passages, AnalyzeSettings, PassageSettings};
+use ballpass::sim::{simulate, SimSettings};
+
+fn arg(name: &str, default: usize) -> usize {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .map_or(default, |v| v.parse().expect("a whole number"))
+}
+
+/// Best wall time of `repeat` runs of `f`.
+fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> Duration {
+    (0..repeat)
+        .map(|_| {
+            let t = Instant::now();
+            black_box(f());
+            t.elapsed()
+        })
+        .min()
+        .expect("repeat >= 1")
+}
+
+fn main() {
+    let repeat = arg("--repeat", 60).max(1);
+    let sim = simulate(&SimSettings {
+        velocity_mm_s: 9.0,
+        seed: 1,
+        ..SimSettings::default()
+    })
+    .expect("the default simulation runs");
+    let geometry = sim.truth.settings.geometry;
+    let settings = AnalyzeSettings::default();
+    let rec = sim.recording;
+    let checked = check(
+        vec![rec.clone()],
+        Some(9.0),
+        &geometry,
+        &PreflightSettings::default(),
+    )
+    .expect("the simulated record passes the checks");
+    let recs = checked.recordings;
+    let pred = geometry
+        .predict(checked.velocity_mm_s, settings.harmonics)
+        .expect("a prediction");
+    let friction = recs[0]
+        .channel(ballpass::recording::Channel::Friction)
+        .expect("friction")
+        .to_vec();
+    let passage_settings = PassageSettings {
+        velocity_mm_s: Some(pred.velocity_mm_s),
+        fit_pulses: 0,
+        ..PassageSettings::default()
+    };
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let threads = rayon::current_num_threads();
+    println!(
+        "analyze stages, 30 s 3-channel record at 9 mm/s, best of {repeat}, {threads} rayon thread(s)"
+    );
+    let t_check = best(repeat, || {
+        check(
+            vec![rec.clone()],
+            Some(9.0),
+            &geometry,
+            &PreflightSettings::default(),
+        )
+    });
+    let t_load = best(repeat, || {
+        restore_friction(&friction, rec.fs_hz(), pred.tau_c_s, settings.load_cell)
+    });
+    let t_passages = best(repeat, || detect_passages(&recs[0], &passage_settings));
+    let t_position = best(repeat, || {
+        position_spectra(&recs, pred.d_avg_mm, &settings).expect("position spectra")
+    });
+    let t_all = best(repeat, || {
+        analyze(&recs, &pred, &settings).expect("analysis")
+    });
+    let inside = t_load + t_passages + t_position;
+    let rest = t_all.saturating_sub(inside);
+    for (name, t) in [
+        ("checks before the analysis (preflight)", t_check),
+        ("load-cell correction", t_load),
+        ("optical passages", t_passages),
+        ("position-domain spectra", t_position),
+        ("the rest of analyze", rest),
+        ("analyze, whole", t_all),
+    ] {
+        println!(
+            "{name:40} {:8.2} ms  {:5.1} %",
+            ms(t),
+            100.0 * t.as_secs_f64() / t_all.as_secs_f64()
+        );
+    }
+}
