@@ -31,15 +31,7 @@ fn main() {
         refine();
         return;
     }
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .collect();
-    let n: u64 = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let seed: u64 = args
-        .get(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(7_000_000);
+    let (n, seed) = n_and_seed(7_000_000);
     println!(
         "v_mm_s,condition,stage,fc_before_um_s,fc_after_um_s,fc_pred_um_s,reduction,std_before_um_s,std_after_um_s,std_pred_um_s,fc_pred_err,std_pred_err"
     );
@@ -97,15 +89,7 @@ fn main() {
 
 /// The `--rail` measurement (module docs).
 fn rail() {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .collect();
-    let n: u64 = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let seed: u64 = args
-        .get(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(7_400_000);
+    let (n, seed) = n_and_seed(7_400_000);
     println!("v_mm_s,condition,frame_shift_pitch,lock_fraction,locked,rail_reduction");
     let mut rows: Vec<RailCheck> = Vec::new();
     for i in 0..n {
@@ -156,15 +140,7 @@ fn rail() {
 
 /// The `--rounds` measurement (module docs).
 fn refine() {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .collect();
-    let n: u64 = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let seed: u64 = args
-        .get(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(7_500_000);
+    let (n, seed) = n_and_seed(7_500_000);
     let r = 3;
     println!(
         "v_mm_s,condition,std_over_v,fc_um_s (none, round 1..{r}),std_um_s (none, round 1..{r})"
@@ -203,4 +179,18 @@ fn refine() {
     for (k, [a, b]) in met.iter().enumerate() {
         println!("# round {}: f_c -80 % {a}/{m}, std down {b}/{m}", k + 1);
     }
+}
+
+/// The positional arguments `[N] [SEED]` (20 and `default_seed` when absent).
+fn n_and_seed(default_seed: u64) -> (u64, u64) {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let n = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
+    let seed = args
+        .get(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(default_seed);
+    (n, seed)
 }

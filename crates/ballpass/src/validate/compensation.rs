@@ -75,14 +75,7 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
     s1.feedforward = Some(comp.feedforward());
     let sim1 = simulate(&s1)?;
     let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
-    let ve = a1
-        .sync
-        .as_ref()
-        .and_then(|y| y.waveform(Signal::VelocityError))
-        .ok_or_else(|| Error::InvalidRecording {
-            source_name: sim1.recording.source_name(),
-            reason: "no synchronous average of the compensated run".into(),
-        })?;
+    let f_c_after = velocity_error_f_c(&a1, &sim1.recording)?;
     let p = &comp.prediction;
     Ok(CompensationCheck {
         velocity_mm_s: s.velocity_mm_s,
@@ -90,7 +83,7 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
         seed: s.seed,
         stage_source: comp.stage_source,
         f_c_before_um_s: p.f_c_before_um_s,
-        f_c_after_um_s: ve.fundamental_amplitude,
+        f_c_after_um_s: f_c_after,
         f_c_predicted_um_s: p.f_c_after_um_s,
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: a1
@@ -99,6 +92,22 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
             .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
         std_predicted_um_s: p.std_after_um_s,
     })
+}
+
+/// The f_c component of the velocity error of a compensated run's
+/// analysis (the fundamental of its synchronous average), µm/s.
+fn velocity_error_f_c(
+    a: &crate::analysis::Analysis,
+    rec: &crate::recording::Recording,
+) -> Result<f64> {
+    a.sync
+        .as_ref()
+        .and_then(|y| y.waveform(Signal::VelocityError))
+        .map(|w| w.fundamental_amplitude)
+        .ok_or_else(|| Error::InvalidRecording {
+            source_name: rec.source_name(),
+            reason: "no synchronous average of the compensated run".into(),
+        })
 }
 
 /// The bench of draw `i` of a run seeded `seed`: velocity log-uniform in
@@ -197,15 +206,7 @@ pub fn rail_check(s: &SimSettings, frame_shift: Option<f64>) -> Result<RailCheck
     });
     let sim1 = simulate(&s1)?;
     let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
-    let after = a1
-        .sync
-        .as_ref()
-        .and_then(|y| y.waveform(Signal::VelocityError))
-        .ok_or_else(|| Error::InvalidRecording {
-            source_name: sim1.recording.source_name(),
-            reason: "no synchronous average of the compensated run".into(),
-        })?
-        .fundamental_amplitude;
+    let after = velocity_error_f_c(&a1, &sim1.recording)?;
     Ok(RailCheck {
         velocity_mm_s: s.velocity_mm_s,
         condition: s.condition,
