@@ -6,19 +6,32 @@
 //! bench simulated with the table as feedforward and analysed again.
 //! Prints one row per bench and the rates against the goals:
 //! f_c component reduced ≥ 80 %, std reduced, prediction within 20 %.
+//!
+//! With `--rail`, checks instead the rail-position table's lock rule
+//! ([`ballpass::model::compensate::RAIL_LOCK_FRACTION`], frozen): each
+//! bench once as one record, and once split in two halves with the second
+//! half's encoder re-zeroed by a random fraction of a pitch (uniform in
+//! 0–1). The table keyed on the fitted grid is applied in closed loop
+//! whether or not the rule locked; a lock is false when that table misses
+//! the 80 % f_c reduction, a refusal is a miss when it meets it.
+//!
+//! With `--rounds`, compensates each bench in three rounds, each table
+//! built from the run with the previous one applied
+//! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
+//! component and std after each.
 
-use ballpass::validate::compensation::{bench, check};
+use ballpass::validate::compensation::{bench, check, rail_check, rounds, RailCheck};
 
 fn main() {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .collect();
-    let n: u64 = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let seed: u64 = args
-        .get(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(7_000_000);
+    if std::env::args().any(|a| a == "--rail") {
+        rail();
+        return;
+    }
+    if std::env::args().any(|a| a == "--rounds") {
+        refine();
+        return;
+    }
+    let (n, seed) = n_and_seed(7_000_000);
     println!(
         "v_mm_s,condition,stage,fc_before_um_s,fc_after_um_s,fc_pred_um_s,reduction,std_before_um_s,std_after_um_s,std_pred_um_s,fc_pred_err,std_pred_err"
     );
@@ -72,4 +85,112 @@ fn main() {
         "# stage identified: {}/{m}",
         count(&|c| c.stage_source == ballpass::model::compensate::StageSource::Identified)
     );
+}
+
+/// The `--rail` measurement (module docs).
+fn rail() {
+    let (n, seed) = n_and_seed(7_400_000);
+    println!("v_mm_s,condition,frame_shift_pitch,lock_fraction,locked,rail_reduction");
+    let mut rows: Vec<RailCheck> = Vec::new();
+    for i in 0..n {
+        let s = bench(seed, i);
+        // The shift of draw i, uniform in 0..1 pitch, from its own stream.
+        let shift =
+            ballpass::sim::rng::Rng::stream(ballpass::sim::rng::derive_seed(seed, i), 78).uniform();
+        for fs in [None, Some(shift)] {
+            match rail_check(&s, fs) {
+                Ok(c) => {
+                    println!(
+                        "{:.3},{},{},{:.4},{},{:.3}",
+                        c.velocity_mm_s,
+                        c.condition.name(),
+                        c.frame_shift_pitch.map_or("".into(), |x| format!("{x:.3}")),
+                        c.lock_fraction,
+                        c.locked,
+                        c.rail_reduction
+                    );
+                    rows.push(c);
+                }
+                Err(e) => println!("# bench {i} ({} mm/s, shift {fs:?}): {e}", s.velocity_mm_s),
+            }
+        }
+    }
+    for (what, one) in [("one record", true), ("two halves, frame re-zeroed", false)] {
+        let r: Vec<&RailCheck> = rows
+            .iter()
+            .filter(|c| c.frame_shift_pitch.is_none() == one)
+            .collect();
+        let locked = r.iter().filter(|c| c.locked).count();
+        let works = r.iter().filter(|c| c.rail_reduction >= 0.8).count();
+        let false_lock = r
+            .iter()
+            .filter(|c| c.locked && c.rail_reduction < 0.8)
+            .count();
+        let missed = r
+            .iter()
+            .filter(|c| !c.locked && c.rail_reduction >= 0.8)
+            .count();
+        println!(
+            "# {what}: {} benches; locked {locked}; rail table meets -80 % {works}; false locks {false_lock}/{locked}; missed {missed}/{}",
+            r.len(),
+            r.len() - locked
+        );
+    }
+}
+
+/// The `--rounds` measurement (module docs).
+fn refine() {
+    let (n, seed) = n_and_seed(7_500_000);
+    let r = 3;
+    println!(
+        "v_mm_s,condition,std_over_v,fc_um_s (none, round 1..{r}),std_um_s (none, round 1..{r})"
+    );
+    // Per round: benches meeting f_c -80 % and std down.
+    let mut met = vec![[0usize; 2]; r];
+    let mut m = 0;
+    for i in 0..n {
+        let s = bench(seed, i);
+        match rounds(&s, r) {
+            Ok(x) => {
+                m += 1;
+                let (fc0, sd0) = x[0];
+                for (k, (fc, sd)) in x.iter().skip(1).enumerate() {
+                    met[k][0] += usize::from(*fc <= 0.2 * fc0);
+                    met[k][1] += usize::from(*sd < sd0);
+                }
+                println!(
+                    "{:.3},{},{:.3},{},{}",
+                    s.velocity_mm_s,
+                    s.condition.name(),
+                    sd0 * 1e-3 / s.velocity_mm_s,
+                    x.iter()
+                        .map(|p| format!("{:.1}", p.0))
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    x.iter()
+                        .map(|p| format!("{:.1}", p.1))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+    for (k, [a, b]) in met.iter().enumerate() {
+        println!("# round {}: f_c -80 % {a}/{m}, std down {b}/{m}", k + 1);
+    }
+}
+
+/// The positional arguments `[N] [SEED]` (20 and `default_seed` when absent).
+fn n_and_seed(default_seed: u64) -> (u64, u64) {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let n = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
+    let seed = args
+        .get(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(default_seed);
+    (n, seed)
 }

@@ -99,6 +99,34 @@ pub struct PositionLine {
     pub unit: &'static str,
     /// PSD at the peak over the floor, dB.
     pub ratio_db: f64,
+    /// The floor's share of the summed bins, `floor · bins · Δk`, unit²
+    /// (0 when no bin was left to measure the floor, see `floor_bins`).
+    pub floor_power: f64,
+    /// Bins the floor's median was taken over (0: the spectrum is too
+    /// coarse to tell the line from its floor; `power` then includes it).
+    pub floor_bins: usize,
+    /// Amplitude of the line as a sinusoid, `sqrt(2 power)` (N or mm/s).
+    pub amplitude: f64,
+    /// Lower end of the amplitude's confidence interval (the PSD band's
+    /// confidence, [`line_amplitude_band`]); 0 when the line does not stand
+    /// above the floor at that confidence.
+    pub amplitude_lower: Option<f64>,
+    /// Upper end of the amplitude's confidence interval.
+    pub amplitude_upper: Option<f64>,
+}
+
+/// Confidence interval `[lower, upper]` of a line's sinusoid amplitude from
+/// the chi-square factors `[lower_factor, upper_factor]` of its PSD
+/// ([`super::confidence::psd_band_factors`]): the bins summed hold
+/// `power + floor_power`, which the factors bound; the floor, taken as known
+/// (a median over many bins), is subtracted:
+/// `sqrt(2 max(0, (power + floor_power) · factor − floor_power))`.
+///
+/// The factors are those of one bin: the sum of the ±2 Hann bins around a
+/// line carries at least one bin's degrees of freedom, so the interval is on
+/// the wide (conservative) side.
+pub fn line_amplitude_band(power: f64, floor_power: f64, factors: [f64; 2]) -> [f64; 2] {
+    factors.map(|f| (2.0 * ((power + floor_power) * f - floor_power).max(0.0)).sqrt())
 }
 
 /// Friction and velocity-error spectra against the travel.
@@ -293,6 +321,7 @@ fn resample_record(
     filter: Option<&ZeroPhaseFilter>,
     settings: &AnalyzeSettings,
     dx: f64,
+    with_optical: bool,
 ) -> Result<Resampled> {
     let name = rec.source_name();
     let fs = rec.fs_hz();
@@ -318,7 +347,7 @@ fn resample_record(
         Some(x) => Some(lowpass(x[range.clone()].to_vec(), "friction")?),
         None => None,
     };
-    let o = match rec.channel(Channel::Optical) {
+    let o = match rec.channel(Channel::Optical).filter(|_| with_optical) {
         Some(x) => Some(lowpass(x[range.clone()].to_vec(), "optical")?),
         None => None,
     };
@@ -437,6 +466,33 @@ pub(crate) fn compute(
     filter: Option<&ZeroPhaseFilter>,
     d_avg_mm: f64,
 ) -> Result<PositionSpectra> {
+    compute_with(recs, settings, filter, d_avg_mm, Detail::Full)
+}
+
+/// How much [`compute_with`] does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Detail {
+    /// Friction, velocity error and optical; each line located between the
+    /// bins (the zero-padded Welch maximum).
+    Full,
+    /// Friction and velocity error only, each line's frequency left at its
+    /// largest bin: what the lines' powers and amplitudes need (they are
+    /// summed over the bins), at a fraction of the cost (a sweep's records).
+    Amplitudes,
+}
+
+/// [`compute`] in the detail asked for.
+///
+/// # Errors
+/// As [`compute`].
+pub(crate) fn compute_with(
+    recs: &[RecordPart<'_>],
+    settings: &AnalyzeSettings,
+    filter: Option<&ZeroPhaseFilter>,
+    d_avg_mm: f64,
+    detail: Detail,
+) -> Result<PositionSpectra> {
+    let full = detail == Detail::Full;
     let line = 1.0 / (2.0 * d_avg_mm);
     let dx = 2.0 * d_avg_mm / POINTS_PER_PERIOD as f64;
     let mut all = Vec::new();
@@ -448,6 +504,7 @@ pub(crate) fn compute(
             filter,
             settings,
             dx,
+            full,
         )?);
     }
     let longest = all
@@ -523,8 +580,10 @@ pub(crate) fn compute(
                         None => sums.push((*s, p.pxx.iter().map(|b| k as f64 * b).collect())),
                     }
                 }
-                for (sig, x) in &sigs {
-                    scan.add(*sig, x);
+                if full {
+                    for (sig, x) in &sigs {
+                        scan.add(*sig, x);
+                    }
                 }
                 run.segments = k;
                 n_segments += k;
@@ -556,7 +615,7 @@ pub(crate) fn compute(
         freq_per_mm: freq,
         auto: sums,
     };
-    out.lines = lines(&out, settings.harmonics, &scan);
+    out.lines = lines(&out, settings.harmonics, full.then_some(&scan));
     Ok(out)
 }
 
@@ -685,9 +744,21 @@ impl LineScan {
     }
 }
 
+/// Median of `χ²_ν / ν` (0.693 at ν = 2, 0.934 at 10, → 1); 1 without
+/// degrees of freedom.
+fn chi2_median_over_nu(nu: f64) -> f64 {
+    let m = crate::stats::chi2_ppf(0.5, nu) / nu;
+    if nu > 0.0 && m.is_finite() && m > 0.0 {
+        m
+    } else {
+        1.0
+    }
+}
+
 /// The line and harmonics of every signal (module docs), each line in
-/// parallel (rayon; the order is that of a sequential pass).
-fn lines(p: &PositionSpectra, harmonics: usize, scan: &LineScan) -> Vec<PositionLine> {
+/// parallel (rayon; the order is that of a sequential pass). Without
+/// `scan`, each line's frequency is its largest bin's.
+fn lines(p: &PositionSpectra, harmonics: usize, scan: Option<&LineScan>) -> Vec<PositionLine> {
     let df = p.resolution_per_mm;
     let wanted: Vec<(Signal, &[f64], usize)> = p
         .auto
@@ -710,22 +781,38 @@ fn lines(p: &PositionSpectra, harmonics: usize, scan: &LineScan) -> Vec<Position
             if psd[i] <= 0.0 {
                 return None;
             }
-            let measured = scan.peak(*s, (i as f64 - 1.0) * df, (i as f64 + 1.0) * df);
+            let measured = match scan {
+                Some(scan) => scan.peak(*s, (i as f64 - 1.0) * df, (i as f64 + 1.0) * df),
+                None => i as f64 * df,
+            };
+            // The power is summed around the predicted line's bin, not the
+            // largest one: where the line is weak, the largest bin of a
+            // ±25 % search is often a peak of the floor's scatter, and
+            // summing around it would bias the power up.
+            let i0 = ((f / df).round() as usize).clamp(lo, hi);
             // Floor: the bins within ±50 % of k·f_line, more than 2 bins
-            // from the peak and from the neighbouring harmonics.
+            // from the line and from the neighbouring harmonics.
             let flo = ((0.5 * f / df).ceil() as usize).max(1);
             let fhi = ((1.5 * f / df).floor() as usize).min(psd.len() - 1);
             let rest: Vec<f64> = (flo..=fhi)
                 .filter(|&j| {
                     let h = (j as f64 * df / p.line_per_mm).round();
-                    j.abs_diff(i) > 2 && (j as f64 * df - h * p.line_per_mm).abs() > 2.0 * df
+                    j.abs_diff(i0) > 2 && (j as f64 * df - h * p.line_per_mm).abs() > 2.0 * df
                 })
                 .map(|j| psd[j])
                 .collect();
-            let floor = median(&rest).unwrap_or(0.0);
-            let power: f64 = (i.saturating_sub(2)..=(i + 2).min(psd.len() - 1))
-                .map(|j| (psd[j] - floor).max(0.0) * df)
-                .sum();
+            // The median of bins distributed S·χ²_ν/ν is S times the median
+            // of χ²_ν/ν: divided by it, the floor is the mean level S the
+            // line's bins carry too.
+            let floor = median(&rest).unwrap_or(0.0) / chi2_median_over_nu(p.dof);
+            let summed = i0.saturating_sub(2)..=(i0 + 2).min(psd.len() - 1);
+            let floor_power = floor * summed.clone().count() as f64 * df;
+            // Unclamped per bin (a bin below the floor is the floor's
+            // scatter, and clamping it would bias the power up).
+            let power = summed.map(|j| (psd[j] - floor) * df).sum::<f64>().max(0.0);
+            let band = p
+                .band
+                .map(|b| line_amplitude_band(power, floor_power, [b.lower_factor, b.upper_factor]));
             Some(PositionLine {
                 signal: *s,
                 k,
@@ -740,6 +827,11 @@ fn lines(p: &PositionSpectra, harmonics: usize, scan: &LineScan) -> Vec<Position
                 } else {
                     f64::INFINITY
                 },
+                floor_power,
+                floor_bins: rest.len(),
+                amplitude: (2.0 * power).sqrt(),
+                amplitude_lower: band.map(|b| b[0]),
+                amplitude_upper: band.map(|b| b[1]),
             })
         })
         .collect()

@@ -3,6 +3,8 @@
 //! - `records.csv`: one row per record, every scalar the analyses produced
 //!   (failed records too, with their reason);
 //! - `sweep.csv`: one row per velocity; `diagnosis.csv`: one row per bearing;
+//!   `records.csv` and `sweep.csv` end with the position-domain ripple
+//!   (`ripple_<signal>_h<k>_<unit>` and its `_lower_`/`_upper_` interval);
 //! - `friction_spectra.csv`: the averaged friction spectrum of each bearing
 //!   (`freq_hz`, then `psd_friction_<bearing>_n2_per_hz`);
 //!
@@ -19,6 +21,7 @@ use serde::Serialize;
 use super::batch::BatchOutcome;
 use super::diagnose::Diagnosis;
 use super::record::RecordResult;
+use super::ripple::{unit_token, RIPPLE_SIGNALS};
 use super::sweep::Sweep;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -47,6 +50,7 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
     for k in 1..=harmonics {
         let _ = write!(s, ",friction_h{k}_ratio_db,friction_h{k}_significant");
     }
+    s.push_str(&ripple_header(harmonics));
     s.push('\n');
     for r in &outcome.records {
         let e = &r.entry;
@@ -62,7 +66,7 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
         match &r.result {
             Err(why) => {
                 let _ = write!(s, "failed,{}", quote(why));
-                s.push_str(&",".repeat(21 + 2 * harmonics));
+                s.push_str(&",".repeat(21 + 2 * harmonics + 3 * RIPPLE_SIGNALS.len() * harmonics));
             }
             Ok(x) => {
                 let st = x.sticking.as_ref();
@@ -104,6 +108,12 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
                             .unwrap_or_default()
                     );
                 }
+                s.push_str(&ripple_cells(harmonics, |sig, k| {
+                    x.position_ripple
+                        .iter()
+                        .find(|l| l.signal == sig && l.k == k)
+                        .map(|l| [Some(l.amplitude), l.amplitude_lower, l.amplitude_upper])
+                }));
             }
         }
         s.push('\n');
@@ -111,13 +121,55 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
     s
 }
 
+/// Header cells of the position-domain ripple, for `harmonics` lines of
+/// each [`RIPPLE_SIGNALS`] signal: `,ripple_friction_h1_n,
+/// ripple_friction_h1_lower_n,ripple_friction_h1_upper_n,...`.
+fn ripple_header(harmonics: usize) -> String {
+    let mut s = String::new();
+    for (sig, unit, _) in RIPPLE_SIGNALS {
+        let u = unit_token(unit);
+        for k in 1..=harmonics {
+            let n = sig.name();
+            let _ = write!(
+                s,
+                ",ripple_{n}_h{k}_{u},ripple_{n}_h{k}_lower_{u},ripple_{n}_h{k}_upper_{u}"
+            );
+        }
+    }
+    s
+}
+
+/// The cells under [`ripple_header`]: amplitude, lower, upper of each line
+/// `get` finds (empty cells where it finds none).
+fn ripple_cells(
+    harmonics: usize,
+    get: impl Fn(crate::analysis::Signal, usize) -> Option<[Option<f64>; 3]>,
+) -> String {
+    let mut s = String::new();
+    for (sig, _, _) in RIPPLE_SIGNALS {
+        for k in 1..=harmonics {
+            let [a, lo, hi] = get(sig, k).unwrap_or([None; 3]);
+            let _ = write!(s, ",{},{},{}", opt(a), opt(lo), opt(hi));
+        }
+    }
+    s
+}
+
 /// `sweep.csv`: one row per velocity.
 pub fn sweep_csv(sweep: &Sweep) -> String {
+    let harmonics = sweep
+        .velocities
+        .iter()
+        .flat_map(|r| r.ripple.iter().map(|l| l.k))
+        .max()
+        .unwrap_or(0);
     let mut s = String::from(
         "velocity_mm_s,records,f_c_predicted_hz,f_c_measured_hz,f_c_measured_std_hz,\
          velocity_error_std_um_s,velocity_error_std_spread_um_s,tau_c_s,tau_c_spread_s,\
-         tau_p_s,tau_p_spread_s,tau_ratio,tau_ratio_spread\n",
+         tau_p_s,tau_p_spread_s,tau_ratio,tau_ratio_spread",
     );
+    s.push_str(&ripple_header(harmonics));
+    s.push('\n');
     for r in &sweep.velocities {
         let m = |x: Option<crate::stats::MeanStd>| (opt(x.map(|m| m.mean)), opt(x.map(|m| m.std)));
         let (fc, fcs) = m(r.f_c_measured_hz);
@@ -125,11 +177,18 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
         let (tc, tcs) = m(r.tau_c_s);
         let (tp, tps) = m(r.tau_p_s);
         let (ra, ras) = m(r.tau_ratio);
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{},{},{},{fc},{fcs},{ve},{ves},{tc},{tcs},{tp},{tps},{ra},{ras}",
             r.velocity_mm_s, r.records, r.f_c_predicted_hz
         );
+        s.push_str(&ripple_cells(harmonics, |sig, k| {
+            r.ripple
+                .iter()
+                .find(|l| l.signal == sig && l.k == k)
+                .map(|l| [Some(l.amplitude), l.amplitude_lower, l.amplitude_upper])
+        }));
+        s.push('\n');
     }
     s
 }

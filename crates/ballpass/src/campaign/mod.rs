@@ -8,6 +8,7 @@ pub mod manifest;
 pub mod output;
 pub mod pattern;
 pub mod record;
+pub mod ripple;
 pub mod run;
 pub mod select;
 pub mod sticking;

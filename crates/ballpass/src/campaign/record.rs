@@ -63,6 +63,11 @@ pub struct RecordResult {
     pub friction_low_band_power_n2: Option<f64>,
     /// Friction of each ball-pass period (sticking).
     pub sticking: Option<PassageHeights>,
+    /// The friction's and velocity error's lines in the position domain
+    /// (amplitude with its confidence interval, per harmonic), when the
+    /// record has an encoder and enough travel in one direction.
+    #[serde(default)]
+    pub position_ripple: Vec<super::ripple::RippleLine>,
     /// Warnings of the analyses.
     pub warnings: Vec<String>,
     /// Friction auto-spectrum (full range, after the analysis' low-pass and

@@ -136,6 +136,7 @@ pub fn process_recording(
             .map(|(f, d)| (Cow::Borrowed(f.as_ref()), d.clone()))]),
     )?;
     let mut warnings = analysis.warnings.clone();
+    let position_ripple = position_ripple(rec, &restored, &prediction, settings, &mut warnings)?;
 
     let passages = if rec.channel(Channel::Optical).is_some() {
         let ps = PassageSettings {
@@ -223,11 +224,51 @@ pub fn process_recording(
         friction_harmonic_significant: harmonics.iter().map(|h| h.significant).collect(),
         friction_low_band_power_n2: low_band,
         sticking,
+        position_ripple,
         warnings,
         friction_psd_freq_hz: freq,
         friction_psd: psd,
         stage_spectra: analysis.stage_spectra.clone(),
     })
+}
+
+/// The record's ripple in the position domain (friction restored from the
+/// load cell as for the analysis), or none with a warning saying why when
+/// the record has an encoder but too little travel in one direction.
+///
+/// # Errors
+/// A bad low-pass setting (the analysis would have failed on it first).
+fn position_ripple(
+    rec: &Recording,
+    restored: &Option<(Cow<'_, [f64]>, crate::analysis::load_cell::DcRestoration)>,
+    prediction: &crate::bearing::Prediction,
+    settings: &CampaignSettings,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<super::ripple::RippleLine>> {
+    if rec.channel(Channel::Position).is_none() {
+        return Ok(Vec::new());
+    }
+    let a = &settings.analyze;
+    let filter = crate::analysis::preprocess::lowpass_filter(a, rec.fs_hz())?;
+    let trim = ((a.trim_start_s * rec.fs_hz()).round() as usize).min(rec.len());
+    let part = (
+        rec,
+        restored.as_ref().map(|(f, _)| f.as_ref()),
+        trim..rec.len(),
+    );
+    match crate::analysis::position::compute_with(
+        &[part],
+        a,
+        filter.as_ref(),
+        prediction.d_avg_mm,
+        crate::analysis::position::Detail::Amplitudes,
+    ) {
+        Ok(p) => Ok(super::ripple::record_lines(&p)),
+        Err(e) => {
+            warnings.push(format!("no position-domain ripple: {e}"));
+            Ok(Vec::new())
+        }
+    }
 }
 
 /// A manifest entry for a recording that did not come from a manifest.

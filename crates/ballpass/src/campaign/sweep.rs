@@ -39,6 +39,10 @@ pub struct VelocityRow {
     pub f_c_measured_hz: Option<MeanStd>,
     /// Predicted ball-pass frequency, Hz.
     pub f_c_predicted_hz: f64,
+    /// The friction's and velocity error's lines at `k / (2 d_avg)` in the
+    /// position domain, pooled over the records (empty when none had
+    /// enough travel).
+    pub ripple: Vec<super::ripple::VelocityRipple>,
 }
 
 /// A power law `y = c · v^slope` fitted as a line in log10–log10.
@@ -164,6 +168,7 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
                 tau_ratio: mean_std(&col(&|r| r.tau_ratio)),
                 f_c_measured_hz: mean_std(&col(&|r| r.f_c_passages_hz.or(r.f_c_correlation_hz))),
                 f_c_predicted_hz: at[0].f_c_predicted_hz,
+                ripple: super::ripple::pool(&at.iter().map(|r| **r).collect::<Vec<_>>()),
             }
         })
         .collect();
@@ -268,6 +273,11 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
             m.n
         ));
     }
+    let ripple_rows: Vec<(f64, &[super::ripple::VelocityRipple])> = velocities
+        .iter()
+        .map(|r| (r.velocity_mm_s, r.ripple.as_slice()))
+        .collect();
+    findings.extend(super::ripple::finding(&ripple_rows));
     if let (Some(d), Some(ci)) = (d_avg_fitted_mm, d_avg_ci95_mm) {
         let cat = d_avg_catalog_mm
             .map(|c| format!("; catalog {c:.4} mm ({:+.2} %)", 100.0 * (d - c) / c))
@@ -456,6 +466,7 @@ pub(crate) mod tests {
             friction_harmonic_significant: vec![Some(false)],
             friction_low_band_power_n2: Some(0.01),
             sticking: None,
+            position_ripple: vec![],
             warnings: vec![],
             friction_psd_freq_hz: vec![],
             friction_psd: vec![],

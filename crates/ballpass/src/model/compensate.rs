@@ -71,6 +71,21 @@ pub struct RailTable {
     pub lock_rms_mm: f64,
 }
 
+/// The rail grid fitted to the optical passages, whether or not they lock
+/// to it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RailGrid {
+    /// Encoder position of phase 0 (an optical passage), mm.
+    pub x0_mm: f64,
+    /// Travel per period fitted to the passages, mm.
+    pub pitch_mm: f64,
+    /// Rms distance of the passages from the grid, mm.
+    pub lock_rms_mm: f64,
+    /// The same as a fraction of the pitch (locked when ≤
+    /// [`RAIL_LOCK_FRACTION`]).
+    pub lock_fraction: f64,
+}
+
 /// Where the stage model of the prediction came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -126,6 +141,9 @@ pub struct Compensation {
     pub rail: Option<RailTable>,
     /// Why there is or is not a rail table.
     pub rail_note: String,
+    /// The rail grid fitted to the passages (locked or not), when the
+    /// records have an encoder and passages.
+    pub rail_grid: Option<RailGrid>,
     /// Where the stage model came from.
     pub stage_source: StageSource,
     /// The stage model used.
@@ -272,13 +290,16 @@ pub fn from_analysis(
     let std_after = (std_before.powi(2) - var_before + var_after)
         .max(0.0)
         .sqrt();
-    let (rail, rail_note) = rail_table(recs, a, b);
+    let (rail, rail_note, rail_grid) = rail_table(recs, a, b);
     let mut warnings = Vec::new();
     let vel = a.prediction.velocity_mm_s;
     let stall = std_before * 1e-3 / vel;
     if stall > STALL_FRACTION {
         warnings.push(format!(
-            "the velocity error's std is {:.0} % of the velocity ({std_before:.0} µm/s at {vel} mm/s):              the stage nearly stalls at the friction peaks, where the linear prediction does not              hold; on simulated benches above {:.0} % the table mostly fell short of an 80 % f_c              reduction and often raised the std. Try it with care (scaled down first)",
+            "the velocity error's std is {:.0} % of the velocity ({std_before:.0} µm/s at {vel} mm/s): \
+             the stage nearly stalls at the friction peaks, where the linear prediction does not \
+             hold; on simulated benches above {:.0} % the table mostly fell short of an 80 % f_c \
+             reduction and often raised the std. Try it with care (scaled down first)",
             100.0 * stall,
             100.0 * STALL_FRACTION
         ));
@@ -297,6 +318,7 @@ pub fn from_analysis(
         force_n,
         rail,
         rail_note,
+        rail_grid,
         stage_source,
         stage,
         stage_text,
@@ -320,8 +342,46 @@ fn describe(g: &PdLoop) -> String {
 }
 
 /// The rail grid of the optical passages of every record (one encoder
-/// frame assumed), when they lock to it.
-fn rail_table(recs: &[Recording], a: &Analysis, bins: usize) -> (Option<RailTable>, String) {
+/// frame assumed), with the table when they lock to it.
+fn rail_table(
+    recs: &[Recording],
+    a: &Analysis,
+    bins: usize,
+) -> (Option<RailTable>, String, Option<RailGrid>) {
+    match rail_grid(recs, a) {
+        Err(why) => (None, why, None),
+        Ok(g) if g.lock_fraction <= RAIL_LOCK_FRACTION => (
+            Some(RailTable {
+                x0_mm: g.x0_mm,
+                pitch_mm: g.pitch_mm,
+                spacing_mm: g.pitch_mm / bins as f64,
+                lock_rms_mm: g.lock_rms_mm,
+            }),
+            format!(
+                "the passages lock to the rail: rms {:.1} % of the pitch from x0 + k·{:.4} mm \
+                 (limit {:.0} %)",
+                100.0 * g.lock_fraction,
+                g.pitch_mm,
+                100.0 * RAIL_LOCK_FRACTION
+            ),
+            Some(g),
+        ),
+        Ok(g) => (
+            None,
+            format!(
+                "no rail table: the passages wander {:.1} % of a pitch (rms) from a rail grid \
+                 (limit {:.0} %); use the table keyed on the passages",
+                100.0 * g.lock_fraction,
+                100.0 * RAIL_LOCK_FRACTION
+            ),
+            Some(g),
+        ),
+    }
+}
+
+/// The rail grid fitted to the optical passages of every record, or why
+/// there is none.
+fn rail_grid(recs: &[Recording], a: &Analysis) -> std::result::Result<RailGrid, String> {
     let settings = crate::analysis::PassageSettings {
         velocity_mm_s: Some(a.prediction.velocity_mm_s),
         fit_pulses: 0,
@@ -331,13 +391,10 @@ fn rail_table(recs: &[Recording], a: &Analysis, bins: usize) -> (Option<RailTabl
     let mut pos = Vec::new();
     for r in recs {
         let Some(x) = r.channel(Channel::Position) else {
-            return (None, "no rail table: no encoder position".into());
+            return Err("no rail table: no encoder position".into());
         };
         let Ok(p) = crate::analysis::detect_passages(r, &settings) else {
-            return (
-                None,
-                "no rail table: passages not found in every record".into(),
-            );
+            return Err("no rail table: passages not found in every record".into());
         };
         let fs = r.fs_hz();
         for q in &p.passages {
@@ -347,7 +404,7 @@ fn rail_table(recs: &[Recording], a: &Analysis, bins: usize) -> (Option<RailTabl
         }
     }
     if pos.len() < 3 {
-        return (None, "no rail table: fewer than 3 passages".into());
+        return Err("no rail table: fewer than 3 passages".into());
     }
     // Grid index of each passage from the predicted pitch, then a line.
     let x_first = pos[0];
@@ -356,10 +413,7 @@ fn rail_table(recs: &[Recording], a: &Analysis, bins: usize) -> (Option<RailTabl
         .map(|x| ((x - x_first) / pitch0).round())
         .collect();
     let Some(fit) = crate::stats::linear_fit(&k, &pos) else {
-        return (
-            None,
-            "no rail table: the passage positions do not fit a line".into(),
-        );
+        return Err("no rail table: the passage positions do not fit a line".into());
     };
     let (pitch, x0) = (fit.slope, fit.intercept);
     let rms = (k
@@ -369,33 +423,12 @@ fn rail_table(recs: &[Recording], a: &Analysis, bins: usize) -> (Option<RailTabl
         .sum::<f64>()
         / pos.len() as f64)
         .sqrt();
-    let frac = rms / pitch.abs();
-    if frac <= RAIL_LOCK_FRACTION {
-        (
-            Some(RailTable {
-                x0_mm: x0,
-                pitch_mm: pitch,
-                spacing_mm: pitch / bins as f64,
-                lock_rms_mm: rms,
-            }),
-            format!(
-                "the passages lock to the rail: rms {:.1} % of the pitch from x0 + k·{pitch:.4} mm \
-                 (limit {:.0} %)",
-                100.0 * frac,
-                100.0 * RAIL_LOCK_FRACTION
-            ),
-        )
-    } else {
-        (
-            None,
-            format!(
-                "no rail table: the passages wander {:.1} % of a pitch (rms) from a rail grid \
-                 (limit {:.0} %); use the table keyed on the passages",
-                100.0 * frac,
-                100.0 * RAIL_LOCK_FRACTION
-            ),
-        )
-    }
+    Ok(RailGrid {
+        x0_mm: x0,
+        pitch_mm: pitch,
+        lock_rms_mm: rms,
+        lock_fraction: rms / pitch.abs(),
+    })
 }
 
 /// One of the compensation's tables, as its CSV file holds it.

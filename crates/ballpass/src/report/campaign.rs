@@ -261,9 +261,12 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<Repo
                 "Measured ball-pass frequency against velocity",
             )
             .with_caption("Mean over repeats ± one standard deviation; dashed: the catalog prediction; solid: f_c = v/(2 d_avg) fitted through the origin.")
-            .with_data(sweep_csv, "velocity_mm_s, f_c_predicted_hz, f_c_measured_hz, f_c_measured_std_hz")
+            .with_data(sweep_csv.clone(), "velocity_mm_s, f_c_predicted_hz, f_c_measured_hz, f_c_measured_std_hz")
             .with_panel(p),
         );
+    }
+    if let Some(f) = ripple_figure(sweep, prefix, &sweep_csv) {
+        figures.push(f);
     }
     if !figures.is_empty() {
         let refs: Vec<String> = figures
@@ -280,6 +283,73 @@ pub fn sweep_parts(sweep: &Sweep, prefix: &str, tables_dir: &str) -> Result<Repo
     }
     parts.sections.push(section);
     Ok(parts)
+}
+
+/// The fundamental's amplitude in the position domain against velocity,
+/// friction (N) and velocity error (µm/s) in two panels, each point with its
+/// confidence interval as asymmetric bars; `None` when no velocity has one.
+fn ripple_figure(sweep: &Sweep, prefix: &str, sweep_csv: &str) -> Option<Figure> {
+    use crate::campaign::ripple::{unit_token, RIPPLE_SIGNALS};
+    let mut panels = Vec::new();
+    let mut confidence = None;
+    let mut columns = vec!["velocity_mm_s".to_string()];
+    for (signal, unit, _) in RIPPLE_SIGNALS {
+        let (mut x, mut y, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for r in &sweep.velocities {
+            let Some(l) = r.ripple.iter().find(|l| l.signal == signal && l.k == 1) else {
+                continue;
+            };
+            x.push(r.velocity_mm_s);
+            y.push(l.amplitude);
+            lo.push((l.amplitude - l.amplitude_lower.unwrap_or(l.amplitude)).max(0.0));
+            hi.push((l.amplitude_upper.unwrap_or(l.amplitude) - l.amplitude).max(0.0));
+            confidence = confidence.or(Some(l.confidence));
+        }
+        if x.is_empty() {
+            continue;
+        }
+        let t = unit_token(unit);
+        let n = signal.name();
+        columns.push(format!(
+            "ripple_{n}_h1_{t}, ripple_{n}_h1_lower_{t}, ripple_{n}_h1_upper_{t}"
+        ));
+        let mut p = Panel::new(
+            Axis::linear("Tracking velocity", "mm/s"),
+            Axis::linear(format!("{} amplitude", capitalised(signal.words())), unit),
+        )
+        .with_series(Series::line(signal.words(), x, y).with_style(
+            SeriesStyle::ErrorBars {
+                minus: lo,
+                plus: hi,
+                line: true,
+            },
+        ));
+        p.legend = Some(false);
+        panels.push(p);
+    }
+    confidence?;
+    let level = sweep
+        .velocities
+        .iter()
+        .find_map(|r| r.ripple.first())
+        .map_or(String::new(), |l| format!("{:.0} %", 100.0 * l.confidence));
+    let mut fig = Figure::new(
+        format!("{prefix}ripple_vs_velocity"),
+        "Ball-pass ripple against velocity in the position domain (line at 1/(2 d_avg) cycles/mm)",
+    )
+    .with_caption(format!(
+        "Amplitude of the friction's and the velocity error's line at 1/(2 d_avg) cycles/mm, from \
+         the position-domain spectra of the repeats at each velocity pooled (their line powers \
+         averaged, their degrees of freedom added); bars: the {level} confidence interval from \
+         the chi-square band of the Welch estimate. A velocity is missing where its records have \
+         too little travel in one direction to tell the line from its floor. The harmonics are in \
+         the same table."
+    ))
+    .with_data(sweep_csv.to_string(), columns.join(", "));
+    for p in panels {
+        fig = fig.with_panel(p);
+    }
+    Some(fig)
 }
 
 /// A sentence with its first letter in capitals, unless it starts with a
@@ -306,6 +376,8 @@ fn figure_list(figures: &[Figure], refs: &[String]) -> String {
                 "the ball-pass period τc and pulse width τp"
             } else if f.id.ends_with("tau_ratio") {
                 "their ratio τp/τc"
+            } else if f.id.ends_with("ripple_vs_velocity") {
+                "the ripple amplitude at 1/(2 d_avg) in the position domain"
             } else {
                 "the measured ball-pass frequency"
             };

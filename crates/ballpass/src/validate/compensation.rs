@@ -75,14 +75,7 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
     s1.feedforward = Some(comp.feedforward());
     let sim1 = simulate(&s1)?;
     let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
-    let ve = a1
-        .sync
-        .as_ref()
-        .and_then(|y| y.waveform(Signal::VelocityError))
-        .ok_or_else(|| Error::InvalidRecording {
-            source_name: sim1.recording.source_name(),
-            reason: "no synchronous average of the compensated run".into(),
-        })?;
+    let f_c_after = velocity_error_f_c(&a1, &sim1.recording)?;
     let p = &comp.prediction;
     Ok(CompensationCheck {
         velocity_mm_s: s.velocity_mm_s,
@@ -90,7 +83,7 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
         seed: s.seed,
         stage_source: comp.stage_source,
         f_c_before_um_s: p.f_c_before_um_s,
-        f_c_after_um_s: ve.fundamental_amplitude,
+        f_c_after_um_s: f_c_after,
         f_c_predicted_um_s: p.f_c_after_um_s,
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: a1
@@ -99,6 +92,22 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
             .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
         std_predicted_um_s: p.std_after_um_s,
     })
+}
+
+/// The f_c component of the velocity error of a compensated run's
+/// analysis (the fundamental of its synchronous average), µm/s.
+fn velocity_error_f_c(
+    a: &crate::analysis::Analysis,
+    rec: &crate::recording::Recording,
+) -> Result<f64> {
+    a.sync
+        .as_ref()
+        .and_then(|y| y.waveform(Signal::VelocityError))
+        .map(|w| w.fundamental_amplitude)
+        .ok_or_else(|| Error::InvalidRecording {
+            source_name: rec.source_name(),
+            reason: "no synchronous average of the compensated run".into(),
+        })
 }
 
 /// The bench of draw `i` of a run seeded `seed`: velocity log-uniform in
@@ -120,4 +129,133 @@ pub fn bench(seed: u64, i: u64) -> SimSettings {
     let tau_c = 2.0 * s.geometry.d_avg_mm() / v;
     s.duration_s = (40.0 * tau_c).max(30.0).ceil();
     s
+}
+
+/// One bench's check of the rail-position table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RailCheck {
+    /// Commanded velocity, mm/s.
+    pub velocity_mm_s: f64,
+    /// Bearing condition.
+    pub condition: Condition,
+    /// Seed of the bench.
+    pub seed: u64,
+    /// Shift of the second half's encoder frame, pitches (`None`: one
+    /// record, one frame).
+    pub frame_shift_pitch: Option<f64>,
+    /// Rms distance of the passages from the fitted grid over the pitch.
+    pub lock_fraction: f64,
+    /// Whether `compensate` gave a rail table.
+    pub locked: bool,
+    /// f_c component reduction with the table keyed on the fitted rail
+    /// grid (built whether or not it locked), simulated in closed loop.
+    pub rail_reduction: f64,
+}
+
+/// The rail table's check on the bench `s`: the record (or, with
+/// `frame_shift`, its two halves, the second one's encoder re-zeroed by
+/// `frame_shift` pitches, as when the stage is homed again between two
+/// records) given to the compensation; the table keyed on the fitted rail
+/// grid applied in closed loop to the bench in the first record's frame.
+///
+/// # Errors
+/// The simulator's, the analysis' and the compensation's errors.
+pub fn rail_check(s: &SimSettings, frame_shift: Option<f64>) -> Result<RailCheck> {
+    use crate::recording::{Channels, Recording};
+    use crate::sim::feedforward::{Feedforward, FeedforwardKey};
+    let sim = simulate(s)?;
+    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
+    let settings = AnalyzeSettings::default();
+    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let recs = match frame_shift {
+        None => vec![sim.recording.clone()],
+        Some(shift) => {
+            let r = &sim.recording;
+            let half = r.len() / 2;
+            let offset = shift * 2.0 * pred.d_avg_mm;
+            let part = |a: usize, b: usize, dx: f64| -> Result<Recording> {
+                let cut =
+                    |c: Option<&[f64]>, d: f64| c.map(|x| x[a..b].iter().map(|v| v + d).collect());
+                let mut meta = r.meta.clone();
+                meta.start_time_s += a as f64 / r.fs_hz();
+                Recording::new(
+                    r.fs_hz(),
+                    Channels {
+                        friction_n: cut(r.channel(crate::recording::Channel::Friction), 0.0),
+                        position_mm: cut(r.channel(crate::recording::Channel::Position), dx),
+                        optical_v: cut(r.channel(crate::recording::Channel::Optical), 0.0),
+                    },
+                    meta,
+                )
+            };
+            vec![part(0, half, 0.0)?, part(half, r.len(), offset)?]
+        }
+    };
+    let comp = compensate(&recs, &pred, &settings, Some(gains))?;
+    let grid = comp.rail_grid.ok_or_else(|| Error::InvalidRecording {
+        source_name: sim.recording.source_name(),
+        reason: format!("no rail grid: {}", comp.rail_note),
+    })?;
+    let mut s1 = s.clone();
+    s1.feedforward = Some(Feedforward {
+        force_n: comp.force_n.clone(),
+        key: FeedforwardKey::RailPosition {
+            x0_mm: grid.x0_mm,
+            pitch_mm: grid.pitch_mm,
+        },
+    });
+    let sim1 = simulate(&s1)?;
+    let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
+    let after = velocity_error_f_c(&a1, &sim1.recording)?;
+    Ok(RailCheck {
+        velocity_mm_s: s.velocity_mm_s,
+        condition: s.condition,
+        seed: s.seed,
+        frame_shift_pitch: frame_shift,
+        lock_fraction: grid.lock_fraction,
+        locked: comp.rail.is_some(),
+        rail_reduction: 1.0 - after / comp.prediction.f_c_before_um_s,
+    })
+}
+
+/// The bench `s` compensated in `rounds` rounds: round 1 as [`check`];
+/// each further round builds the table anew from the run of the round
+/// before (recorded with that round's table applied: the friction as it is
+/// under compensated motion) and applies it instead. Returns the f_c
+/// component and the low-passed std of the velocity error without a table
+/// and after each round, µm/s.
+///
+/// # Errors
+/// The simulator's, the analysis' and the compensation's errors.
+pub fn rounds(s: &SimSettings, rounds: usize) -> Result<Vec<(f64, f64)>> {
+    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
+    let settings = AnalyzeSettings::default();
+    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let mut run = s.clone();
+    let mut out = Vec::new();
+    for _ in 0..=rounds {
+        let sim = simulate(&run)?;
+        let a = analyze(std::slice::from_ref(&sim.recording), &pred, &settings)?;
+        let fc = a
+            .sync
+            .as_ref()
+            .and_then(|y| y.waveform(Signal::VelocityError))
+            .map_or(f64::NAN, |w| w.fundamental_amplitude);
+        let std = a
+            .velocity_error
+            .as_ref()
+            .map_or(f64::NAN, |v| v.lowpassed_std_um_s);
+        out.push((fc, std));
+        if out.len() > rounds {
+            break;
+        }
+        let comp = compensate(
+            std::slice::from_ref(&sim.recording),
+            &pred,
+            &settings,
+            Some(gains),
+        )?;
+        run.feedforward = Some(comp.feedforward());
+    }
+    Ok(out)
 }
