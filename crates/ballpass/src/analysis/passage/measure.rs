@@ -555,8 +555,8 @@ fn ac_rate(hz: &Solution, hi: &Solution, pulses: &[Pulse], block_noise: f64, tau
 /// Grid points averaged at each end of the template for its step.
 const END_POINTS: usize = 3;
 
-/// Depth of the dip after the pulse, in pulse heights, that counts as an
-/// AC coupling's (at least).
+/// Smallest step down across the template, in pulse heights, that counts as
+/// an AC coupling's (at least; three standard errors when more).
 const AC_LOBE: f64 = 0.005;
 
 /// The pulses of `found` (matched-filter detections), each keeping the
