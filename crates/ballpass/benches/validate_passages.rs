@@ -3,12 +3,14 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh] [N] [--list]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2] [N] [--list]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
 //! `fresh` seeds 1_000_001..=1_000_000+N (never looked at before the rules
-//! were frozen). Prints the Markdown tables of the report; `--list` also
+//! were first frozen), `fresh2` seeds 2_000_001..=2_000_000+N (never looked
+//! at before the edge search and the AC-coupling step of the second
+//! revision were frozen). Prints the Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %.
 
@@ -28,8 +30,9 @@ fn main() {
     let first = match set {
         "train" => 1,
         "fresh" => 1_000_001,
+        "fresh2" => 2_000_001,
         other => {
-            eprintln!("unknown set {other}: train or fresh");
+            eprintln!("unknown set {other}: train, fresh or fresh2");
             std::process::exit(2);
         }
     };

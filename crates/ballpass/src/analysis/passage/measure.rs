@@ -179,26 +179,39 @@ pub(super) fn measure(
         let mut full = None;
         // The part of the baseline too fast for the splines (module docs).
         let mut fast = vec![0.0; nd];
-        for pass in 0..TAIL_PASSES {
-            let rhs: Vec<f64> = match &tails {
+        // Inverted pulses (interference) dip below the baseline by
+        // themselves: no AC coupling is looked for then.
+        let inverted = pulses.iter().any(|p| p.a < 0.0);
+        if inverted {
+            kappa = 0.0;
+            zr = restore(kappa);
+        }
+        // Nor unless the pulses recur at the ball-pass period (within
+        // 25 %): pulses that do not (crests of an interference fringe
+        // taken for pulses, say) are not the balls', and a rate read off
+        // them means nothing.
+        let gaps: Vec<f64> = pulses.windows(2).map(|w| w[1].c - w[0].c).collect();
+        let periodic = !gaps.is_empty() && {
+            let r = super::signal::median(&gaps) / pd;
+            (0.8..=1.25).contains(&r)
+        };
+        let look_for_ac = settings.restore_ac_coupling && !inverted && periodic;
+        for _pass in 0..TAIL_PASSES {
+            // The recorded blocks less the tails and the fast baseline of
+            // the last pass (both of the restored signal).
+            let raw: Vec<f64> = match &tails {
                 Some(t) => {
                     let m = pulse_model(nd, &all, t);
-                    (0..nd).map(|i| zr[i] - m[i] - fast[i]).collect()
+                    (0..nd).map(|i| z[i] - m[i] - fast[i]).collect()
                 }
-                None => (0..nd).map(|i| zr[i] - fast[i]).collect(),
+                None => (0..nd).map(|i| z[i] - fast[i]).collect(),
             };
-            let mut s1 = solve(&rhs)?;
-            // The AC coupling's rate: the least one that leaves no dip
-            // below the baseline after the pulse (`ac_rate`). The template
-            // of `z + κ I` is that of `z` plus κ times that of `I`.
-            // Inverted pulses (interference) dip below the baseline by
-            // themselves: no AC coupling is looked for then.
-            let inverted = pulses.iter().any(|p| p.a < 0.0);
-            if inverted {
-                kappa = 0.0;
-            }
-            if pass == 0 && settings.restore_ac_coupling && !inverted {
-                let both = Problem {
+            // The AC coupling's rate (`ac_rate`), every pass: the tails
+            // of the neighbouring pulses, taken out, no longer lift one
+            // end of the support. The template of `raw + κ I` is that of
+            // `raw` plus κ times that of `I`.
+            let s1 = if look_for_ac {
+                let mut both = Problem {
                     n: nd,
                     splines,
                     pulses: &all,
@@ -206,21 +219,30 @@ pub(super) fn measure(
                     smoothness: SMOOTHNESS,
                     pin_ends: false,
                 }
-                .solve(&[&z, &integral])
+                .solve(&[&raw, &integral])
                 .ok_or("the pulses found leave the pulse shape undetermined")?;
-                let k = ac_rate(
-                    &both[0],
-                    &both[1],
-                    &all,
-                    noise / qf.sqrt(),
-                    tau_samples / fs,
-                );
+                let si = both.pop().ok_or("no least-squares solution")?;
+                let mut sz = both.pop().ok_or("no least-squares solution")?;
+                let k = ac_rate(&sz, &si, &all, noise / qf.sqrt(), tau_samples / fs);
                 if k != kappa {
                     kappa = k;
                     zr = restore(kappa);
-                    s1 = solve(&zr)?;
                 }
-            }
+                for (v, w) in sz.template.h.iter_mut().zip(&si.template.h) {
+                    *v += kappa * w;
+                }
+                for (v, w) in sz.beta.iter_mut().zip(&si.beta) {
+                    *v += kappa * w;
+                }
+                sz
+            } else {
+                let rhs: Vec<f64> = raw
+                    .iter()
+                    .zip(&integral)
+                    .map(|(r, i)| r + kappa * i)
+                    .collect();
+                solve(&rhs)?
+            };
             match s1.template.with_tails(TAIL_REACH_PERIODS * pd) {
                 Some((f, t)) => {
                     full = Some(f);
@@ -350,8 +372,9 @@ pub(super) fn measure(
             let hw_r = shape.right_u - shape.peak_u;
             let core_left = SUPPORT_HALF_WIDTHS * hw_l - shape.peak_u;
             let core_right = SUPPORT_HALF_WIDTHS * hw_r + shape.peak_u;
-            let s = scan(
-                &d,
+            let edges = EdgeSearch::new(&d, &baseline, &pulses, &ghosts, core, pd);
+            let mut s = scan(
+                &edges.signal,
                 &resid,
                 &template.restricted(-core_left, core_right),
                 distance,
@@ -359,6 +382,7 @@ pub(super) fn measure(
                 settings.min_snr,
                 settings.min_relative_prominence,
             );
+            s.found.retain(|f| edges.keeps(f.c));
             found_z = s.z;
             amplitude_noise = s.amplitude_noise;
             // A search that finds nothing keeps what the seeds found (its
@@ -474,71 +498,65 @@ fn ghosts(pulses: &[Pulse], nd: usize, grid: &Template, amps: [f64; 2]) -> [Opti
     ]
 }
 
-/// The rate `κ = 1/T` of a first-order AC coupling: the least `κ ≥ 0`
-/// whose restored template `h_z + κ h_I` (`h_z`, `h_I`: the templates of
-/// the blocks and of their running integral, same pulses) has no dip after
-/// its peak: its lowest 3-point mean past the right half-maximum crossing
-/// at or above −`max(0.5 %, 3 standard errors)` of the peak (standard error
-/// of such a mean: `block_noise / √(3 Σ a_k² dx)`). A pulse of light
-/// cannot dip below the level around it; an AC coupling makes every pulse
-/// do so, by less the more it is undone. A pulse whose own tail is long
-/// (skewed) has no dip, and gets no restoration. 0 when the template as
-/// recorded has no dip, or when no rate up to `50 / τ_c` removes it (a
-/// dip of another cause), or when a rate leaves no pulse shape.
+/// The rate `κ = 1/T` of a first-order AC coupling: the `κ` whose
+/// restored template `h_z + κ h_I` (`h_z`, `h_I`: the templates of the
+/// blocks and of their running integral, same pulses) ends where it
+/// starts, `κ = −Δh_z / Δh_I` with `Δ` the mean of the last
+/// [`END_POINTS`] grid points less that of the first. A pulse of light
+/// starts and ends at the level around it; an AC coupling pulls the level
+/// after each pulse down by `κ_true` × its area, which `h_I` (a step of
+/// the pulse's area) measures. 0 unless the step of `h_z` is down by more
+/// than `max(0.5 %, 3 standard errors)` of the peak (standard error of an
+/// end's mean: `block_noise / √(3 Σ a_k² dx)`, the step's `√2` that), or
+/// when `κ` exceeds `50 / τ_c`, or leaves no pulse shape. (A dip after the
+/// pulse is no measure: a skewed pulse's long tail fills it, and a rate
+/// that merely removes it is short of the true one.)
 fn ac_rate(hz: &Solution, hi: &Solution, pulses: &[Pulse], block_noise: f64, tau_c_s: f64) -> f64 {
-    let a2: f64 = pulses.iter().map(|p| p.a * p.a).sum();
-    let dip = |k: f64| -> Option<bool> {
-        let mut t = hz.template.clone();
-        for (v, w) in t.h.iter_mut().zip(&hi.template.h) {
-            *v += k * w;
-        }
-        let sh = t.shape()?;
-        let from = ((sh.right_u / t.dx) + t.origin as f64).ceil().max(0.0) as usize;
-        if from + 3 > t.h.len() {
-            return Some(false);
-        }
-        let lowest = t.h[from..]
-            .windows(3)
-            .map(|w| (w[0] + w[1] + w[2]) / 3.0)
-            .fold(f64::INFINITY, f64::min)
-            / sh.peak;
-        let se = block_noise / (3.0 * a2 * t.dx).max(f64::MIN_POSITIVE).sqrt() / sh.peak;
-        Some(lowest < -(AC_LOBE.max(3.0 * se)))
-    };
-    if dip(0.0) != Some(true) {
+    let (tz, ti) = (&hz.template, &hi.template);
+    let g = tz.h.len();
+    if g < 2 * END_POINTS + 1 || ti.h.len() != g {
         return 0.0;
     }
-    // The integral is in V·s, so κ is in 1/s. Rates double from
-    // `T = 100 τ_c` until the dip is gone (at most `T = τ_c / 50`), then
-    // bisection between the last two.
-    let mut lo = 0.0;
-    let mut hi_k = 0.01 / tau_c_s;
-    loop {
-        match dip(hi_k) {
-            Some(false) => break,
-            Some(true) if hi_k < AC_MAX_RATE_PER_PERIOD / tau_c_s => {
-                lo = hi_k;
-                hi_k *= 2.0;
-            }
-            _ => return 0.0,
-        }
+    let Some(sh) = tz.shape() else { return 0.0 };
+    let step = |h: &[f64]| -> f64 {
+        let k = END_POINTS as f64;
+        h[g - END_POINTS..].iter().sum::<f64>() / k - h[..END_POINTS].iter().sum::<f64>() / k
+    };
+    let (dz, di) = (step(&tz.h), step(&ti.h));
+    if di.is_nan() || di <= 0.0 {
+        return 0.0;
     }
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi_k);
-        if dip(mid) == Some(false) {
-            hi_k = mid;
-        } else {
-            lo = mid;
-        }
-        if hi_k - lo <= 1e-3 * hi_k {
-            break;
-        }
+    // Standard error of an end's mean over `END_POINTS` grid points
+    // (each point the least-squares estimate from every pulse), and of the
+    // step, their difference.
+    let a2: f64 = pulses.iter().map(|p| p.a * p.a).sum();
+    let se_end = block_noise
+        / (END_POINTS as f64 * a2 * tz.dx)
+            .max(f64::MIN_POSITIVE)
+            .sqrt();
+    let se_step = std::f64::consts::SQRT_2 * se_end;
+    if dz >= -(AC_LOBE * sh.peak).max(3.0 * se_step) {
+        return 0.0;
     }
-    hi_k
+    let kappa = -dz / di;
+    if kappa > AC_MAX_RATE_PER_PERIOD / tau_c_s {
+        return 0.0;
+    }
+    let mut t = tz.clone();
+    for (v, w) in t.h.iter_mut().zip(&ti.h) {
+        *v += kappa * w;
+    }
+    if t.shape().is_none() {
+        return 0.0;
+    }
+    kappa
 }
 
-/// Depth of the dip after the pulse, in pulse heights, that counts as an
-/// AC coupling's (at least).
+/// Grid points averaged at each end of the template for its step.
+const END_POINTS: usize = 3;
+
+/// Smallest step down across the template, in pulse heights, that counts as
+/// an AC coupling's (at least; three standard errors when more).
 const AC_LOBE: f64 = 0.005;
 
 /// The pulses of `found` (matched-filter detections), each keeping the
@@ -574,4 +592,113 @@ fn merge(pulses: &[Pulse], found: &[super::scan::Found], tol: f64) -> (Vec<Pulse
     }
     out.sort_by(|a, b| a.c.total_cmp(&b.c));
     (out, changed)
+}
+
+/// Periods from the outermost pulse to the record's end within which that
+/// end is searched as in [`EdgeSearch`].
+const EDGE_PERIODS: f64 = 1.5;
+
+/// The search's view of the record's ends. Past the outermost pulses'
+/// support the baseline splines are held by nothing but the data, and bend
+/// to take a pulse the search has not found yet (one cut by the record's
+/// start or end, with the ghost there too weak to hold them off). There
+/// the search sees the signal against the baseline continued in a straight
+/// line from the half period before, and keeps a pulse only where the next
+/// one is due: within a quarter period of the ghost's centre, which must
+/// lie inside the record.
+struct EdgeSearch {
+    /// The baseline-removed signal, the ends against the straight baseline.
+    signal: Vec<f64>,
+    /// Blocks before `lo` and after `hi` are the ends.
+    lo: f64,
+    hi: f64,
+    /// Where a pulse is due at each end (`None`: no ghost inside the record).
+    due: [Option<f64>; 2],
+    /// Tolerance on `due`, blocks.
+    tol: f64,
+}
+
+impl EdgeSearch {
+    fn new(
+        d: &[f64],
+        baseline: &[f64],
+        pulses: &[Pulse],
+        ghosts: &[Option<Pulse>],
+        core: (f64, f64),
+        pd: f64,
+    ) -> Self {
+        let nd = d.len();
+        let end = nd.saturating_sub(1) as f64;
+        let mut signal = d.to_vec();
+        let (Some(first), Some(last)) = (pulses.first(), pulses.last()) else {
+            return Self {
+                signal,
+                lo: f64::NEG_INFINITY,
+                hi: f64::INFINITY,
+                due: [None, None],
+                tol: 0.0,
+            };
+        };
+        let lo = first.c + core.0;
+        let hi = last.c + core.1;
+        let inside = |g: &Option<Pulse>| g.map(|g| g.c).filter(|c| (0.0..=end).contains(c));
+        // Only where the record ends within one and a half periods of the
+        // outermost pulse: further out, pulses are missing (the seeds found
+        // part of the record), and the search is left as it is.
+        let due = [
+            ghosts
+                .first()
+                .and_then(inside)
+                .filter(|c| *c < first.c && first.c <= EDGE_PERIODS * pd),
+            ghosts
+                .get(1)
+                .and_then(inside)
+                .filter(|c| *c > last.c && end - last.c <= EDGE_PERIODS * pd),
+        ];
+        let span = (0.5 * pd).max(4.0);
+        // Least-squares line through the baseline over `a..=b` (blocks).
+        let line = |a: f64, b: f64| -> Option<(f64, f64)> {
+            let a = a.max(0.0).ceil() as usize;
+            let b = (b.min(end).floor().max(0.0)) as usize;
+            if b < a + 2 || b >= nd {
+                return None;
+            }
+            let xs: Vec<f64> = (a..=b).map(|i| i as f64).collect();
+            let fit = crate::stats::linear_fit(&xs, &baseline[a..=b])?;
+            Some((fit.intercept, fit.slope))
+        };
+        if due[1].is_some() {
+            if let Some((c0, c1)) = line(hi - span, hi) {
+                let from = hi.max(0.0).ceil() as usize;
+                for i in from.min(nd)..nd {
+                    signal[i] = d[i] + baseline[i] - (c0 + c1 * i as f64);
+                }
+            }
+        }
+        if due[0].is_some() {
+            if let Some((c0, c1)) = line(lo, lo + span) {
+                let to = (lo.floor().max(-1.0) + 1.0) as usize;
+                for i in 0..to.min(nd) {
+                    signal[i] = d[i] + baseline[i] - (c0 + c1 * i as f64);
+                }
+            }
+        }
+        Self {
+            signal,
+            lo,
+            hi,
+            due,
+            tol: 0.25 * pd,
+        }
+    }
+
+    /// Whether a pulse found at `c` is kept.
+    fn keeps(&self, c: f64) -> bool {
+        let near = |g: f64| (c - g).abs() <= self.tol;
+        match (c < self.lo, c > self.hi) {
+            (true, _) => self.due[0].is_none_or(near),
+            (_, true) => self.due[1].is_none_or(near),
+            _ => true,
+        }
+    }
 }

@@ -55,14 +55,16 @@
 //!   at least 0.7 τ_c apart, so the valley between two wide pulses is
 //!   never taken for an inverted pulse.
 //! - **AC coupling.** A first-order high-pass of time constant `T` gives
-//!   `y' = x' − y/T`, so `x = y + (1/T) ∫ y dt`: the rate `κ = 1/T` is one
-//!   more unknown of the least squares (the coefficient of the running
-//!   integral), and when it is significant (above 4 standard errors) the
-//!   signal is restored before the pulses are measured. Where `T` is much
-//!   shorter than the pulses any `κ` near the true one restores the same
-//!   shape; where it is comparable, the exponential recovery after each
-//!   pulse, which neither the template nor the baseline can take,
-//!   determines it.
+//!   `y' = x' − y/T`, so `x = y + (1/T) ∫ y dt`: the template of the
+//!   restored signal is that of the blocks plus `κ = 1/T` times that of
+//!   their running integral. A pulse of light starts and ends at the level
+//!   around it, so `κ` is the rate at which the restored template ends
+//!   where it starts (its last three grid points against its first three,
+//!   with the neighbours' tails taken out, re-estimated on every
+//!   least-squares pass); a step smaller than 0.5 % of the pulse or three
+//!   standard errors is no coupling. The step is the AC coupling's
+//!   signature whatever the pulse's shape (a dip after the pulse is not: a
+//!   skewed pulse's long tail hides it).
 //!
 //! Pulse-train fits ([`TrainFits`]) use [`ballpass_dsp::least_squares`]
 //! (Levenberg–Marquardt) with analytic Jacobians: the Gaussian train's is
