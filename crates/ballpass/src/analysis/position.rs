@@ -645,10 +645,15 @@ impl LineScan {
     fn peak(&self, s: Signal, lo: f64, hi: f64) -> f64 {
         let n = 64;
         let h = (hi - lo) / n as f64;
+        // Each grid point's power once (a comparison reads two).
         let best = (0..=n)
-            .map(|j| lo + j as f64 * h)
-            .max_by(|a, b| self.power(s, *a).total_cmp(&self.power(s, *b)))
-            .expect("grid");
+            .map(|j| {
+                let f = lo + j as f64 * h;
+                (f, self.power(s, f))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("grid")
+            .0;
         let (mut a, mut b) = ((best - h).max(lo), (best + h).min(hi));
         let g = 0.5 * (5f64.sqrt() - 1.0);
         while b - a > 1e-4 * h {
