@@ -190,9 +190,9 @@ pub fn group_by_speed(parts: Vec<Recording>, tolerance: f64) -> Vec<(f64, Vec<Re
 ///
 /// With the correlations over a lag window shorter than the record
 /// (`windowed`), measured the same way on the staged analysis of a 2-hour
-/// record (7.2 million samples, 2026-11-24): 65 bytes per sample with or
-/// without the report (468 MB), 55 on a 24-hour record; the constant
-/// rounds these up by about 15 %, and a further repeat is taken at 100
+/// record (7.2 million samples, 2026-11-24): 66 bytes per sample with or
+/// without the report (456 MiB), 58 on a 24-hour record; the constant
+/// rounds these up by 14–30 %, and a further repeat is taken at 100
 /// bytes per sample (its recording, signals and spectra; not measured).
 /// Records up to 2^20 samples run their stages side by side, which holds
 /// more per sample (the earlier 120–160 bytes): that is the floor.
