@@ -83,9 +83,13 @@ fn install_interrupt_handler() {
 }
 
 fn main() -> ExitCode {
-    malloc::keep_freed_memory();
-    install_interrupt_handler();
     let cli = Cli::parse();
+    // Before any other thread exists (the interrupt handler starts one).
+    match cli.command {
+        Command::Analyze(_) => malloc::return_freed_memory(),
+        _ => malloc::keep_freed_memory(),
+    }
+    install_interrupt_handler();
     let result = match cli.command {
         Command::Demo(a) => cmd::demo::run(&a),
         Command::Predict(a) => cmd::predict::run(&a),

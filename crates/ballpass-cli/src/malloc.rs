@@ -40,3 +40,34 @@ pub fn keep_freed_memory() {
         libc::mallopt(libc::M_TRIM_THRESHOLD, TRIM_THRESHOLD);
     }
 }
+
+/// Mmap threshold of [`return_freed_memory`]: every block from 1 MiB up
+/// (a record-length buffer, a correlation block, a CSV piece) is mapped on
+/// its own and unmapped when freed.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+const RETURN_MMAP_THRESHOLD: libc::c_int = 1 << 20;
+
+/// Free memory at the top of a heap trimmed back by [`return_freed_memory`].
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+const RETURN_TRIM_THRESHOLD: libc::c_int = 4 << 20;
+
+/// The opposite of [`keep_freed_memory`], for `analyze`: give freed
+/// memory back to the OS at once, so that the peak resident memory is the
+/// peak of what is in use. `analyze` reads few records, often long ones,
+/// and frees each stage's record-length buffers before the next stage
+/// (the analysis of a long record is staged to hold few of them at once);
+/// memory kept for reuse would add the freed blocks of every worker
+/// thread's heap to the peak: measured on a 2-hour record at 1 kHz,
+/// 610 MB resident for 465 MB in use. Fixed thresholds also stop glibc
+/// raising them as blocks are freed. Does nothing outside glibc.
+#[allow(unsafe_code)]
+pub fn return_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: as in `keep_freed_memory`: called once at the start of
+    // `main`, before any other thread exists, with documented parameters;
+    // a refused value leaves the default in place.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, RETURN_MMAP_THRESHOLD);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, RETURN_TRIM_THRESHOLD);
+    }
+}

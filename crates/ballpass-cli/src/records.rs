@@ -189,18 +189,25 @@ pub fn group_by_speed(parts: Vec<Recording>, tolerance: f64) -> Vec<(f64, Vec<Re
 /// run would not have fitted.
 ///
 /// With the correlations over a lag window shorter than the record
-/// (`windowed`), measured the same way on a 2-hour record (7.2 million
-/// samples, 2026-11-24): 104 bytes per sample without the report, 135 with
-/// it; the constants round these up by about 15 %, and a further repeat is
-/// taken at 100 bytes per sample (its recording, signals and spectra).
+/// (`windowed`), measured the same way on the staged analysis of a 2-hour
+/// record (7.2 million samples, 2026-11-24): 66 bytes per sample with or
+/// without the report (456 MiB), 58 on a 24-hour record; the constant
+/// rounds these up by 14–30 %, and a further repeat is taken at 100
+/// bytes per sample (its recording, signals and spectra; not measured).
+/// Records up to 2^20 samples run their stages side by side, which holds
+/// more per sample (the earlier 120–160 bytes): that is the floor.
 pub fn analysis_bytes(samples: usize, records: usize, report: bool, windowed: bool) -> f64 {
     let (first, further) = match (windowed, report) {
         (false, true) => (1100.0, 250.0),
         (false, false) => (620.0, 250.0),
-        (true, true) => (160.0, 100.0),
-        (true, false) => (120.0, 100.0),
+        (true, _) => (75.0, 100.0),
     };
-    samples as f64 * (first + further * records.saturating_sub(1) as f64)
+    let need = samples as f64 * (first + further * records.saturating_sub(1) as f64);
+    if windowed {
+        need.max(160.0 * samples.min(1 << 20) as f64)
+    } else {
+        need
+    }
 }
 
 /// Environment variable: the memory ballpass may use, GB (default: what

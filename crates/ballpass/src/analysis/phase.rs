@@ -347,7 +347,6 @@ mod tests {
             fs_hz: fs,
             n,
             signals: vec![(Signal::Friction, x), (Signal::Optical, y)],
-            unfiltered: Vec::new(),
             velocity_error: None,
             trimmed_samples: 0,
         };

@@ -11,6 +11,7 @@ use ballpass_dsp::{
     butter, detrend_in_place, gradient, FiltFiltSettings, FilterBand, Spacing, ZeroPhaseFilter,
 };
 use serde::Serialize;
+use std::borrow::Cow;
 
 use super::{AnalyzeSettings, Signal};
 use crate::error::{Error, Result};
@@ -27,10 +28,6 @@ pub struct Prepared {
     pub signals: Vec<(Signal, Vec<f64>)>,
     /// Velocity-error statistics, when the position channel is present.
     pub velocity_error: Option<VelocityErrorStats>,
-    /// The same signals after step 1 only (trimmed; velocity error
-    /// `v - V`), neither low-passed nor detrended: what the full-range
-    /// spectra of the thesis' Figs. 62 and 64 are computed from.
-    pub unfiltered: Vec<(Signal, Vec<f64>)>,
     /// Samples removed at the start.
     pub trimmed_samples: usize,
 }
@@ -146,25 +143,28 @@ pub(crate) fn lowpass_filter(
     Ok(Some(f))
 }
 
-/// Steps 1–2 for one record.
+/// Step 1 for one record: the analysed signals trimmed to
+/// `trim..trim + n_keep`, before the low-pass (what the full-range spectra
+/// of the unfiltered signals are computed from), in canonical order,
+/// `signals` only.
 ///
-/// `velocity_mm_s` is the commanded velocity `V`. Missing channels are
-/// skipped (the caller reports them); `n_keep` truncates the trimmed record
-/// to a common length for repeats; `friction`, when given, replaces the
-/// recorded friction (its load-cell discharge undone).
+/// Friction and optical are the record's own samples (borrowed; `friction`,
+/// when given, replaces the recorded friction: its load-cell discharge
+/// undone, and an owned one is cut in place); the velocity error
+/// `gradient(position) - V` is computed over the whole record and then cut,
+/// so that the first kept value is a centred difference too.
 ///
 /// # Errors
-/// [`Error::InvalidRecording`] if the trim leaves too few samples for the
-/// filter; [`Error::Dsp`] for a kernel failure (named with the record).
-pub(crate) fn prepare(
-    rec: &Recording,
+/// [`Error::InvalidRecording`] if the record is shorter than
+/// `trim + n_keep`; [`Error::Dsp`] for a kernel failure (named with the
+/// record).
+pub(crate) fn raw_signals<'a>(
+    rec: &'a Recording,
     velocity_mm_s: f64,
-    settings: &AnalyzeSettings,
-    filter: Option<&ZeroPhaseFilter>,
-    trim: usize,
-    n_keep: usize,
-    friction: Option<&[f64]>,
-) -> Result<Prepared> {
+    (trim, n_keep): (usize, usize),
+    friction: Option<Cow<'a, [f64]>>,
+    signals: &[Signal],
+) -> Result<Vec<(Signal, Cow<'a, [f64]>)>> {
     let fs = rec.fs_hz();
     let name = rec.source_name();
     let range = trim..trim + n_keep;
@@ -178,37 +178,71 @@ pub(crate) fn prepare(
             ),
         });
     }
-    let ctx = |what: &str| format!("{name}: {what}");
-    let mut signals = Vec::with_capacity(3);
-    let mut velocity_error = None;
-    let mut unfiltered = Vec::with_capacity(3);
-    for s in Signal::ALL {
-        let raw: Vec<f64> = match s {
-            Signal::Friction => match friction.or_else(|| rec.channel(Channel::Friction)) {
-                Some(x) => x[range.clone()].to_vec(),
+    // The range of an owned buffer, in place (no second copy).
+    let cut = |c: Cow<'a, [f64]>| match c {
+        Cow::Borrowed(x) => Cow::Borrowed(&x[range.clone()]),
+        Cow::Owned(mut v) => {
+            v.truncate(range.end);
+            v.drain(..range.start);
+            Cow::Owned(v)
+        }
+    };
+    let mut friction = friction;
+    let mut out = Vec::with_capacity(3);
+    for s in Signal::ALL.into_iter().filter(|s| signals.contains(s)) {
+        let raw = match s {
+            Signal::Friction => match friction
+                .take()
+                .or_else(|| rec.channel(Channel::Friction).map(Cow::Borrowed))
+            {
+                Some(x) => cut(x),
                 None => continue,
             },
             Signal::Optical => match rec.channel(Channel::Optical) {
-                Some(x) => x[range.clone()].to_vec(),
+                Some(x) => Cow::Borrowed(&x[range.clone()]),
                 None => continue,
             },
             Signal::VelocityError => match rec.channel(Channel::Position) {
                 Some(p) => {
-                    // Differentiate the whole record, then cut: the trimmed
-                    // samples' neighbours make the first kept value a
-                    // centred difference too.
-                    let v = gradient(p, Spacing::Uniform(1.0 / fs))
-                        .map_err(|e| Error::dsp(ctx("velocity (gradient)"), e))?;
-                    v[range.clone()].iter().map(|v| v - velocity_mm_s).collect()
+                    let mut v = gradient(p, Spacing::Uniform(1.0 / fs))
+                        .map_err(|e| Error::dsp(format!("{name}: velocity (gradient)"), e))?;
+                    v.truncate(range.end);
+                    v.drain(..range.start);
+                    v.iter_mut().for_each(|x| *x -= velocity_mm_s);
+                    Cow::Owned(v)
                 }
                 None => continue,
             },
         };
+        out.push((s, raw));
+    }
+    Ok(out)
+}
+
+/// Step 2 of one record's step-1 signals ([`raw_signals`]), each dropped
+/// as soon as it is filtered (an owned one's memory is free before the
+/// next signal is filtered).
+///
+/// # Errors
+/// [`Error::Dsp`] for a kernel failure (named with the record).
+pub(crate) fn prepare_raw(
+    rec: &Recording,
+    raw: Vec<(Signal, Cow<'_, [f64]>)>,
+    settings: &AnalyzeSettings,
+    filter: Option<&ZeroPhaseFilter>,
+    (trim, n_keep): (usize, usize),
+) -> Result<Prepared> {
+    let fs = rec.fs_hz();
+    let name = rec.source_name();
+    let ctx = |what: &str| format!("{name}: {what}");
+    let mut signals = Vec::with_capacity(3);
+    let mut velocity_error = None;
+    for (s, raw) in raw {
         let mut y = match filter {
             Some(f) => f
                 .apply(&raw)
                 .map_err(|e| Error::dsp(ctx(&format!("low-pass of {}", s.name())), e))?,
-            None => raw.clone(),
+            None => raw.to_vec(),
         };
         if s == Signal::VelocityError {
             let (m, sd, rms) = moments_um_s(&raw);
@@ -225,17 +259,16 @@ pub(crate) fn prepare(
                 quantisation_floor_um_s: settings.encoder_resolution_um * fs / 24f64.sqrt(),
             });
         }
+        drop(raw);
         detrend_in_place(&mut y, settings.detrend.to_dsp())
             .map_err(|e| Error::dsp(ctx(&format!("detrend of {}", s.name())), e))?;
         signals.push((s, y));
-        unfiltered.push((s, raw));
     }
     Ok(Prepared {
         fs_hz: fs,
         n: n_keep,
         signals,
         velocity_error,
-        unfiltered,
         trimmed_samples: trim,
     })
 }
@@ -261,7 +294,8 @@ mod tests {
         .unwrap();
         let s = AnalyzeSettings::default();
         let f = lowpass_filter(&s, fs).unwrap();
-        let p = prepare(&rec, v, &s, f.as_ref(), 0, 2000, None).unwrap();
+        let raw = raw_signals(&rec, v, (0, 2000), None, &Signal::ALL).unwrap();
+        let p = prepare_raw(&rec, raw, &s, f.as_ref(), (0, 2000)).unwrap();
         let st = p.velocity_error.unwrap();
         // A ramp differentiates exactly up to rounding of i/fs * 9 (~1e-15 mm
         // relative), amplified by 1/(2 T_s) = 500: far below 1e-6 µm/s.

@@ -13,7 +13,9 @@
 //!   record's own scalars are kept with their mean and sample standard
 //!   deviation (ddof 1).
 
-use ballpass_dsp::{CorrelateSettings, Correlator};
+use std::borrow::Cow;
+
+use ballpass_dsp::{CorrelateSettings, Correlator, ZeroPhaseFilter};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -457,54 +459,87 @@ fn identify_stage(
 /// unfiltered spectra.
 type PerRecord = (Prepared, Correlations, Spectra, Spectra, Spectra);
 
-/// [`PerRecord`] of every record, all in parallel (rayon), in record order:
-/// `(trim, n)` are the samples trimmed from the start and the samples kept.
-#[allow(clippy::too_many_arguments)]
-fn per_record(
-    recs: &[Recording],
-    restored: &[super::Restored<'_>],
+/// What every record's preparation, correlations and spectra share.
+struct RecordJob<'s> {
+    pred: &'s Prediction,
+    settings: &'s AnalyzeSettings,
+    filter: Option<&'s ZeroPhaseFilter>,
+    plan: &'s spectra::HiresPlan,
+    /// Samples trimmed from the start and samples kept.
+    trim_n: (usize, usize),
+    signals: &'s [Signal],
+    max_lag: usize,
+}
+
+impl RecordJob<'_> {
+    /// [`PerRecord`] of every record, all in parallel (rayon), in record
+    /// order; `frictions[i]` replaces record `i`'s recorded friction (its
+    /// load-cell discharge undone). An owned one is cut and filtered in
+    /// its own buffer, and freed once filtered.
+    fn run<'a>(
+        &self,
+        recs: &'a [Recording],
+        frictions: Vec<Option<Cow<'a, [f64]>>>,
+    ) -> Result<Vec<PerRecord>> {
+        let (settings, (trim, n)) = (self.settings, self.trim_n);
+        let one = |(r, fr): (&'a Recording, Option<Cow<'a, [f64]>>)| -> Result<PerRecord> {
+            let v = self.pred.velocity_mm_s;
+            let raw = preprocess::raw_signals(r, v, (trim, n), fr, self.signals)?;
+            // The unfiltered spectra first; then each step-1 signal is
+            // dropped as soon as it is filtered (on a long record the
+            // velocity error, and an owned friction, are record-length
+            // buffers).
+            let u = spectra::full_of(&raw, r.fs_hz(), n, settings)?;
+            let p = preprocess::prepare_raw(r, raw, settings, self.filter, (trim, n))?;
+            let (c, (f, h)) = rayon::join(
+                || {
+                    with_correlator(
+                        CorrelateSettings {
+                            normalization: settings.corr_norm.to_dsp(),
+                        },
+                        n,
+                        |c| correlation::compute(&p, c, settings, self.max_lag),
+                    )
+                },
+                || {
+                    rayon::join(
+                        || spectra::full(&p, settings),
+                        || spectra::hires(&p, settings, self.plan),
+                    )
+                },
+            );
+            Ok((p, c?, f?, h?, u))
+        };
+        recs.par_iter()
+            .zip(frictions.into_par_iter())
+            .map(one)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect()
+    }
+}
+
+/// The load-cell correction of each record (`None` without friction):
+/// `given` by a caller that needs the restored friction itself, else
+/// made here.
+fn restore_all<'a>(
+    given: Option<Vec<super::Restored<'a>>>,
+    recs: &'a [Recording],
+    fs: f64,
     pred: &Prediction,
     settings: &AnalyzeSettings,
-    filter: Option<&ballpass_dsp::ZeroPhaseFilter>,
-    plan: &spectra::HiresPlan,
-    (trim, n): (usize, usize),
-    signals: &[Signal],
-    max_lag: usize,
-) -> Result<Vec<PerRecord>> {
-    let one = |(r, fr): (&Recording, &super::Restored<'_>)| -> Result<PerRecord> {
-        let friction = fr.as_ref().map(|(f, _)| f.as_ref());
-        let mut p =
-            preprocess::prepare(r, pred.velocity_mm_s, settings, filter, trim, n, friction)?;
-        p.signals.retain(|(s, _)| signals.contains(s));
-        p.unfiltered.retain(|(s, _)| signals.contains(s));
-        let u = spectra::full_of(&p.unfiltered, p.fs_hz, p.n, settings)?;
-        // Nothing else reads the unfiltered signals: on a long record they
-        // are three record-length copies.
-        p.unfiltered = Vec::new();
-        let (c, (f, h)) = rayon::join(
-            || {
-                with_correlator(
-                    CorrelateSettings {
-                        normalization: settings.corr_norm.to_dsp(),
-                    },
-                    n,
-                    |c| correlation::compute(&p, c, settings, max_lag),
-                )
-            },
-            || {
-                rayon::join(
-                    || spectra::full(&p, settings),
-                    || spectra::hires(&p, settings, plan),
-                )
-            },
-        );
-        Ok((p, c?, f?, h?, u))
-    };
+) -> Result<Vec<super::Restored<'a>>> {
+    if let Some(r) = given {
+        return Ok(r);
+    }
     recs.par_iter()
-        .zip(restored.par_iter())
-        .map(one)
-        .collect::<Vec<_>>()
-        .into_iter()
+        .map(|r| {
+            r.channel(Channel::Friction)
+                .map(|f| {
+                    super::load_cell::restore_friction(f, fs, pred.tau_c_s, settings.load_cell)
+                })
+                .transpose()
+        })
         .collect()
 }
 
@@ -515,6 +550,28 @@ pub(crate) fn run(
     settings: &AnalyzeSettings,
     with_passages: bool,
     restored: Option<Vec<super::Restored<'_>>>,
+) -> Result<Analysis> {
+    run_staged_above(
+        recs,
+        pred,
+        settings,
+        with_passages,
+        restored,
+        STAGED_ABOVE_SAMPLES,
+    )
+}
+
+/// [`run`], with records of more than `staged_above` samples (after the
+/// trim) analysed in stages one after the other, so that few record-length
+/// buffers are alive at once; shorter records run their independent
+/// stages side by side. The results are the same either way.
+pub(crate) fn run_staged_above(
+    recs: &[Recording],
+    pred: &Prediction,
+    settings: &AnalyzeSettings,
+    with_passages: bool,
+    restored: Option<Vec<super::Restored<'_>>>,
+    staged_above: usize,
 ) -> Result<Analysis> {
     settings.validate()?;
     check_velocity(pred.velocity_mm_s)?;
@@ -637,10 +694,12 @@ pub(crate) fn run(
     // spectra. Their results are taken in the order of a sequential pass,
     // so the numbers, the warnings and the first error reported are that
     // pass's.
-    // On long records the passages are detected at the end instead, after
-    // the prepared signals are dropped: each branch holds several
-    // record-length buffers (same results, less memory).
-    let side_by_side = n <= SIDE_BY_SIDE_MAX_SAMPLES;
+    // A long record is analysed in stages instead, one after the other,
+    // each holding few record-length buffers beside the record: the
+    // passages; the load-cell correction, the stage and the
+    // position-domain spectra; then the correlations and spectra, which
+    // take the corrected friction over (freed once filtered). Same results.
+    let staged = n > staged_above;
     let detect = || {
         if with_passages {
             super::passage_summaries(recs, pred)
@@ -648,74 +707,82 @@ pub(crate) fn run(
             Vec::new()
         }
     };
-    // Position-domain spectra for `analyze` itself; the campaigns (which
-    // detect the passages themselves, `with_passages` false) do not use
-    // them and skip their cost. They read the corrected friction only, so
-    // they run beside the stage identification and the per-record step
-    // (at the end on long records, as the passages).
-    let position = |restored: &[super::Restored<'_>],
-                    filter: Option<&ballpass_dsp::ZeroPhaseFilter>| {
-        (with_passages && signals.contains(&Signal::VelocityError)).then(|| {
-            let parts: Vec<super::position::RecordPart<'_>> = recs
-                .iter()
-                .zip(restored)
-                .map(|(r, fr)| (r, fr.as_ref().map(|(f, _)| f.as_ref()), trim..trim + n))
-                .collect();
-            super::position::compute(&parts, settings, filter, pred.d_avg_mm)
-        })
+    let wants_position = with_passages && signals.contains(&Signal::VelocityError);
+    let position_of = |restored: &[super::Restored<'_>], filter: Option<&ZeroPhaseFilter>| {
+        let parts: Vec<super::position::RecordPart<'_>> = recs
+            .iter()
+            .zip(restored)
+            .map(|(r, fr)| (r, fr.as_ref().map(|(f, _)| f.as_ref()), trim..trim + n))
+            .collect();
+        super::position::compute(&parts, settings, filter, pred.d_avg_mm)
     };
-    let (main, early_passages) = rayon::join(
-        || {
-            // The load-cell correction of each record (given by a caller
-            // that needs the restored friction itself, else made here).
-            let restored: Vec<super::Restored<'_>> = match restored {
-                Some(r) => r,
-                None => recs
-                    .par_iter()
-                    .map(|r| {
-                        r.channel(Channel::Friction)
-                            .map(|f| {
-                                super::load_cell::restore_friction(
-                                    f,
-                                    fs,
-                                    pred.tau_c_s,
-                                    settings.load_cell,
-                                )
-                            })
-                            .transpose()
-                    })
-                    .collect::<Result<Vec<_>>>()?,
-            };
-            let ((stage, per_record), position) = rayon::join(
-                || {
-                    rayon::join(
-                        || identify_stage(recs, &restored, fs, pred),
-                        || match (&filter, &plan) {
-                            (Ok(filter), Ok(plan)) => Some(per_record(
-                                recs,
-                                &restored,
-                                pred,
-                                settings,
-                                filter.as_ref(),
-                                plan,
-                                (trim, n),
-                                &signals,
-                                max_lag,
-                            )),
-                            _ => None,
-                        },
-                    )
-                },
-                || match &filter {
-                    Ok(filter) if side_by_side => position(&restored, filter.as_ref()),
-                    _ => None,
-                },
-            );
-            Ok::<_, Error>((restored, stage, per_record, position))
-        },
-        || side_by_side.then(detect),
-    );
-    let (restored, stage, per_record, early_position) = main?;
+    let job = match (&filter, &plan) {
+        (Ok(filter), Ok(plan)) => Some(RecordJob {
+            pred,
+            settings,
+            filter: filter.as_ref(),
+            plan,
+            trim_n: (trim, n),
+            signals: &signals,
+            max_lag,
+        }),
+        _ => None,
+    };
+    let (main, early_passages, early_position) = if staged {
+        let passages = detect();
+        let mut early_position = None;
+        let main = restore_all(restored, recs, fs, pred, settings).map(|mut restored| {
+            let stage = identify_stage(recs, &restored, fs, pred);
+            if let (true, Ok(filter)) = (wants_position, &filter) {
+                early_position = Some(position_of(&restored, filter.as_ref()));
+            }
+            let frictions: Vec<_> = restored
+                .iter_mut()
+                .map(|fr| {
+                    fr.as_mut()
+                        .map(|(f, _)| std::mem::replace(f, Cow::Borrowed(&[])))
+                })
+                .collect();
+            let per_record = job.as_ref().map(|j| j.run(recs, frictions));
+            (restored, stage, per_record)
+        });
+        (main, Some(passages), early_position)
+    } else {
+        // The position-domain spectra read the corrected friction only, so
+        // they run beside the stage identification and the per-record step.
+        let (main, passages) = rayon::join(
+            || {
+                let restored = restore_all(restored, recs, fs, pred, settings)?;
+                let ((stage, per_record), position) = rayon::join(
+                    || {
+                        rayon::join(
+                            || identify_stage(recs, &restored, fs, pred),
+                            || {
+                                let frictions = restored
+                                    .iter()
+                                    .map(|fr| fr.as_ref().map(|(f, _)| Cow::Borrowed(f.as_ref())))
+                                    .collect();
+                                job.as_ref().map(|j| j.run(recs, frictions))
+                            },
+                        )
+                    },
+                    || match (wants_position, &filter) {
+                        (true, Ok(filter)) => Some(position_of(&restored, filter.as_ref())),
+                        _ => None,
+                    },
+                );
+                Ok::<_, Error>((restored, stage, per_record, position))
+            },
+            || Some(detect()),
+        );
+        match main {
+            Ok((restored, stage, per_record, position)) => {
+                (Ok((restored, stage, per_record)), passages, position)
+            }
+            Err(e) => (Err(e), passages, None),
+        }
+    };
+    let (restored, stage, per_record) = main?;
     let load_cell: Vec<super::load_cell::DcRestoration> =
         restored.iter().flatten().map(|(_, d)| d.clone()).collect();
     if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
@@ -802,10 +869,7 @@ pub(crate) fn run(
     );
     // (The prepared signals stay: the synchronous average below reads them
     // with the passages.)
-    let passages = match early_passages {
-        Some(p) => p,
-        None => detect(),
-    };
+    let passages = early_passages.unwrap_or_else(detect);
     notes.push(format!(
         "high-resolution spectrum: {} with q = {}, fs = {} Hz, {}-sample segments, {} overlap, \
          resolution {:.5} Hz",
@@ -891,10 +955,14 @@ pub(crate) fn run(
     } else {
         None
     };
+    drop(prepared);
     let verdict = verdict(pred, &findings);
-    let position = match early_position.or_else(|| position(&restored, filter.as_ref())) {
-        None => None,
-        Some(computed) => match computed {
+    // Position-domain spectra for `analyze` itself (a staged run made them
+    // before its correlations); the campaigns (which detect the passages
+    // themselves, `with_passages` false) do not use them and skip their
+    // cost.
+    let position = if wants_position {
+        match early_position.unwrap_or_else(|| position_of(&restored, filter.as_ref())) {
             Ok(p) => {
                 notes.push(format!(
                     "position-domain spectra: {} runs of one direction, {:.0} mm of travel on a \
@@ -913,7 +981,9 @@ pub(crate) fn run(
                 warnings.push(format!("no position-domain spectra: {e}"));
                 None
             }
-        },
+        }
+    } else {
+        None
     };
     Ok(Analysis {
         schema: SCHEMA,
@@ -970,9 +1040,10 @@ pub(crate) fn run(
     })
 }
 
-/// Longest record whose analysis and passage detection run side by side
-/// (2^20 samples, 17 minutes at 1 kHz).
-const SIDE_BY_SIDE_MAX_SAMPLES: usize = 1 << 20;
+/// Longest record whose independent stages run side by side (2^20
+/// samples, 17 minutes at 1 kHz); a longer one is analysed in stages, one
+/// after the other ([`run_staged_above`]).
+pub(crate) const STAGED_ABOVE_SAMPLES: usize = 1 << 20;
 
 thread_local! {
     /// The correlator a worker thread used last, kept for its next record:
@@ -1008,3 +1079,6 @@ fn with_correlator<R>(
 /// spectra, two work spectra, the inverse's input, scratch) hold ~28 MB; a
 /// longer record's would stay with the thread for the rest of the run.
 const KEEP_MAX_SAMPLES: usize = 1 << 18;
+
+#[cfg(test)]
+mod staged_tests;

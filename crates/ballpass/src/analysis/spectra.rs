@@ -318,8 +318,8 @@ fn info(
 
 /// Welch auto/cross spectra of equal-length signals (shared by full and
 /// decimated).
-fn welch_all(
-    signals: &[(Signal, Vec<f64>)],
+fn welch_all<S: AsRef<[f64]>>(
+    signals: &[(Signal, S)],
     fs_hz: f64,
     welch: &mut Welch,
 ) -> Result<(Spectra, usize)> {
@@ -330,7 +330,7 @@ fn welch_all(
         .filter(|(x, y)| x != y)
         .collect();
     let idx: Vec<(usize, usize)> = pairs.iter().map(|&(x, y)| (index(x), index(y))).collect();
-    let xs: Vec<&[f64]> = signals.iter().map(|(_, x)| x.as_slice()).collect();
+    let xs: Vec<&[f64]> = signals.iter().map(|(_, x)| x.as_ref()).collect();
     // One FFT per signal and segment for all the auto and cross spectra;
     // the same numbers as `psd` per signal and `csd` per pair.
     let set = welch.spectra(&xs, &idx, fs_hz).map_err(|e| {
@@ -375,8 +375,8 @@ pub(crate) fn full(p: &Prepared, settings: &AnalyzeSettings) -> Result<Spectra> 
 
 /// Full-range spectra of equal-length signals of `n` samples at `fs_hz`
 /// (the step-2 signals, or the unfiltered ones).
-pub(crate) fn full_of(
-    signals: &[(Signal, Vec<f64>)],
+pub(crate) fn full_of<S: AsRef<[f64]>>(
+    signals: &[(Signal, S)],
     fs_hz: f64,
     n: usize,
     settings: &AnalyzeSettings,

@@ -11,8 +11,8 @@
 use crate::analysis::export::{correlation_column, psd_column};
 use crate::analysis::{Analysis, CorrNorm, Signal};
 use crate::error::Result;
-use crate::recording::{Channel, Recording};
-use crate::report::kinds::{self, fmt_pm, fmt_sig, SpectrumView, Trace};
+use crate::recording::Recording;
+use crate::report::kinds::{self, fmt_pm, fmt_sig, SpectrumView};
 use crate::report::{
     Axis, Block, Figure, Level, Marker, Report, Rgb, Section, Series, Table, Verdict,
 };
@@ -158,33 +158,19 @@ pub fn sections(
 
     // Signals
     if let Some(rec) = raw {
-        let t: Vec<f64> = (0..rec.len()).map(|i| rec.time_s(i)).collect();
-        let traces: Vec<Trace<'_>> = Channel::ALL
-            .iter()
-            .filter_map(|&c| {
-                rec.channel(c).map(|v| Trace {
-                    label: match c {
-                        Channel::Friction => "Friction force",
-                        Channel::Position => "Position",
-                        Channel::Optical => "Optical sensor",
-                    },
-                    unit: c.unit(),
-                    values: v,
-                })
-            })
-            .collect();
-        let mut fig = kinds::time_series_stack(
+        let mut fig = super::envelope::signals(
             &id("signals"),
             &format!(
                 "Signals of {}",
                 crate::report::passage::short_name(&rec.source_name())
             ),
-            &t,
-            &traces,
+            rec,
         )
-        .with_caption(
-            "As loaded, before the velocity error is formed and before any filtering (thesis Fig. 54).",
-        );
+        .with_caption(format!(
+            "As loaded, before the velocity error is formed and before any filtering (thesis Fig. \
+             54).{}",
+            super::envelope::envelope_words(rec)
+        ));
         if let Some(path) = &links.recording {
             fig = fig.with_data(path.clone(), "the recording");
         }
@@ -197,11 +183,30 @@ pub fn sections(
         } else {
             format!("{{fig:{}}} shows the record as loaded.", id("signals"))
         };
-        out.push(
-            Section::new("Signals")
-                .with(Block::Paragraph(text))
-                .with_figure(fig),
+        let mut section = Section::new("Signals")
+            .with(Block::Paragraph(text))
+            .with_figure(fig);
+        // A long record: a few ball periods from its middle, sample by
+        // sample (the measured period, else the predicted one).
+        let tau = a.measured_period.period_s.unwrap_or(a.prediction.tau_c_s);
+        let detail_title = format!(
+            "{} ball periods from the middle of the record",
+            super::envelope::DETAIL_PERIODS
         );
+        if let Some(d) = super::envelope::detail(&id("signals_detail"), &detail_title, rec, tau) {
+            section = section.with(Block::Paragraph(format!(
+                "{{fig:{}}} shows {} ball periods (τc = {} s) from the middle of the record, \
+                 sample by sample.",
+                id("signals_detail"),
+                super::envelope::DETAIL_PERIODS,
+                fmt_sig(tau, 4)
+            )));
+            section = section.with_figure(d.with_caption(
+                "As loaded, every sample: the pulses and the friction ripple the envelope above \
+                 cannot show.",
+            ));
+        }
+        out.push(section);
     }
 
     // Correlations

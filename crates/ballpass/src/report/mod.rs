@@ -78,6 +78,7 @@
 pub mod analysis;
 pub mod campaign;
 mod draw;
+pub mod envelope;
 mod html;
 pub mod kinds;
 mod live;

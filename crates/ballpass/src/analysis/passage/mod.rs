@@ -485,8 +485,10 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
 
     // Noise, a first baseline and the seeds.
     let window = (settings.baseline_periods * tau_samples).round() as usize;
-    let baseline0 = running_percentile(x, window, settings.baseline_percentile);
-    let y0: Vec<f64> = x.iter().zip(&baseline0).map(|(a, b)| a - b).collect();
+    let y0: Vec<f64> = {
+        let baseline0 = running_percentile(x, window, settings.baseline_percentile);
+        x.iter().zip(&baseline0).map(|(a, b)| a - b).collect()
+    };
     // A lag of ~1/40 of the expected pulse width keeps the pulses out of the
     // differences while catching noise that is not white sample to sample.
     let lag = ((0.3 * tau_samples) / 40.0).floor().max(1.0) as usize;
@@ -514,6 +516,9 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
             "no pulse stands out of the noise: largest excursion {largest:.3e} V, noise sigma {sigma:.3e} V"
         )));
     };
+    // Record-length buffers are freed as soon as they are used (a long
+    // record's passages are found beside few other buffers).
+    drop(y0);
     let m = measure::measure(x, fs, tau_samples, &seeds, half_widths, sigma, settings)
         .map_err(no_passages)?;
 
@@ -665,18 +670,19 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     // and the baseline as the recorded signal shows it (for the plots).
     let positions: Vec<f64> = (0..n).map(|i| (i as f64 - 0.5 * (q - 1.0)) / q).collect();
     let base = m.splines.eval_at(&m.beta, &positions);
+    drop(positions);
     let integral = if m.kappa > 0.0 {
         signal::running_integral(x, 1.0 / fs)
     } else {
         Vec::new()
     };
     let restored = |i: usize| x[i] + integral.get(i).map_or(0.0, |v| m.kappa * v);
-    let y: Vec<f64> = (0..n).map(|i| restored(i) - base[i]).collect();
     let baseline_v: Vec<f64> = (0..n)
         .map(|i| base[i] - integral.get(i).map_or(0.0, |v| m.kappa * v))
         .collect();
 
     let fits = if settings.fit_pulses >= 2 && inverted == 0 {
+        let y: Vec<f64> = (0..n).map(|i| restored(i) - base[i]).collect();
         Some(fits::fit_trains(
             &y,
             fs,

@@ -255,25 +255,30 @@ fn direction_runs(v: &[f64], v_stop: f64) -> Vec<(usize, usize, bool)> {
     out
 }
 
-/// Values of `y` where the non-decreasing `p` first reaches each grid point
-/// `x0 + j dx`, `j = 0..m` (linear interpolation between samples).
-fn resample(p: &[f64], ys: &[&[f64]], x0: f64, dx: f64, m: usize) -> Vec<Vec<f64>> {
-    let mut out: Vec<Vec<f64>> = ys.iter().map(|_| Vec::with_capacity(m)).collect();
+/// Values of `y` where the running maximum of `sign · p` (a non-decreasing
+/// travel axis) first reaches each grid point `x0 + j dx`, `j = 0..m`
+/// (linear interpolation between samples). The running maximum is taken
+/// as the walk goes, never stored.
+fn resample(p: &[f64], sign: f64, y: &[f64], x0: f64, dx: f64, m: usize) -> Vec<f64> {
+    let mut out = Vec::with_capacity(m);
+    // The running maximum at samples i - 1 and i.
+    let mut prev = f64::NEG_INFINITY.max(sign * p[0]);
+    let mut cur = prev.max(sign * p[1]);
     let mut i = 1;
     for j in 0..m {
         let x = x0 + j as f64 * dx;
-        while i + 1 < p.len() && p[i] < x {
+        while i + 1 < p.len() && cur < x {
             i += 1;
+            prev = cur;
+            cur = cur.max(sign * p[i]);
         }
-        let (a, b) = (p[i - 1], p[i]);
+        let (a, b) = (prev, cur);
         let t = if b > a {
             ((x - a) / (b - a)).clamp(0.0, 1.0)
         } else {
             1.0
         };
-        for (o, y) in out.iter_mut().zip(ys) {
-            o.push(y[i - 1] + t * (y[i] - y[i - 1]));
-        }
+        out.push(y[i - 1] + t * (y[i] - y[i - 1]));
     }
     out
 }
@@ -335,28 +340,26 @@ fn resample_record(
             needed_for: "position-domain spectra",
         });
     };
-    let lowpass = |x: Vec<f64>, what: &str| -> Result<Vec<f64>> {
+    let lowpass = |x: &[f64], what: &str| -> Result<Vec<f64>> {
         match filter {
             Some(f) => f
-                .apply(&x)
+                .apply(x)
                 .map_err(|e| Error::dsp(format!("{name}: low-pass of {what}"), e)),
-            None => Ok(x),
+            None => Ok(x.to_vec()),
         }
     };
-    let v_all = gradient(pos, Spacing::Uniform(1.0 / fs))
-        .map_err(|e| Error::dsp(format!("{name}: velocity (gradient)"), e))?;
-    let v = lowpass(v_all[range.clone()].to_vec(), "velocity")?;
-    let f = match friction.or_else(|| rec.channel(Channel::Friction)) {
-        Some(x) => Some(lowpass(x[range.clone()].to_vec(), "friction")?),
-        None => None,
-    };
-    let o = match rec.channel(Channel::Optical).filter(|_| with_optical) {
-        Some(x) => Some(lowpass(x[range.clone()].to_vec(), "optical")?),
-        None => None,
+    // One record-length buffer at a time beside the record: the velocity,
+    // then each signal low-passed, resampled run by run and decimated.
+    let v = {
+        let v_all = gradient(pos, Spacing::Uniform(1.0 / fs))
+            .map_err(|e| Error::dsp(format!("{name}: velocity (gradient)"), e))?;
+        lowpass(&v_all[range.clone()], "velocity")?
     };
     let p = &pos[range.clone()];
-    let speeds: Vec<f64> = v.iter().map(|x| x.abs()).collect();
-    let med = median(&speeds).unwrap_or(0.0);
+    let med = {
+        let speeds: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+        median(&speeds).unwrap_or(0.0)
+    };
     if med.is_nan() || med <= 0.0 {
         return Err(Error::InvalidRecording {
             source_name: name,
@@ -371,20 +374,21 @@ fn resample_record(
         q *= 2;
     }
     let fine = dx / q as f64;
-    let period_pts = POINTS_PER_PERIOD | 1; // odd window for a centred mean
-    let mut runs = Vec::new();
+    // Odd window for a centred mean.
+    let period_pts = POINTS_PER_PERIOD | 1;
+    // Each run, with where it lies on the fine grid when it is long enough
+    // to resample: (samples a..b, sign, first grid point, grid points).
+    type Grid = (std::ops::Range<usize>, f64, f64, usize);
+    let mut planned: Vec<(DirectionRun, Option<Grid>)> = Vec::new();
     for (a, b, fwd) in direction_runs(&v, v_stop) {
         let sign = if fwd { 1.0 } else { -1.0 };
-        // Running maximum of the mirrored position: a monotone travel axis.
-        let mut run_max = f64::NEG_INFINITY;
-        let mono: Vec<f64> = p[a..b]
+        // Running maximum of the mirrored position: a monotone travel axis
+        // from its first value to its largest.
+        let first = f64::NEG_INFINITY.max(sign * p[a]);
+        let last = p[a..b]
             .iter()
-            .map(|x| {
-                run_max = run_max.max(sign * x);
-                run_max
-            })
-            .collect();
-        let travel = mono[mono.len() - 1] - mono[0];
+            .fold(f64::NEG_INFINITY, |m, x| m.max(sign * x));
+        let travel = last - first;
         let duration = (b - a) as f64 / fs;
         let run = DirectionRun {
             start_s: a as f64 / fs,
@@ -394,40 +398,53 @@ fn resample_record(
             mean_speed_mm_s: travel / duration,
             segments: 0,
         };
-        let x0 = (mono[0] / fine).ceil() * fine;
+        let x0 = (first / fine).ceil() * fine;
         let m = if travel > 0.0 {
-            ((mono[mono.len() - 1] - x0) / fine).floor() as usize + 1
+            ((last - x0) / fine).floor() as usize + 1
         } else {
             0
         };
         if b - a < 2 || m < MIN_FINE_POINTS * q {
+            planned.push((run, None));
+        } else {
+            planned.push((run, Some((a..b, sign, x0, m))));
+        }
+    }
+    // One signal on the grid, run by run (`None` for a run not resampled).
+    let on_grid = |y: &[f64]| -> Result<Vec<Option<Vec<f64>>>> {
+        planned
+            .iter()
+            .map(|(_, g)| {
+                g.as_ref()
+                    .map(|(r, sign, x0, m)| {
+                        let fine_y = resample(&p[r.clone()], *sign, &y[r.clone()], *x0, fine, *m);
+                        decimate_pow2(fine_y, q, &name)
+                    })
+                    .transpose()
+            })
+            .collect()
+    };
+    let vel = on_grid(&v)?;
+    drop(v);
+    let fr = match friction.or_else(|| rec.channel(Channel::Friction)) {
+        Some(x) => Some(on_grid(&lowpass(&x[range.clone()], "friction")?)?),
+        None => None,
+    };
+    let op = match rec.channel(Channel::Optical).filter(|_| with_optical) {
+        Some(x) => Some(on_grid(&lowpass(&x[range.clone()], "optical")?)?),
+        None => None,
+    };
+    let mut fr = fr.map(Vec::into_iter);
+    let mut op = op.map(Vec::into_iter);
+    let mut runs = Vec::new();
+    for ((run, _), vel) in planned.into_iter().zip(vel) {
+        let (fr, op) = (
+            fr.as_mut().and_then(Iterator::next).flatten(),
+            op.as_mut().and_then(Iterator::next).flatten(),
+        );
+        let Some(vel) = vel else {
             runs.push((run, None));
             continue;
-        }
-        let mut ys: Vec<&[f64]> = vec![&v[a..b]];
-        if let Some(f) = &f {
-            ys.push(&f[a..b]);
-        }
-        if let Some(o) = &o {
-            ys.push(&o[a..b]);
-        }
-        let mut fine_series = resample(&mono, &ys, x0, fine, m).into_iter();
-        let vel = decimate_pow2(fine_series.next().expect("velocity"), q, &name)?;
-        let fr = match f.is_some() {
-            true => Some(decimate_pow2(
-                fine_series.next().expect("friction"),
-                q,
-                &name,
-            )?),
-            false => None,
-        };
-        let op = match o.is_some() {
-            true => Some(decimate_pow2(
-                fine_series.next().expect("optical"),
-                q,
-                &name,
-            )?),
-            false => None,
         };
         // Velocity error: v minus its mean over one period, centred.
         let mean = moving_average_valid(&vel, period_pts);
