@@ -234,3 +234,37 @@ pub fn velocity_matches(entry: &ManifestEntry, wanted: f64, tolerance: f64) -> b
         entry.velocity_mm_s == wanted
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::manifest::parse_manifest;
+    use std::path::Path;
+
+    /// A manifest row names one run of a TDMS file (`FILE#GROUP`, relative
+    /// to the manifest); the record read is that group's.
+    #[test]
+    fn a_manifest_names_a_run_inside_a_file() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+        let m = parse_manifest(
+            &dir.join("m.csv"),
+            "path,bearing,velocity_mm_s,repeat\ntdms_runs.tdms#Run 3,sr25w,27,1\n",
+        )
+        .unwrap();
+        let g = crate::bearing::lookup("sr25w").unwrap().geometry;
+        // 0.16 s: shorter than the loader's default 3 periods at 27 mm/s.
+        let opts = LoadOptions {
+            min_periods: 0.1,
+            ..LoadOptions::default()
+        };
+        let rec = load_entry(&m.entries[0], &opts, g, &CampaignSettings::default()).unwrap();
+        assert_eq!(rec.len(), 160);
+        assert!(rec.source_name().ends_with("tdms_runs.tdms#Run 3"));
+        assert_eq!(rec.meta.velocity_mm_s, Some(27.0));
+        // An empty velocity without a plateau says how to proceed.
+        let mut e = m.entries[0].clone();
+        e.velocity_mm_s = f64::NAN;
+        let err = load_entry(&e, &opts, g, &CampaignSettings::default()).unwrap_err();
+        assert!(err.to_string().contains("--segment"), "{err}");
+    }
+}
