@@ -26,6 +26,13 @@ with npTDMS):
     tdms_bigendian.tdms    a big-endian segment
     tdms_daqmx.tdms        DAQmx raw data: one int16 buffer of 3 scalers,
                            NI polynomial scales on each channel
+    tdms_runs.tdms         three runs in one file, one group each ('Run 1',
+                           'Run 2', 'Run 3'), as LabVIEW logs a run per
+                           group: the same channel names in every group,
+                           run k at 9 k mm/s with 200 - 20 (k - 1) samples,
+                           each run written in two segments and the runs'
+                           segments interleaved; one expected file per run,
+                           tdms_runs.tdms.run<k>.expected.csv
 MF4 (asammdf):
     mf4_plain.mf4          one channel group, time master, units
     mf4_compressed.mf4     the same saved with transposed deflate (DZ blocks)
@@ -40,12 +47,14 @@ MATLAB v7.3 (h5py, in MATLAB's layout: 512-byte text header, MATLAB_class):
 MATLAB level 5 structs (scipy.io.savemat):
     struct_v5.mat          bearing.gs, bearing.sr, nested.inner.data, a cell
 
-Usage: python3 tools/make_format_fixtures.py
+Usage: python3 tools/make_format_fixtures.py [FUNCTION ...]
+(all fixtures, or only those of the functions named, e.g. tdms_runs)
 """
 import datetime
 import io
 import os
 import struct
+import sys
 
 import asammdf
 import h5py
@@ -119,6 +128,48 @@ def tdms_plain(s):
         "position_mm": g["position_mm"][:],
         "optical_V": g["optical_V"][:],
     })
+
+
+def tdms_runs(s):
+    name = "tdms_runs.tdms"
+    props = lambda unit, k: {
+        "wf_increment": 1.0 / FS,
+        "wf_start_offset": 0.0,
+        "wf_start_time": np.datetime64(f"2011-03-14T1{k}:00:00.000000"),
+        "unit_string": unit,
+    }
+    runs = {}
+    for k in (1, 2, 3):
+        n = N - 20 * (k - 1)
+        t = np.arange(n) / FS
+        runs[k] = {
+            "friction_N": 2 + 0.5 * k * np.sin(2 * np.pi * 5 * k * t),
+            "position_mm": 9 * k * t + k,
+            "optical_V": 0.25 + 0.125 * np.cos(2 * np.pi * 20 * t + k),
+        }
+    with TdmsWriter(path(name)) as w:
+        w.write_segment([RootObject({"title": "ballpass fixture: one run per group"})])
+        for part in (0, 1):
+            for k, r in runs.items():
+                n = len(r["friction_N"])
+                half = slice(0, n // 2) if part == 0 else slice(n // 2, n)
+                g = f"Run {k}"
+                w.write_segment([
+                    GroupObject(g, {"velocity_mm_s": 9.0 * k}),
+                    *[
+                        ChannelObject(g, c, r[c][half], props(u, k))
+                        for c, u in (("friction_N", "N"), ("position_mm", "mm"), ("optical_V", "V"))
+                    ],
+                ])
+    f = TdmsFile.read(path(name))
+    for k in runs:
+        g = f[f"Run {k}"]
+        expected(f"{name}.run{k}", {
+            "time_s": tdms_time(g["friction_N"]),
+            "friction_N": g["friction_N"][:],
+            "position_mm": g["position_mm"][:],
+            "optical_V": g["optical_V"][:],
+        })
 
 
 def tdms_scaled(s):
@@ -453,14 +504,15 @@ def struct_v5(s):
 def main():
     os.makedirs(OUT, exist_ok=True)
     s = signals()
-    tdms_plain(s)
-    tdms_scaled(s)
-    tdms_interleaved(s)
-    tdms_bigendian(s)
-    tdms_daqmx(s)
-    mf4_fixtures(s)
-    v73_fixtures(s)
-    struct_v5(s)
+    every = [tdms_plain, tdms_scaled, tdms_runs, tdms_interleaved, tdms_bigendian, tdms_daqmx,
+             mf4_fixtures, v73_fixtures, struct_v5]
+    wanted = sys.argv[1:]
+    unknown = [w for w in wanted if w not in {f.__name__ for f in every}]
+    if unknown:
+        sys.exit(f"unknown fixture function(s) {unknown}; known: {[f.__name__ for f in every]}")
+    for f in every:
+        if not wanted or f.__name__ in wanted:
+            f(s)
     print(
         f"wrote format fixtures to {os.path.normpath(OUT)} with npTDMS {nptdms.__version__}, "
         f"asammdf {asammdf.__version__}, h5py {h5py.__version__}, scipy {scipy.__version__}, "

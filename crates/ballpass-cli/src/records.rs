@@ -137,14 +137,7 @@ pub fn segment_all(recs: &[Recording]) -> Result<(Vec<Segmented>, Vec<Recording>
     let mut found = Vec::new();
     let mut parts = Vec::new();
     for r in recs {
-        let p = segment::plateaus(r, &settings)?;
-        if p.is_empty() {
-            bail!(
-                "{}: no constant-velocity plateau of at least {} s found from the encoder",
-                r.source_name(),
-                settings.min_duration_s
-            );
-        }
+        let p = segment::plateaus_found(r, &settings)?;
         parts.extend(segment::split(r, &p)?);
         found.push(Segmented {
             source: r.source_name(),
@@ -154,27 +147,27 @@ pub fn segment_all(recs: &[Recording]) -> Result<(Vec<Segmented>, Vec<Recording>
     Ok((found, parts))
 }
 
-/// Records grouped by speed: each group's speeds lie within `tolerance` of
-/// its mean (the first record of a group sets it; groups in speed order).
+/// Records grouped by speed ([`segment::group_speeds`]): each group's
+/// speeds lie within `tolerance` of its slowest; groups in speed order,
+/// with their mean speed.
 pub fn group_by_speed(parts: Vec<Recording>, tolerance: f64) -> Vec<(f64, Vec<Recording>)> {
-    let mut parts: Vec<(f64, Recording)> = parts
-        .into_iter()
-        .map(|r| (r.meta.velocity_mm_s.unwrap_or(0.0), r))
+    let speeds: Vec<f64> = parts
+        .iter()
+        .map(|r| r.meta.velocity_mm_s.unwrap_or(0.0))
         .collect();
-    parts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut groups: Vec<(f64, Vec<f64>, Vec<Recording>)> = Vec::new();
-    for (v, r) in parts {
-        match groups.last_mut() {
-            Some((first, speeds, recs)) if (v - *first).abs() <= tolerance * *first => {
-                speeds.push(v);
-                recs.push(r);
-            }
-            _ => groups.push((v, vec![v], vec![r])),
-        }
+    let (group, means) = segment::group_speeds(&speeds, tolerance);
+    let mut groups: Vec<(f64, Vec<(f64, Recording)>)> =
+        means.into_iter().map(|m| (m, Vec::new())).collect();
+    for ((g, v), r) in group.into_iter().zip(speeds).zip(parts) {
+        groups[g].1.push((v, r));
     }
     groups
         .into_iter()
-        .map(|(_, speeds, recs)| (speeds.iter().sum::<f64>() / speeds.len() as f64, recs))
+        .map(|(m, mut recs)| {
+            // In speed order within a group, as before.
+            recs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            (m, recs.into_iter().map(|(_, r)| r).collect())
+        })
         .collect()
 }
 

@@ -101,7 +101,7 @@ fn every_exported_column_names_its_unit() {
         "_s_per_m", "_mm3_s2",
     ];
     // counts, ratios, fractions, flags, names: no unit
-    const PLAIN: [&str; 25] = [
+    const PLAIN: [&str; 28] = [
         "phase",
         "periods",
         "spikes",
@@ -127,6 +127,9 @@ fn every_exported_column_names_its_unit() {
         "n",
         "c_over_p",
         "thesis_printed_c_over_p",
+        "plateau",
+        "plateaus_in_file",
+        "direction",
     ];
     // a coefficient-normalised correlation: r_<series>, no unit
     const SERIES: [&str; 6] = [

@@ -36,6 +36,7 @@ fn record(
         repeat,
         condition: Some(if sticking { "sticking" } else { "good" }.into()),
         notes: None,
+        plateau: None,
     }
 }
 

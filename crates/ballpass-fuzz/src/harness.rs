@@ -225,6 +225,10 @@ fn options(rng: &mut Rng, kind: Kind) -> LoadOptions {
             o.friction.name = Some("Force".into());
             o.optical.name = Some("Bench 1/Voltage".into());
         }
+        (Kind::Tdms, 2) => {
+            // One run per group (`FILE#GROUP`).
+            o.record = Some("Run 2".into());
+        }
         _ => {
             o.gaps = GapPolicy {
                 fill_max_s: Some(0.01),

@@ -180,6 +180,7 @@ fn process_record<'py>(
         repeat,
         condition,
         notes: None,
+        plateau: None,
     };
     let r = py
         .detach(|| process_entry(&entry, &opts, fallback, &settings))
@@ -233,6 +234,7 @@ fn entry_of(r: &RecordResult) -> ManifestEntry {
         repeat: r.repeat,
         condition: r.condition.clone(),
         notes: None,
+        plateau: r.plateau.clone(),
     }
 }
 
@@ -301,6 +303,7 @@ fn diagnose_records<'py>(
                 repeat,
                 condition: None,
                 notes: None,
+                plateau: None,
             },
             result: Err(reason),
         });

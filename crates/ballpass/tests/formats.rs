@@ -270,3 +270,79 @@ fn inspect_lists_what_each_format_holds() {
     has("mf4_plain.mf4", "bench/friction_N", "200 samples");
     has("mf4_plain.mf4", "bench/time", "master");
 }
+
+/// One run per group, as LabVIEW logs them: `FILE#GROUP` reads that run,
+/// bit for bit as npTDMS reads the group; the record is named after it.
+#[test]
+fn tdms_runs_one_per_group_are_named_file_hash_group() {
+    for k in 1..=3 {
+        let spec = PathBuf::from(format!("{}#Run {k}", data("tdms_runs.tdms").display()));
+        let r = load(&spec, &LoadOptions::default()).unwrap();
+        assert_eq!(r.fs_hz(), 1000.0);
+        assert_eq!(r.len(), 200 - 20 * (k - 1));
+        assert_eq!(r.channels(), Channel::ALL.to_vec());
+        assert_matches(&format!("tdms_runs.tdms.run{k}"), &r);
+        assert!(r
+            .source_name()
+            .ends_with(&format!("tdms_runs.tdms#Run {k}")));
+        assert_eq!(
+            r.meta.test_id.as_deref(),
+            Some(&*format!("tdms_runs#Run {k}"))
+        );
+    }
+    // The group's name ignoring case, as channel names.
+    let spec = PathBuf::from(format!("{}#run 2", data("tdms_runs.tdms").display()));
+    assert_eq!(load(&spec, &LoadOptions::default()).unwrap().len(), 180);
+    // Only that group's contents.
+    let c = contents(&spec, &LoadOptions::default(), 100).unwrap();
+    assert!(c.iter().all(|(n, _)| n.starts_with("Run 2")), "{c:?}");
+    assert_eq!(c.len(), 4, "{c:?}");
+}
+
+#[test]
+fn tdms_runs_wrong_or_missing_names_say_what_the_file_holds() {
+    let file = data("tdms_runs.tdms");
+    let holds = "'Run 1' (3 channels), 'Run 2' (3 channels), 'Run 3' (3 channels)";
+    // No group named: the channel names are in every group.
+    let e = load(&file, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(holds) && e.contains("FILE#GROUP") && !e.contains('\n'),
+        "{e}"
+    );
+    let spec = PathBuf::from(format!("{}#Run 9", file.display()));
+    let e = load(&spec, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no group 'Run 9'") && e.contains(holds) && e.contains("tdms_runs.tdms"),
+        "{e}"
+    );
+    let spec = PathBuf::from(format!("{}#", file.display()));
+    assert!(load(&spec, &LoadOptions::default()).is_err());
+    // A record name on a format that holds one record.
+    let spec = PathBuf::from(format!("{}#rec", data("plain_v5.mat").display()));
+    let e = load(&spec, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("only TDMS files") && e.contains("mat"), "{e}");
+}
+
+/// A file whose name holds `#` is that file.
+#[test]
+fn a_file_named_with_a_hash_is_read_as_it_is() {
+    let d = std::env::temp_dir().join(format!("ballpass-hash-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join("run#1.csv");
+    std::fs::write(
+        &p,
+        (0..100).fold("time_s,friction_N\n".to_string(), |s, i| {
+            s + &format!("{},{}\n", i as f64 / 100.0, i)
+        }),
+    )
+    .unwrap();
+    let r = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(r.len(), 100);
+    std::fs::remove_dir_all(&d).unwrap();
+}

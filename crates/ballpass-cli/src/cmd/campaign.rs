@@ -11,6 +11,7 @@ use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
 use ballpass::campaign::output::{DIAGNOSIS_SCHEMA, SWEEP_SCHEMA};
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
+use ballpass::campaign::segments::{load_entry, segment_manifest};
 use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
     export, from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind,
@@ -24,7 +25,7 @@ use clap::Args;
 use serde::Serialize;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
-use crate::records::CheckArgs;
+use crate::records::{CheckArgs, SegmentArgs};
 use crate::{output, text};
 
 /// Arguments shared by `sweep` and `diagnose`.
@@ -63,6 +64,8 @@ pub struct CampaignArgs {
     load: LoadArgs,
     #[command(flatten)]
     check: CheckArgs,
+    #[command(flatten)]
+    segment: SegmentArgs,
 }
 
 /// Arguments of `ballpass diagnose`.
@@ -102,12 +105,10 @@ fn read_source(a: &CampaignArgs) -> Result<Manifest> {
         // Without {bearing} in the pattern, the bearing is --bearing, else the
         // profile's, else the default (sr25w), as for every other command.
         let bearing = a.load.options()?.bearing;
-        Ok(from_directory(
-            &a.source,
-            p,
-            bearing.as_deref(),
-            a.load.velocity,
-        )?)
+        // Segmented runs measure their speeds: none needs to be given
+        // (NaN: "measured", as an empty manifest cell).
+        let velocity = a.load.velocity.or(a.segment.segment.then_some(f64::NAN));
+        Ok(from_directory(&a.source, p, bearing.as_deref(), velocity)?)
     } else {
         if a.pattern.is_some() {
             bail!(
@@ -131,6 +132,7 @@ fn settings(
     s.sticking = sticking;
     s.preflight = a.check.preflight();
     s.window = a.load.window.parsed()?;
+    s.segment = a.segment.segment.then(Default::default);
     Ok(s)
 }
 
@@ -141,13 +143,33 @@ fn run(
     settings: &CampaignSettings,
 ) -> Result<Batch> {
     let out = output::open_dir(&a.out, command)?;
-    let manifest = read_source(a)?;
-    let Selection { entries, notes } = select(&manifest, kind, &a.only_bearing, &a.only_velocity)?;
+    let mut manifest = read_source(a)?;
     let load = a.load.options()?;
     let fallback = load.geometry.context("no bearing geometry")?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs.unwrap_or(0))
         .build()?;
+    // A multi-speed run: its plateaus are the records.
+    let (mut unsegmented, mut segment_notes) = (Vec::new(), Vec::new());
+    if settings.segment.is_some() {
+        let s = pool.install(|| segment_manifest(&manifest, &load, fallback, settings));
+        if s.manifest.entries.is_empty() {
+            let why: Vec<String> = s
+                .failed
+                .iter()
+                .filter_map(|r| r.result.as_ref().err().cloned())
+                .collect();
+            bail!("no plateau found in any file: {}", why.join("; "));
+        }
+        manifest = s.manifest;
+        unsegmented = s.failed;
+        segment_notes = s.notes;
+    }
+    let Selection {
+        mut entries,
+        mut notes,
+    } = select(&manifest, kind, &a.only_bearing, &a.only_velocity)?;
+    notes.splice(0..0, segment_notes);
     let bar = crate::output::progress(entries.len(), "records");
     let t0 = Instant::now();
     let outcome = pool.install(|| {
@@ -164,6 +186,10 @@ fn run(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    // Files that could not be segmented are failed records.
+    entries.extend(unsegmented.iter().map(|r| r.entry.clone()));
+    let mut outcome = outcome;
+    outcome.records.extend(unsegmented);
     Ok(Batch {
         manifest,
         entries,
@@ -204,7 +230,7 @@ fn campaign_report(
     let failed: Vec<String> = b
         .outcome
         .failed()
-        .map(|(e, why)| format!("{}: {why}", e.path.display()))
+        .map(|(e, why)| format!("{}: {why}", e.label()))
         .collect();
     if !failed.is_empty() {
         report = report.with_section(Section::new("Failed records").with(Block::Warnings(failed)));
@@ -297,7 +323,7 @@ fn conclude(b: Batch, html: Option<PathBuf>, summary: Vec<String>) -> Result<()>
         writeln!(out, "{}", text::line(line))?;
     }
     for (e, why) in outcome.failed() {
-        let l = format!("{}: {why}", e.path.display());
+        let l = format!("{}: {why}", e.label());
         writeln!(out, "  failed: {}", text::line(&l))?;
     }
     writeln!(
@@ -393,7 +419,7 @@ pub fn run_diagnose(a: &DiagnoseArgs) -> Result<()> {
         },
         || {
             let f_c = ok.first().map(|r| r.f_c_predicted_hz);
-            let examples = examples(&d, &b.entries, c)?;
+            let examples = examples(&d, &b.entries, c, &settings)?;
             Ok(diagnosis_parts(&d, f_c, &examples, "", "")?)
         },
     )?;
@@ -407,11 +433,12 @@ fn examples(
     d: &ballpass::campaign::diagnose::Diagnosis,
     entries: &[ManifestEntry],
     a: &CampaignArgs,
+    settings: &CampaignSettings,
 ) -> Result<Vec<FrictionTrace>> {
     let load = a.load.options()?;
+    let fallback = load.geometry.context("no bearing geometry")?;
     Ok(friction_examples(d, |bearing| {
         let e = entries.iter().find(|e| e.bearing == bearing)?;
-        let rec = ballpass::recording::load(&e.path, &load).ok()?;
-        a.load.window.apply(rec).ok()
+        load_entry(e, &load, fallback, settings).ok()
     }))
 }

@@ -90,6 +90,7 @@ mod tests {
                 repeat: i,
                 condition: None,
                 notes: None,
+                plateau: None,
             })
             .collect();
         let calls = AtomicUsize::new(0);

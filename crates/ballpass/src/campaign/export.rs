@@ -1,7 +1,9 @@
 //! Campaign tables as CSV and JSON, written atomically.
 //!
 //! - `records.csv`: one row per record, every scalar the analyses produced
-//!   (failed records too, with their reason);
+//!   (failed records too, with their reason), ending with the plateau of a
+//!   segmented multi-speed run the record is (`plateau`, ...,
+//!   `direction`; empty for whole files);
 //! - `sweep.csv`: one row per velocity; `diagnosis.csv`: one row per bearing;
 //!   `records.csv` and `sweep.csv` end with the position-domain ripple
 //!   (`ripple_<signal>_h<k>_<unit>` and its `_lower_`/`_upper_` interval);
@@ -51,6 +53,7 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
         let _ = write!(s, ",friction_h{k}_ratio_db,friction_h{k}_significant");
     }
     s.push_str(&ripple_header(harmonics));
+    s.push_str(PLATEAU_HEADER);
     s.push('\n');
     for r in &outcome.records {
         let e = &r.entry;
@@ -116,9 +119,35 @@ pub fn records_csv(outcome: &BatchOutcome<RecordResult>, harmonics: usize) -> St
                 }));
             }
         }
+        s.push_str(&plateau_cells(e.plateau.as_ref()));
         s.push('\n');
     }
     s
+}
+
+/// The last columns of `records.csv`: which plateau of a multi-speed run
+/// the record is (empty for a whole file): its number in the file, its time
+/// range on the file's time axis, the measured velocity (signed, mm/s) and
+/// the direction (`forward`, `backward`).
+const PLATEAU_HEADER: &str =
+    ",plateau,plateaus_in_file,plateau_start_s,plateau_end_s,plateau_velocity_mm_s,direction";
+
+fn plateau_cells(p: Option<&super::segments::PlateauSource>) -> String {
+    match p {
+        None => ",,,,,,".into(),
+        Some(p) => format!(
+            ",{},{},{},{},{},{}",
+            p.index,
+            p.of,
+            p.plateau.start_s,
+            p.plateau.end_s,
+            p.plateau.velocity_mm_s,
+            match p.plateau.direction {
+                crate::recording::segment::Direction::Forward => "forward",
+                crate::recording::segment::Direction::Backward => "backward",
+            }
+        ),
+    }
 }
 
 /// Header cells of the position-domain ripple, for `harmonics` lines of
@@ -255,6 +284,9 @@ pub fn friction_psd_column(bearing: &str) -> String {
 pub struct Failure {
     /// File.
     pub path: String,
+    /// The plateau of a segmented run that failed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plateau: Option<super::segments::PlateauSource>,
     /// Why.
     pub reason: String,
 }
@@ -265,6 +297,7 @@ pub fn failures(outcome: &BatchOutcome<RecordResult>) -> Vec<Failure> {
         .failed()
         .map(|(e, why)| Failure {
             path: e.path.display().to_string(),
+            plateau: e.plateau.clone(),
             reason: why.to_string(),
         })
         .collect()

@@ -5,7 +5,9 @@
 //! `path, bearing, velocity_mm_s, repeat` and, optionally, `condition` and
 //! `notes` (any order, names matched ignoring case; other columns are kept
 //! out). Relative paths are relative to the manifest's folder. Lines starting
-//! with `#` are comments.
+//! with `#` are comments. The velocity may be left empty for a multi-speed
+//! run that is segmented into its plateaus ([`super::segments`]), whose
+//! speeds are measured from the encoder.
 //!
 //! Labs without a manifest name a folder and a file-name pattern instead
 //! ([`from_directory`]): `*` matches any run of characters, and the fields
@@ -27,7 +29,9 @@ pub struct ManifestEntry {
     pub path: PathBuf,
     /// Bearing name.
     pub bearing: String,
-    /// Commanded tracking velocity, mm/s.
+    /// Commanded tracking velocity, mm/s; NaN where the manifest leaves it
+    /// empty (a multi-speed run whose plateaus' measured speeds are used,
+    /// see [`super::segments`]).
     pub velocity_mm_s: f64,
     /// Repeat number.
     pub repeat: u32,
@@ -35,6 +39,10 @@ pub struct ManifestEntry {
     pub condition: Option<String>,
     /// Free notes.
     pub notes: Option<String>,
+    /// The plateau of a multi-speed run this entry stands for (see
+    /// [`super::segments`]); `None`: the whole file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plateau: Option<super::segments::PlateauSource>,
 }
 
 /// A whole campaign.
@@ -57,6 +65,25 @@ pub struct Skipped {
     pub name: String,
     /// Why (`a folder`, `a broken link`, `does not match the pattern`, ...).
     pub reason: String,
+}
+
+impl ManifestEntry {
+    /// The file, and for a plateau which one: `run.tdms (plateau 2 of 6,
+    /// t = 4.100–6.900 s, -42.03 mm/s)`.
+    pub fn label(&self) -> String {
+        match &self.plateau {
+            None => self.path.display().to_string(),
+            Some(p) => format!(
+                "{} (plateau {} of {}, t = {:.3}–{:.3} s, {:.2} mm/s)",
+                self.path.display(),
+                p.index,
+                p.of,
+                p.plateau.start_s,
+                p.plateau.end_s,
+                p.plateau.velocity_mm_s
+            ),
+        }
+    }
 }
 
 impl Manifest {
@@ -193,21 +220,27 @@ pub fn parse_manifest(path: &Path, text: &str) -> Result<Manifest> {
                 "empty bearing name".into(),
             ));
         }
-        let velocity_mm_s: f64 = cells[iv]
-            .trim()
-            .parse()
-            .ok()
-            .filter(|v: &f64| v.is_finite() && *v > 0.0)
-            .ok_or_else(|| {
-                parse_err(
-                    line,
-                    Some("velocity_mm_s"),
-                    format!(
-                        "'{}' is not a positive number of mm/s",
-                        excerpt(cells[iv].trim())
-                    ),
-                )
-            })?;
+        // Empty: a multi-speed run, its plateaus' speeds measured.
+        let velocity_mm_s: f64 = if cells[iv].trim().is_empty() {
+            Ok(f64::NAN)
+        } else {
+            cells[iv]
+                .trim()
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v > 0.0)
+                .ok_or(())
+        }
+        .map_err(|()| {
+            parse_err(
+                line,
+                Some("velocity_mm_s"),
+                format!(
+                    "'{}' is not a positive number of mm/s",
+                    excerpt(cells[iv].trim())
+                ),
+            )
+        })?;
         let repeat: u32 = cells[ir].trim().parse().map_err(|_| {
             parse_err(
                 line,
@@ -242,6 +275,7 @@ pub fn parse_manifest(path: &Path, text: &str) -> Result<Manifest> {
             repeat,
             condition: opt(ic),
             notes: opt(inotes),
+            plateau: None,
         });
     }
     if entries.is_empty() {
@@ -422,6 +456,7 @@ pub fn from_directory(
             repeat,
             condition: None,
             notes: None,
+            plateau: None,
         });
     }
     if entries.is_empty() {
@@ -480,6 +515,27 @@ mod tests {
         // Round trip through the writer.
         std::fs::write(&m, manifest_csv(&man.entries)).unwrap();
         assert_eq!(read_manifest(&m).unwrap().entries, man.entries);
+    }
+
+    /// An empty velocity is "measured" (NaN) for a segmented run; the
+    /// entry says which plateau it is once segmented.
+    #[test]
+    fn an_empty_velocity_is_left_to_the_plateaus() {
+        let d = tmpdir("empty-v");
+        let m = d.join("m.csv");
+        std::fs::write(
+            &m,
+            "path,bearing,velocity_mm_s,repeat
+run.tdms,b1,,1
+",
+        )
+        .unwrap();
+        let man = read_manifest(&m).unwrap();
+        assert!(man.entries[0].velocity_mm_s.is_nan());
+        assert_eq!(
+            man.entries[0].label(),
+            d.join("run.tdms").display().to_string()
+        );
     }
 
     #[test]

@@ -10,6 +10,7 @@ pub mod pattern;
 pub mod record;
 pub mod ripple;
 pub mod run;
+pub mod segments;
 pub mod select;
 pub mod sticking;
 pub mod sweep;

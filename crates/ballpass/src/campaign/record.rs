@@ -70,6 +70,12 @@ pub struct RecordResult {
     pub position_ripple: Vec<super::ripple::RippleLine>,
     /// Warnings of the analyses.
     pub warnings: Vec<String>,
+    /// The plateau of a multi-speed run this record is (file, time range,
+    /// measured velocity, direction); `None`: the whole file. Its
+    /// `velocity_mm_s` above is then the mean speed of the plateaus pooled
+    /// with it, and the record was analysed at the plateau's own speed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plateau: Option<super::segments::PlateauSource>,
     /// Friction auto-spectrum (full range, after the analysis' low-pass and
     /// detrend): frequencies, Hz.
     #[serde(skip)]

@@ -18,8 +18,8 @@ use crate::analysis::{
 };
 use crate::bearing::{lookup, Geometry};
 use crate::error::Result;
-use crate::recording::segment::{window, Window};
-use crate::recording::{load, Channel, LoadOptions, Recording};
+use crate::recording::segment::{SegmentSettings, Window};
+use crate::recording::{Channel, LoadOptions, Recording};
 
 /// Settings of the per-record work of a campaign.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,6 +40,10 @@ pub struct CampaignSettings {
     /// Only this time window of each record (`None`: all of it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub window: Option<Window>,
+    /// Split each file into its constant-velocity plateaus, each a record
+    /// (see [`super::segments`]); `None`: each file is one record.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub segment: Option<SegmentSettings>,
 }
 
 impl Default for CampaignSettings {
@@ -54,6 +58,7 @@ impl Default for CampaignSettings {
             low_band_hz: 25.0,
             preflight: PreflightSettings::default(),
             window: None,
+            segment: None,
         }
     }
 }
@@ -64,9 +69,12 @@ pub fn geometry_for(bearing: &str, fallback: Geometry) -> Geometry {
     lookup(bearing).map_or(fallback, |e| e.geometry)
 }
 
-/// Loads one manifest entry, cuts it to the settings' window, runs the [`preflight`] checks (dead channels
-/// left out with a warning, the manifest's velocity against the encoder's)
-/// and processes it.
+/// Loads one manifest entry, cuts it to the settings' window (and to its
+/// plateau, see [`super::segments::load_entry`]), runs the [`preflight`]
+/// checks (dead channels left out with a warning, the manifest's velocity
+/// against the encoder's) and processes it. A plateau is analysed at its
+/// own measured speed; its result keeps the entry's (pooled) velocity and
+/// says which plateau it was.
 ///
 /// # Errors
 /// Whatever loading, the checks or the analysis report (the message names
@@ -78,25 +86,26 @@ pub fn process_entry(
     settings: &CampaignSettings,
 ) -> Result<RecordResult> {
     let geometry = geometry_for(&entry.bearing, fallback);
-    let opts = LoadOptions {
-        velocity_mm_s: Some(entry.velocity_mm_s),
-        bearing: Some(entry.bearing.clone()),
-        geometry: Some(geometry),
-        ..load_options.clone()
+    let rec = super::segments::load_entry(entry, load_options, fallback, settings)?;
+    // A plateau: analysed at its own speed.
+    let analysed = match &entry.plateau {
+        Some(p) => Cow::Owned(ManifestEntry {
+            velocity_mm_s: p.plateau.speed_mm_s,
+            ..entry.clone()
+        }),
+        None => Cow::Borrowed(entry),
     };
-    let mut rec = load(&entry.path, &opts)?;
-    if let Some(w) = &settings.window {
-        rec = window(&rec, w)?;
-    }
     let checked = preflight::check(
         vec![rec],
-        Some(entry.velocity_mm_s),
+        Some(analysed.velocity_mm_s),
         &geometry,
         &settings.preflight,
     )?;
     let rec = &checked.recordings[0];
-    let mut result = process_recording(rec, entry, geometry, settings)?;
+    let mut result = process_recording(rec, &analysed, geometry, settings)?;
     result.warnings.splice(0..0, checked.warnings);
+    result.velocity_mm_s = entry.velocity_mm_s;
+    result.plateau = entry.plateau.clone();
     Ok(result)
 }
 
@@ -226,6 +235,7 @@ pub fn process_recording(
         sticking,
         position_ripple,
         warnings,
+        plateau: None,
         friction_psd_freq_hz: freq,
         friction_psd: psd,
         stage_spectra: analysis.stage_spectra.clone(),
@@ -280,6 +290,7 @@ pub fn entry_for(path: &Path, bearing: &str, velocity_mm_s: f64, repeat: u32) ->
         repeat,
         condition: None,
         notes: None,
+        plateau: None,
     }
 }
 
@@ -293,6 +304,7 @@ pub fn entry_of_simulation(c: &crate::sim::campaign::CampaignEntry) -> ManifestE
         repeat: c.repeat,
         condition: Some(c.condition.name().to_string()),
         notes: None,
+        plateau: None,
     }
 }
 

@@ -59,7 +59,14 @@ pub fn select(
         notes.push(format!("only bearings {}", only_bearings.join(", ")));
     }
     if !only_velocities.is_empty() {
-        entries.retain(|e| only_velocities.contains(&e.velocity_mm_s));
+        // A plateau's velocity is a measured mean: matched within the
+        // tolerance its speeds were grouped with.
+        let tolerance = crate::analysis::preflight::PreflightSettings::default().velocity_tolerance;
+        entries.retain(|e| {
+            only_velocities
+                .iter()
+                .any(|&v| super::segments::velocity_matches(e, v, tolerance))
+        });
         notes.push(format!("only velocities {only_velocities:?} mm/s"));
     }
     notes.extend(skipped_notes(manifest));

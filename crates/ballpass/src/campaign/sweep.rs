@@ -167,7 +167,7 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
                 tau_p_s: mean_std(&col(&|r| r.tau_p_s)),
                 tau_ratio: mean_std(&col(&|r| r.tau_ratio)),
                 f_c_measured_hz: mean_std(&col(&|r| r.f_c_passages_hz.or(r.f_c_correlation_hz))),
-                f_c_predicted_hz: at[0].f_c_predicted_hz,
+                f_c_predicted_hz: predicted(&at),
                 ripple: super::ripple::pool(&at.iter().map(|r| **r).collect::<Vec<_>>()),
             }
         })
@@ -300,6 +300,18 @@ pub fn sweep(records: &[&RecordResult], d_avg_catalog_mm: Option<f64>) -> Sweep 
         d_avg_catalog_mm,
         f_c_line,
         findings,
+    }
+}
+
+/// The predicted ball-pass frequency of one velocity's records: theirs
+/// when they agree (records at a commanded velocity), else their mean
+/// (plateaus of a multi-speed run, each predicted at its measured speed).
+fn predicted(at: &[&&RecordResult]) -> f64 {
+    let first = at[0].f_c_predicted_hz;
+    if at.iter().all(|r| r.f_c_predicted_hz == first) {
+        first
+    } else {
+        at.iter().map(|r| r.f_c_predicted_hz).sum::<f64>() / at.len() as f64
     }
 }
 
@@ -468,6 +480,7 @@ pub(crate) mod tests {
             sticking: None,
             position_ripple: vec![],
             warnings: vec![],
+            plateau: None,
             friction_psd_freq_hz: vec![],
             friction_psd: vec![],
             stage_spectra: None,

@@ -205,11 +205,14 @@ impl View<'_> {
 /// values out of range.
 pub fn inspect_file(path: &Path, opts: &LoadOptions, s: &InspectSettings) -> Result<Inspection> {
     opts.validate()?;
-    let bytes = std::fs::read(path).map_err(|source| crate::Error::Io {
-        path: path.to_path_buf(),
+    // `FILE#GROUP`: read the file, name the record.
+    let (file, opts) = super::io::resolve(path, opts)?;
+    let bytes = std::fs::read(&file).map_err(|source| crate::Error::Io {
+        path: file.clone(),
         source,
     })?;
-    inspect_bytes(path, &bytes, opts, s)
+    let p = super::io::prepare_for_inspection(&file, &bytes, &opts)?;
+    Ok(inspect_prepared(path, &p, &opts, s))
 }
 
 /// [`inspect_file`] of a file in memory; `path` names it and gives the

@@ -394,6 +394,54 @@ pub fn split(rec: &Recording, plateaus: &[Plateau]) -> Result<Vec<Recording>> {
         .collect()
 }
 
+/// [`plateaus`], refusing a record where none is found.
+///
+/// # Errors
+/// As [`plateaus`]; [`Error::InvalidRecording`] naming the record when it
+/// holds no plateau.
+pub fn plateaus_found(rec: &Recording, s: &SegmentSettings) -> Result<Vec<Plateau>> {
+    let p = plateaus(rec, s)?;
+    if p.is_empty() {
+        return Err(Error::InvalidRecording {
+            source_name: rec.source_name(),
+            reason: format!(
+                "no constant-velocity plateau of at least {} s at {} mm/s or faster found from the \
+                 encoder",
+                s.min_duration_s, s.min_speed_mm_s
+            ),
+        });
+    }
+    Ok(p)
+}
+
+/// Plateaus (by speed) grouped into the speeds of a run: speeds sorted,
+/// each group's speeds within `tolerance` (relative) of its slowest one.
+/// Returns the group of each input speed and the mean speed of each group
+/// (groups in ascending speed).
+pub fn group_speeds(speeds: &[f64], tolerance: f64) -> (Vec<usize>, Vec<f64>) {
+    let mut order: Vec<usize> = (0..speeds.len()).collect();
+    order.sort_by(|&a, &b| speeds[a].total_cmp(&speeds[b]));
+    let mut group = vec![0; speeds.len()];
+    let mut members: Vec<Vec<f64>> = Vec::new();
+    let mut first = f64::NAN;
+    for i in order {
+        let v = speeds[i];
+        match members.last_mut() {
+            Some(m) if (v - first).abs() <= tolerance * first => m.push(v),
+            _ => {
+                first = v;
+                members.push(vec![v]);
+            }
+        }
+        group[i] = members.len() - 1;
+    }
+    let means = members
+        .iter()
+        .map(|m| m.iter().sum::<f64>() / m.len() as f64)
+        .collect();
+    (group, means)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -508,5 +556,32 @@ mod tests {
         let x1 = parts[1].channel(Channel::Position).unwrap();
         assert!(x1[x1.len() - 1] > x1[0]);
         assert!(parts[1].channel(Channel::Friction).unwrap()[0] < 0.0);
+    }
+
+    /// Speeds forward and back, in any order, pooled within the tolerance
+    /// of their group's slowest; a speed just outside starts a group.
+    #[test]
+    fn speeds_group_within_the_tolerance() {
+        let speeds = [83.1, 42.0, 41.9, 125.2, 83.0, 125.0, 44.1];
+        let (g, means) = group_speeds(&speeds, 0.05);
+        // 41.9 opens the first group; 44.1 > 41.9 * 1.05 = 43.995 opens
+        // the second.
+        assert_eq!(g, [2, 0, 0, 3, 2, 3, 1]);
+        assert_eq!(means.len(), 4);
+        assert!((means[0] - 41.95).abs() < 1e-12);
+        assert_eq!(means[1], 44.1);
+        assert!((means[2] - 83.05).abs() < 1e-12);
+        let (g, m) = group_speeds(&[], 0.05);
+        assert!(g.is_empty() && m.is_empty());
+    }
+
+    #[test]
+    fn a_record_at_rest_has_no_plateau_and_says_so() {
+        let r = rec(vec![1.0; 3000], 0.0);
+        let e = plateaus_found(&r, &SegmentSettings::default()).unwrap_err();
+        assert!(
+            e.to_string().contains("no constant-velocity plateau"),
+            "{e}"
+        );
     }
 }

@@ -64,11 +64,87 @@ pub use options::{
 /// splits into several pieces (use [`load_all`] for those).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Recording> {
     opts.validate()?;
-    if let Some(pieces) = load_streamed(path, opts)? {
-        return one_piece(path, pieces);
+    let (file, opts) = resolve(path, opts)?;
+    if let Some(pieces) = load_streamed(&file, &opts)? {
+        return one_piece(path, named(path, pieces, &opts));
     }
-    let bytes = read(path)?;
-    load_bytes(path, &bytes, opts)
+    let bytes = read(&file)?;
+    one_piece(
+        path,
+        named(path, load_all_bytes(&file, &bytes, &opts)?, &opts),
+    )
+}
+
+/// A path `FILE#NAME` names record `NAME` of `FILE` (a TDMS group): the
+/// file and the options with [`LoadOptions::record`] set. A path that is a
+/// file as it stands is that file, `#` and all.
+///
+/// # Errors
+/// [`Error::Format`] naming the file when it is not of a format that holds
+/// several records (TDMS), or when the name is empty.
+pub(crate) fn resolve<'a>(
+    path: &Path,
+    opts: &'a LoadOptions,
+) -> Result<(std::path::PathBuf, std::borrow::Cow<'a, LoadOptions>)> {
+    use std::borrow::Cow;
+    let split = path
+        .to_str()
+        .filter(|_| !path.exists())
+        .and_then(|s| s.rsplit_once('#'))
+        .filter(|(f, name)| !name.contains('/') && Path::new(f).is_file());
+    let Some((file, name)) = split else {
+        if let Some(r) = &opts.record {
+            check_holds_records(path, opts, r)?;
+        }
+        return Ok((path.to_path_buf(), Cow::Borrowed(opts)));
+    };
+    let file = std::path::PathBuf::from(file);
+    if name.trim().is_empty() {
+        return Err(Error::Format {
+            path: file,
+            reason: "'#' with no record name after it; give FILE#GROUP".into(),
+        });
+    }
+    check_holds_records(&file, opts, name)?;
+    Ok((
+        file,
+        Cow::Owned(LoadOptions {
+            record: Some(name.to_string()),
+            ..opts.clone()
+        }),
+    ))
+}
+
+/// Only TDMS files hold several records here.
+fn check_holds_records(file: &Path, opts: &LoadOptions, name: &str) -> Result<()> {
+    let format = opts.format.unwrap_or_else(|| Format::from_path(file));
+    if format == Format::Tdms {
+        return Ok(());
+    }
+    Err(Error::Format {
+        path: file.to_path_buf(),
+        reason: format!(
+            "'#{}' names a record inside the file, but only TDMS files (one group per run) \
+             hold several records; this file is read as {}",
+            crate::error::excerpt(name),
+            format.name()
+        ),
+    })
+}
+
+/// The recordings of `FILE#NAME` named after it (source and test id), so
+/// that records of one file are told apart in every output.
+fn named(path: &Path, mut recs: Vec<Recording>, opts: &LoadOptions) -> Vec<Recording> {
+    let Some(name) = &opts.record else {
+        return recs;
+    };
+    for r in &mut recs {
+        r.meta.source = Some(path.to_path_buf());
+        if opts.test_id.is_none() {
+            r.meta.test_id = r.meta.test_id.take().map(|t| format!("{t}#{name}"));
+        }
+    }
+    recs
 }
 
 /// A long text file read in pieces (`csv::parse_streamed`), when it is one.
@@ -90,11 +166,12 @@ fn load_streamed(path: &Path, opts: &LoadOptions) -> Result<Option<Vec<Recording
 /// As [`load`].
 pub fn load_all(path: &Path, opts: &LoadOptions) -> Result<Vec<Recording>> {
     opts.validate()?;
-    if let Some(pieces) = load_streamed(path, opts)? {
-        return Ok(pieces);
+    let (file, opts) = resolve(path, opts)?;
+    if let Some(pieces) = load_streamed(&file, &opts)? {
+        return Ok(named(path, pieces, &opts));
     }
-    let bytes = read(path)?;
-    load_all_bytes(path, &bytes, opts)
+    let bytes = read(&file)?;
+    Ok(named(path, load_all_bytes(&file, &bytes, &opts)?, &opts))
 }
 
 /// [`load`] of a file already in memory; `path` names it in messages and
@@ -139,6 +216,9 @@ fn read(path: &Path) -> Result<Vec<u8>> {
 /// The raw table of a file in memory, by its format.
 pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawTable> {
     let format = opts.format.unwrap_or_else(|| Format::from_path(path));
+    if let Some(r) = &opts.record {
+        check_holds_records(path, opts, r)?;
+    }
     match format {
         Format::Csv | Format::Tsv => csv::parse(path, bytes, format, opts),
         Format::Mat => mat::parse(path, bytes, opts),
@@ -154,8 +234,9 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
 /// # Errors
 /// As [`load`] for a file that cannot be read at all.
 pub fn contents(path: &Path, opts: &LoadOptions, limit: usize) -> Result<Vec<(String, String)>> {
-    let bytes = read(path)?;
-    contents_of_bytes(path, &bytes, opts, limit)
+    let (file, opts) = resolve(path, opts)?;
+    let bytes = read(&file)?;
+    contents_of_bytes(&file, &bytes, &opts, limit)
 }
 
 /// [`contents`] of a file in memory.
@@ -172,7 +253,7 @@ pub fn contents_of_bytes(
     match format {
         Format::Csv | Format::Tsv => csv::contents(path, bytes, format, opts, limit),
         Format::Mat => mat::contents(path, bytes, limit),
-        Format::Tdms => tdms::contents(path, bytes, limit),
+        Format::Tdms => tdms::contents(path, bytes, opts.record.as_deref(), limit),
         Format::Mf4 => mf4::contents(path, bytes, limit),
     }
 }

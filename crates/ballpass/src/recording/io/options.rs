@@ -254,6 +254,10 @@ pub struct LoadOptions {
     pub min_periods: f64,
     /// Test identifier; `None`: the file stem.
     pub test_id: Option<String>,
+    /// The record to read from a file that holds several: a TDMS group
+    /// (one run per group, as LabVIEW writes them). Set from a path
+    /// `FILE#NAME` by [`super::load`]; `None`: the file is one record.
+    pub record: Option<String>,
 }
 
 impl Default for LoadOptions {
@@ -278,6 +282,7 @@ impl Default for LoadOptions {
             geometry: None,
             min_periods: 3.0,
             test_id: None,
+            record: None,
         }
     }
 }

@@ -1001,10 +1001,65 @@ fn open(path: &Path, bytes: &[u8]) -> Result<Tdms> {
     read(bytes).map_err(|r| format_err(path, format!("damaged TDMS file: {r}")))
 }
 
-/// The channels of a TDMS file by name (`Group/Channel`, or `Channel` alone).
-fn candidates(t: &Tdms) -> (Vec<usize>, Vec<Candidate>) {
+/// The groups that hold channels, in file order.
+fn groups(t: &Tdms) -> Vec<String> {
+    let mut g: Vec<String> = Vec::new();
+    for o in t.objects.iter().filter(|o| o.channel.is_some()) {
+        if !g.contains(&o.group) {
+            g.push(o.group.clone());
+        }
+    }
+    g
+}
+
+/// The groups of a file for a message: `'Run 1' (3 channels), ...`.
+fn list_groups(t: &Tdms) -> String {
+    let g: Vec<String> = groups(t)
+        .iter()
+        .map(|g| {
+            let n = t
+                .objects
+                .iter()
+                .filter(|o| o.channel.is_some() && &o.group == g)
+                .count();
+            format!(
+                "'{}' ({n} channel{})",
+                excerpt(g),
+                if n == 1 { "" } else { "s" }
+            )
+        })
+        .collect();
+    if g.is_empty() {
+        "no group with channels".into()
+    } else {
+        g.join(", ")
+    }
+}
+
+/// The group `record` names (its name ignoring case).
+///
+/// # Errors
+/// The reason, listing the file's groups, when none has that name.
+fn group_of(t: &Tdms, record: &str) -> R<String> {
+    let want = record.trim();
+    groups(t)
+        .into_iter()
+        .find(|g| g.eq_ignore_ascii_case(want))
+        .ok_or_else(|| {
+            format!(
+                "no group '{}' (FILE#GROUP names one run); the file holds {}",
+                excerpt(want),
+                list_groups(t)
+            )
+        })
+}
+
+/// The channels of a TDMS file by name (`Group/Channel`, or `Channel` alone),
+/// only those of `group` when given.
+fn candidates(t: &Tdms, group: Option<&str>) -> (Vec<usize>, Vec<Candidate>) {
     let ids: Vec<usize> = (0..t.objects.len())
         .filter(|&i| t.objects[i].channel.is_some())
+        .filter(|&i| group.is_none_or(|g| t.objects[i].group == g))
         .collect();
     let cands = ids
         .iter()
@@ -1022,8 +1077,14 @@ fn candidates(t: &Tdms) -> (Vec<usize>, Vec<Candidate>) {
 /// Parses a TDMS file held in memory into raw columns.
 pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawTable> {
     let t = open(path, bytes)?;
-    let (ids, cands) = candidates(&t);
     let err = |r: String| format_err(path, r);
+    let group = opts
+        .record
+        .as_deref()
+        .map(|r| group_of(&t, r))
+        .transpose()
+        .map_err(err)?;
+    let (ids, cands) = candidates(&t, group.as_deref());
     let has = || names::list(&cands.iter().map(|c| c.full.clone()).collect::<Vec<_>>());
     let column = |i: usize| -> Result<RawColumn> {
         let o = &t.objects[i];
@@ -1045,7 +1106,27 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
     };
     let mut channels = Vec::new();
     let mut used = Vec::new();
-    for (c, k) in names::map_channels(&cands, opts, ", as Group/Channel or Channel").map_err(err)? {
+    let all = groups(&t);
+    let several = group.is_none() && all.len() > 1;
+    let mapped =
+        names::map_channels(&cands, opts, ", as Group/Channel or Channel").map_err(|r| {
+            if several {
+                // One run per group, as LabVIEW writes them: say how to pick one.
+                let file = path
+                    .file_name()
+                    .map_or(String::new(), |f| f.to_string_lossy().into_owned());
+                err(format!(
+                    "{r}; the file holds several groups (runs?): {}; name one as FILE#GROUP \
+                     (e.g. '{}#{}')",
+                    list_groups(&t),
+                    excerpt(&file),
+                    excerpt(&all[0])
+                ))
+            } else {
+                err(r)
+            }
+        })?;
+    for (c, k) in mapped {
         used.push(ids[k]);
         channels.push((c, column(ids[k])?));
     }
@@ -1139,10 +1220,23 @@ fn rate_of_increment(inc: f64) -> f64 {
 }
 
 /// What a TDMS file holds, for `inspect`: groups and channels.
-pub(crate) fn contents(path: &Path, bytes: &[u8], limit: usize) -> Result<Vec<(String, String)>> {
+pub(crate) fn contents(
+    path: &Path,
+    bytes: &[u8],
+    record: Option<&str>,
+    limit: usize,
+) -> Result<Vec<(String, String)>> {
     let t = open(path, bytes)?;
+    let group = record
+        .map(|r| group_of(&t, r))
+        .transpose()
+        .map_err(|r| format_err(path, r))?;
     let mut out = Vec::new();
-    for o in t.objects.iter().take(limit) {
+    let shown = t
+        .objects
+        .iter()
+        .filter(|o| group.as_ref().is_none_or(|g| &o.group == g));
+    for o in shown.take(limit) {
         let desc = match &o.channel {
             None => {
                 let n = t
