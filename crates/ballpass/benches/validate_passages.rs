@@ -3,14 +3,15 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2] [N] [--list]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3] [N] [--list]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
 //! `fresh` seeds 1_000_001..=1_000_000+N (never looked at before the rules
 //! were first frozen), `fresh2` seeds 8_000_001..=8_000_000+N (never looked
 //! at before the edge search and the AC-coupling step of the second
-//! revision were frozen). Prints the Markdown tables of the report; `--list` also
+//! revision were frozen), `fresh3` seeds 11_000_001..=11_000_000+N (never
+//! looked at before the AC coupling's plausibility check was frozen). Prints the Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %.
 
@@ -31,8 +32,9 @@ fn main() {
         "train" => 1,
         "fresh" => 1_000_001,
         "fresh2" => 8_000_001,
+        "fresh3" => 11_000_001,
         other => {
-            eprintln!("unknown set {other}: train, fresh or fresh2");
+            eprintln!("unknown set {other}: train, fresh, fresh2 or fresh3");
             std::process::exit(2);
         }
     };

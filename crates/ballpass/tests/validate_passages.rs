@@ -79,3 +79,20 @@ fn ac_coupling_is_found_under_skewed_pulses() {
     let w = s.width_error.expect("widths measured");
     assert!(w.abs() <= 0.05, "width error {w}");
 }
+
+/// Wide pulses recorded DC coupled (FWHM 0.41 and 0.44 τc): their tails
+/// leave the template's ends a few percent apart, which read as slow AC
+/// couplings (T 10 s and 3.4 s) and were reported, and undoing them
+/// ramped the reported baseline by 23 and 41 pulse heights (reported as a
+/// drift). Integrating the record's DC level back is no light level a
+/// photodetector saw, so neither is kept now.
+#[test]
+fn wide_dc_coupled_pulses_are_not_taken_for_an_ac_coupling() {
+    for seed in [27, 226] {
+        let s = design_bench(seed);
+        assert!(!s.truth.ac_coupling && s.truth.drift_fraction == 0.0);
+        assert!(!s.reported.ac_coupling, "bench {seed}: {:?}", s.reported);
+        assert!(!s.reported.baseline_drift, "bench {seed}: {:?}", s.reported);
+        assert!(s.count_exact, "bench {seed}");
+    }
+}

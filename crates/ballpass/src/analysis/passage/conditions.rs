@@ -114,6 +114,14 @@ pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
     if let Some(p) = c.f_c_predicted {
         let e = (c.f_c - p) / p;
         if e.abs() > 0.2 {
+            // With pulses inverted or missed, the passages found are not
+            // every ball's, and their period is not the balls' either.
+            let symptom = out.iter().any(|k| {
+                matches!(
+                    k.kind,
+                    ConditionKind::InvertedPulses | ConditionKind::MissedPassages
+                )
+            });
             out.push(Condition {
                 kind: ConditionKind::PeriodMismatch,
                 measure: e,
@@ -122,9 +130,76 @@ pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
                     c.f_c,
                     100.0 * e
                 ),
-                advice: "check the tracking velocity and the bearing geometry given; passages closer than 0.7 predicted periods are merged".into(),
+                advice: if symptom {
+                    "the passages found are not every ball's (see the inverted or missed passages reported): fix the optical signal first; the measured f_c of this record is not the bearing's".into()
+                } else {
+                    "check the tracking velocity and the bearing geometry given; passages closer than 0.7 predicted periods are merged".into()
+                },
             });
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn passage(i: usize, polarity: i8) -> Passage {
+        Passage {
+            index: i,
+            time_s: i as f64,
+            peak_time_s: i as f64,
+            polarity,
+            tau_c_s: Some(1.0),
+            tau_p_s: 0.1,
+            sigma_s: 0.04,
+            amplitude_v: 0.5 * f64::from(polarity),
+            height_v: 0.5,
+            tau_p_over_tau_c: Some(0.1),
+            spacing_mm: None,
+            edge: false,
+            width_used: true,
+        }
+    }
+
+    fn mismatch_advice(passages: &[Passage], tau_c_all: &[f64]) -> String {
+        let baseline = vec![0.0; 100];
+        let out = conditions(&Inputs {
+            passages,
+            tau_c_all,
+            med_tau: 1.0,
+            baseline: &baseline,
+            blocks_per_period: 10.0,
+            med_amp: 0.5,
+            block_noise: 0.01,
+            ac: None,
+            f_c: 1.0,
+            // Predicted 1.4 Hz: the measured period is 40 % long.
+            f_c_predicted: Some(1.4),
+        });
+        let m = out
+            .iter()
+            .find(|c| c.kind == ConditionKind::PeriodMismatch)
+            .expect("a 29 % mismatch is reported");
+        m.advice.clone()
+    }
+
+    /// A period far from the prediction points at the velocity and the
+    /// geometry only when every ball's pulse was found; with pulses
+    /// inverted or missed, at the optical signal.
+    #[test]
+    fn period_mismatch_advice_follows_its_cause() {
+        let clean: Vec<Passage> = (0..10).map(|i| passage(i, 1)).collect();
+        let ones = vec![1.0; 9];
+        assert!(mismatch_advice(&clean, &ones).starts_with("check the tracking velocity"));
+
+        let mut inverted = clean.clone();
+        inverted[4].polarity = -1;
+        assert!(mismatch_advice(&inverted, &ones).contains("fix the optical signal first"));
+
+        let mut gaps = ones.clone();
+        gaps[3] = 2.0;
+        assert!(mismatch_advice(&clean, &gaps).contains("fix the optical signal first"));
+    }
 }

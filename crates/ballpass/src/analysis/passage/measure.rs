@@ -223,7 +223,10 @@ pub(super) fn measure(
                 .ok_or("the pulses found leave the pulse shape undetermined")?;
                 let si = both.pop().ok_or("no least-squares solution")?;
                 let mut sz = both.pop().ok_or("no least-squares solution")?;
-                let k = ac_rate(&sz, &si, &all, noise / qf.sqrt(), tau_samples / fs);
+                let mut k = ac_rate(&sz, &si, &all, noise / qf.sqrt(), tau_samples / fs);
+                if k > 0.0 && !ac_plausible(k, &sz, &si, &pulses, (&z, &fast), &splines, qf / fs) {
+                    k = 0.0;
+                }
                 if k != kappa {
                     kappa = k;
                     zr = restore(kappa);
@@ -551,6 +554,68 @@ fn ac_rate(hz: &Solution, hi: &Solution, pulses: &[Pulse], block_noise: f64, tau
     }
     kappa
 }
+
+/// Whether undoing an AC coupling of rate `kappa` leaves a light level a
+/// photodetector could have seen.
+///
+/// A first-order coupling removes the light's running mean over `T`, so the
+/// recorded signal's mean over the record is the change of that running
+/// mean between its ends: the light's drift between them, and at most the
+/// pulses' own mean (under half a pulse) while the coupling settles. The
+/// level restored is the least squares' baseline `b` (of `z + κ ∫(z − mean)
+/// dt`) plus the ramp `κ × mean(z) × t` ([`with_mean_ramp`]). A coupling
+/// read off a DC-coupled record (the step of wide pulses' tails, say)
+/// turns the record's DC level into a ramp of `duration / T` times that
+/// level, which no drift seen in `b` explains. The coupling is plausible
+/// when the ramp exceeds the range of `b` by less than
+/// [`AC_RAMP_EXCESS`] pulse heights.
+fn ac_plausible(
+    kappa: f64,
+    hz: &Solution,
+    hi: &Solution,
+    pulses: &[Pulse],
+    (z, fast): (&[f64], &[f64]),
+    splines: &Splines,
+    dt: f64,
+) -> bool {
+    let nd = z.len();
+    // The restored template's peak, and the median pulse in its units.
+    let mut t = hz.template.clone();
+    for (v, w) in t.h.iter_mut().zip(&hi.template.h) {
+        *v += kappa * w;
+    }
+    let Some(sh) = t.shape() else {
+        return true;
+    };
+    let peak = sh.peak;
+    let amps: Vec<f64> = pulses.iter().map(|p| p.a.abs()).collect();
+    let height = super::signal::median(&amps) * peak;
+    if height.is_nan() || height <= 0.0 || nd == 0 {
+        return true;
+    }
+    let beta: Vec<f64> = hz
+        .beta
+        .iter()
+        .zip(&hi.beta)
+        .map(|(a, b)| a + kappa * b)
+        .collect();
+    let b = splines.eval(&beta, nd);
+    let (lo, hi_b) = b
+        .iter()
+        .zip(fast)
+        .map(|(a, f)| a + f)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    let mean = z.iter().sum::<f64>() / nd as f64;
+    let ramp = (kappa * mean * nd as f64 * dt).abs();
+    ramp - (hi_b - lo) < AC_RAMP_EXCESS * height
+}
+
+/// Largest excess, in pulse heights, of the restored level's mean ramp over
+/// the baseline's own range for an AC coupling to be kept
+/// ([`ac_plausible`]): twice the most the pulses' mean can explain.
+const AC_RAMP_EXCESS: f64 = 1.0;
 
 /// Grid points averaged at each end of the template for its step.
 const END_POINTS: usize = 3;

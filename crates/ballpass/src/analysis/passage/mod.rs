@@ -64,7 +64,13 @@
 //!   least-squares pass); a step smaller than 0.5 % of the pulse or three
 //!   standard errors is no coupling. The step is the AC coupling's
 //!   signature whatever the pulse's shape (a dip after the pulse is not: a
-//!   skewed pulse's long tail hides it).
+//!   skewed pulse's long tail hides it). A coupling is kept only if the
+//!   light level it restores is one a photodetector could have seen: the
+//!   coupling takes the light's running mean out, so the record's mean,
+//!   integrated back, may ramp the restored level by the light's own drift
+//!   and at most the pulses' mean, not by `duration / T` times the
+//!   record's DC level (the step that wide pulses' tails leave on a
+//!   DC-coupled record reads as a slow coupling, and fails this).
 //!
 //! Pulse-train fits ([`TrainFits`]) use [`ballpass_dsp::least_squares`]
 //! (Levenberg–Marquardt) with analytic Jacobians: the Gaussian train's is
@@ -82,7 +88,7 @@
 //!   record by more than 20 % of the median pulse and 5 block noises
 //!   (thesis Figs. 32, 36).
 //! - [`ConditionKind::AcCoupling`]: an AC coupling was found (and undone)
-//!   whose dip per pulse (pulse area over `T`) is at least 1 % of the pulse
+//!   whose dip per pulse (pulse area over `T`) is at least 2 % of the pulse
 //!   (thesis Fig. 38).
 //! - [`ConditionKind::InvertedPulses`]: pulses pointing down, the signature of
 //!   interference with a coherent source (thesis Fig. 32, §5.2).

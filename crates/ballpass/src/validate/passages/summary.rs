@@ -365,9 +365,17 @@ fn condition_rows(s: &[PassageScore]) -> Vec<ConditionRow> {
             },
             &|r| r.reported.missed_passages,
         ),
+        // The benches' geometry and speed are right, so a measured period
+        // far from the predicted one is the detector's: the count broken.
         row(
-            "period_mismatch (never present)",
-            &|_| Some(false),
+            "period_mismatch (present: count broken, a required passage missed or a spurious one; absent: count exact)",
+            &|r| {
+                if r.too_short {
+                    None
+                } else {
+                    Some(!r.count_exact)
+                }
+            },
             &|r| r.reported.period_mismatch,
         ),
     ]
