@@ -36,7 +36,10 @@ pub use iir::{
     Zpk,
 };
 pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
-pub use lti::{bode, freqs, freqz, sosfreqz, unwrap, AnalogResponse, Bode, DigitalResponse};
+pub use lti::{
+    bode, freqs, freqs_values, freqz, freqz_values, sosfreqz, sosfreqz_values, unwrap,
+    AnalogResponse, Bode, DigitalResponse,
+};
 pub use peaks::{
     find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
     FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,
