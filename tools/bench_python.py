@@ -20,14 +20,18 @@ for SciPy (NumPy/SciPy do not thread these calls) and ballpass in its
 default pool (analyze parallelises over channels; the signal kernels run
 in the calling thread).
 
-Usage: python3 tools/bench_python.py [--repeat 7] [--json out.json]
+Usage: python3 tools/bench_python.py [--repeat 7] [--json out.json] [--cpu]
 (``RAYON_NUM_THREADS=1`` in the environment times analyze on one core, as
-SciPy runs.) Pinned versions: tools/requirements-py.txt.
+SciPy runs. ``--cpu`` times the process's CPU time instead of the wall
+clock: on a loaded machine the wall clock mostly measures the waits for
+a core, which CPU time leaves out.) Pinned versions:
+tools/requirements-py.txt.
 """
 import argparse
 import json
 import pathlib
 import sys
+import time
 import timeit
 import warnings
 
@@ -43,16 +47,19 @@ import reference_analyze as ref  # noqa: E402
 from bench_scipy_analyze import ref_namespace  # noqa: E402
 
 
+TIMER = time.perf_counter
+
+
 def best(stmt, repeat):
     """Best time per call, s: timeit with a loop of ~0.2 s."""
-    t = timeit.Timer(stmt)
+    t = timeit.Timer(stmt, timer=TIMER)
     n, _ = t.autorange()
     return min(t.repeat(repeat=repeat, number=max(1, n))) / max(1, n)
 
 
 def pair(ours, theirs, repeat):
     """Best per-call times of both, interleaved repeat by repeat."""
-    to, tt = timeit.Timer(ours), timeit.Timer(theirs)
+    to, tt = timeit.Timer(ours, timer=TIMER), timeit.Timer(theirs, timer=TIMER)
     no = max(1, to.autorange()[0])
     nt = max(1, tt.autorange()[0])
     bo = bt = float("inf")
@@ -125,8 +132,13 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--cpu", action="store_true", help="time CPU, not the wall clock")
     a = ap.parse_args()
-    print(f"ballpass {ballpass.__version__}, scipy {scipy.__version__}, numpy {np.__version__}")
+    global TIMER
+    if a.cpu:
+        TIMER = time.process_time
+    print(f"ballpass {ballpass.__version__}, scipy {scipy.__version__}, numpy {np.__version__}, "
+          f"{'CPU time' if a.cpu else 'wall time'}")
     out = {}
     t_bp, t_sp = analyze_case(a.repeat)
     out["analyze_30s"] = {"ballpass_s": t_bp, "scipy_s": t_sp, "speedup": t_sp / t_bp}

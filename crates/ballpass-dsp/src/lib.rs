@@ -14,6 +14,7 @@ pub mod lsq;
 pub mod lti;
 mod npcomplex;
 pub mod peaks;
+pub mod segment_power;
 mod simd;
 mod sincos;
 pub mod sos;
@@ -35,7 +36,10 @@ pub use iir::{
     Zpk,
 };
 pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
-pub use lti::{bode, freqs, freqz, sosfreqz, unwrap, AnalogResponse, Bode, DigitalResponse};
+pub use lti::{
+    bode, freqs, freqs_values, freqz, freqz_values, sosfreqz, sosfreqz_values, unwrap,
+    AnalogResponse, Bode, DigitalResponse,
+};
 pub use peaks::{
     find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
     FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,
@@ -43,6 +47,7 @@ pub use peaks::{
 /// Complex numbers used in spectra, frequency responses and pole-zero lists
 /// (re-exported from `num_complex` via `rustfft`).
 pub use rustfft::num_complex::Complex64;
+pub use segment_power::segment_powers;
 pub use sos::{
     lfilter, lfilter_with_state, lfilter_zi, sosfilt, sosfilt_fast, sosfilt_fast_with_state,
     sosfilt_with_state, sosfilt_zi, sosfiltfilt, FiltFiltSettings, LfilterOutput, PadLen, PadType,

@@ -62,28 +62,37 @@ fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
 /// [`crate::DspError::Empty`] / [`crate::DspError::NonFinite`] for bad inputs;
 /// [`crate::DspError::InvalidSetting`] if `a` or `b` is identically zero.
 pub fn freqs(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<AnalogResponse> {
+    Ok(AnalogResponse {
+        h: freqs_values(b, a, w_rad_s)?,
+        w_rad_s: w_rad_s.to_vec(),
+    })
+}
+
+/// [`freqs`]' response values alone (no copy of the frequencies).
+///
+/// # Errors
+/// As [`freqs`].
+pub fn freqs_values(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Vec<Complex64>> {
     check_poly("b", b)?;
     check_poly("a", a)?;
     check_finite("w_rad_s", w_rad_s)?;
-    let h = crate::simd::widest(
+    Ok(crate::simd::widest(
         #[inline(always)]
         || {
             by_blocks(w_rad_s, |w: &[f64; LANES], h: &mut [Complex64]| {
                 div_lanes(polyval_jw(b, w), polyval_jw(a, w), h);
             })
         },
-    );
-    Ok(AnalogResponse {
-        w_rad_s: w_rad_s.to_vec(),
-        h,
-    })
+    ))
 }
 
 /// Points evaluated in lock step: the responses at different frequencies
 /// are independent, so [`LANES`] of them run side by side (in SIMD
 /// registers, the Horner chains of one point no longer waiting on each
 /// other), each lane with exactly the arithmetic of a point on its own.
-const LANES: usize = 8;
+/// 16: two or more independent chains per register width, so that the
+/// Horner steps' latency is hidden.
+const LANES: usize = 16;
 
 /// `eval` on the points `x` in blocks of [`LANES`] (the last block padded
 /// with zeros, its extra results dropped): one result per point.
@@ -275,21 +284,29 @@ fn ratio_z(b: &[f64], a: &[f64], zr: &[f64; LANES], zi: &[f64; LANES], h: &mut [
 /// [`crate::DspError::Empty`] / [`crate::DspError::NonFinite`] for bad inputs;
 /// [`crate::DspError::InvalidSetting`] for a zero denominator or a bad `fs_hz`.
 pub fn freqz(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<DigitalResponse> {
+    Ok(DigitalResponse {
+        h: freqz_values(b, a, freq_hz, fs_hz)?,
+        freq_hz: freq_hz.to_vec(),
+    })
+}
+
+/// [`freqz`]' response values alone (no copy of the frequencies).
+///
+/// # Errors
+/// As [`freqz`].
+pub fn freqz_values(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<Vec<Complex64>> {
     check_poly("b", b)?;
     check_poly("a", a)?;
     check_freqs(freq_hz, fs_hz)?;
-    Ok(DigitalResponse {
-        freq_hz: freq_hz.to_vec(),
-        h: crate::simd::widest(
-            #[inline(always)]
-            || {
-                by_blocks(freq_hz, |f, h| {
-                    let (zr, zi) = unit_delays(f, fs_hz);
-                    ratio_z(b, a, &zr, &zi, h);
-                })
-            },
-        ),
-    })
+    Ok(crate::simd::widest(
+        #[inline(always)]
+        || {
+            by_blocks(freq_hz, |f, h| {
+                let (zr, zi) = unit_delays(f, fs_hz);
+                ratio_z(b, a, &zr, &zi, h);
+            })
+        },
+    ))
 }
 
 /// Frequency response of second-order sections, the product of the
@@ -307,9 +324,20 @@ pub fn freqz(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<Digita
 /// # Errors
 /// As [`freqz`].
 pub fn sosfreqz(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<DigitalResponse> {
+    Ok(DigitalResponse {
+        h: sosfreqz_values(sos, freq_hz, fs_hz)?,
+        freq_hz: freq_hz.to_vec(),
+    })
+}
+
+/// [`sosfreqz`]' response values alone (no copy of the frequencies).
+///
+/// # Errors
+/// As [`sosfreqz`].
+pub fn sosfreqz_values(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<Vec<Complex64>> {
     check_freqs(freq_hz, fs_hz)?;
     // The sections' responses at one frequency share its `z^-1`.
-    let h = crate::simd::widest(
+    Ok(crate::simd::widest(
         #[inline(always)]
         || {
             by_blocks(freq_hz, |f, h| {
@@ -325,11 +353,7 @@ pub fn sosfreqz(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<DigitalRespons
                 h.copy_from_slice(&acc[..h.len()]);
             })
         },
-    );
-    Ok(DigitalResponse {
-        freq_hz: freq_hz.to_vec(),
-        h,
-    })
+    ))
 }
 
 #[cfg(test)]

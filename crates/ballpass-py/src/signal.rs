@@ -752,8 +752,10 @@ fn freqs<'py>(
     w: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<CArr1<'py>> {
     let (b, a, w) = (slice1(&b)?, slice1(&a)?, slice1(&w)?);
-    let r = py.detach(|| dsp::freqs(b, a, w)).map_err(errors::dsp)?;
-    Ok(complex(py, r.h))
+    let h = py
+        .detach(|| dsp::freqs_values(b, a, w))
+        .map_err(errors::dsp)?;
+    Ok(complex(py, h))
 }
 
 /// `scipy.signal.freqz(b, a, worN=f, fs=fs)`: `H` at frequencies `f`.
@@ -766,8 +768,10 @@ fn freqz<'py>(
     fs: f64,
 ) -> PyResult<CArr1<'py>> {
     let (b, a, f) = (slice1(&b)?, slice1(&a)?, slice1(&f)?);
-    let r = py.detach(|| dsp::freqz(b, a, f, fs)).map_err(errors::dsp)?;
-    Ok(complex(py, r.h))
+    let h = py
+        .detach(|| dsp::freqz_values(b, a, f, fs))
+        .map_err(errors::dsp)?;
+    Ok(complex(py, h))
 }
 
 /// `scipy.signal.freqz_sos(sos, worN=f, fs=fs)`: `H` at frequencies `f`.
@@ -780,10 +784,10 @@ fn sosfreqz<'py>(
 ) -> PyResult<CArr1<'py>> {
     let sos = sos_from(&sos)?;
     let f = slice1(&f)?;
-    let r = py
-        .detach(|| dsp::sosfreqz(&sos, f, fs))
+    let h = py
+        .detach(|| dsp::sosfreqz_values(&sos, f, fs))
         .map_err(errors::dsp)?;
-    Ok(complex(py, r.h))
+    Ok(complex(py, h))
 }
 
 /// `numpy.gradient` along each row, with a uniform step `h` or sample

@@ -4,8 +4,13 @@
 //!
 //! ```sh
 //! GLIBC_TUNABLES=glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=1073741824 \
-//!   RAYON_NUM_THREADS=1 cargo bench -p ballpass --bench analyze_stages -- [--repeat 60]
+//!   RAYON_NUM_THREADS=1 cargo bench -p ballpass --bench analyze_stages -- [--repeat 60] [--cpu]
 //! ```
+//!
+//! (`--cpu`: the mean CPU time per run of the whole process, all threads,
+//! read from `/proc/self/task/*/schedstat` on Linux, instead of the best
+//! wall time, which on a loaded machine mostly measures the waits for a
+//! core.)
 //!
 //! (The tunables are the command line's `mallopt` settings, freed blocks
 //! kept for reuse; the Python extension brings mimalloc for the same
@@ -21,11 +26,13 @@
 //! (low-pass, correlations, the three spectra, stage identification,
 //! period, phases, harmonic tests, synchronous average).
 //!
-//! Measured on the shared 2-core machine at load average 7-9 (best of 60,
-//! the best of three runs; the whole varied from 19.6 to 37 ms between
-//! runs with the load): checks 0.15 ms, load-cell correction 1.29 ms,
-//! optical passages 6.6 ms, position-domain spectra 3.8 ms, the rest
-//! 7.9 ms, analyze 19.6 ms.
+//! Measured on the shared 2-core machine with `--cpu` (mean CPU time of 60
+//! runs, one thread, load average 7; two runs agreed within 0.05 ms):
+//! checks 0.13-0.18 ms, load-cell correction 1.33 ms, optical passages
+//! 6.2 ms, position-domain spectra 2.9 ms, the rest 7.35 ms, analyze
+//! 17.8 ms. (Best wall time in the same minute: 0.15, 1.28, 10.1, 2.85,
+//! 17.7, 32.0 ms: at that load the wall clock mostly measures the waits
+//! for a core.)
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -44,8 +51,30 @@ fn arg(name: &str, default: usize) -> usize {
         .map_or(default, |v| v.parse().expect("a whole number"))
 }
 
-/// Best wall time of `repeat` runs of `f`.
-fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> Duration {
+/// CPU time of every thread of this process so far (Linux: the first
+/// field of each `/proc/self/task/*/schedstat`, in ns); `None` elsewhere.
+fn cpu_time() -> Option<Duration> {
+    let mut ns = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        ns += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(Duration::from_nanos(ns))
+}
+
+/// Best wall time of `repeat` runs of `f`; with `cpu`, the mean CPU time
+/// of the whole process (the rayon workers included) over the `repeat`
+/// runs (the kernel updates a running thread's count at its ticks, so
+/// only a sum over many runs is exact to well under a run).
+fn best<T>(repeat: usize, cpu: bool, mut f: impl FnMut() -> T) -> Duration {
+    if let (true, Some(start)) = (cpu, cpu_time()) {
+        for _ in 0..repeat {
+            black_box(f());
+        }
+        if let Some(end) = cpu_time() {
+            return end.saturating_sub(start) / repeat as u32;
+        }
+    }
     (0..repeat)
         .map(|_| {
             let t = Instant::now();
@@ -58,6 +87,7 @@ fn best<T>(repeat: usize, mut f: impl FnMut() -> T) -> Duration {
 
 fn main() {
     let repeat = arg("--repeat", 60).max(1);
+    let cpu = std::env::args().any(|a| a == "--cpu");
     let sim = simulate(&SimSettings {
         velocity_mm_s: 9.0,
         seed: 1,
@@ -90,9 +120,14 @@ fn main() {
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     let threads = rayon::current_num_threads();
     println!(
-        "analyze stages, 30 s 3-channel record at 9 mm/s, best of {repeat}, {threads} rayon thread(s)"
+        "analyze stages, 30 s 3-channel record at 9 mm/s, best of {repeat}, {threads} rayon thread(s), {}",
+        if cpu && cpu_time().is_some() {
+            "mean CPU time"
+        } else {
+            "best wall time"
+        }
     );
-    let t_check = best(repeat, || {
+    let t_check = best(repeat, cpu, || {
         check(
             vec![rec.clone()],
             Some(9.0),
@@ -100,14 +135,14 @@ fn main() {
             &PreflightSettings::default(),
         )
     });
-    let t_load = best(repeat, || {
+    let t_load = best(repeat, cpu, || {
         restore_friction(&friction, rec.fs_hz(), pred.tau_c_s, settings.load_cell)
     });
-    let t_passages = best(repeat, || detect_passages(&recs[0], &passage_settings));
-    let t_position = best(repeat, || {
+    let t_passages = best(repeat, cpu, || detect_passages(&recs[0], &passage_settings));
+    let t_position = best(repeat, cpu, || {
         position_spectra(&recs, pred.d_avg_mm, &settings).expect("position spectra")
     });
-    let t_all = best(repeat, || {
+    let t_all = best(repeat, cpu, || {
         analyze(&recs, &pred, &settings).expect("analysis")
     });
     let inside = t_load + t_passages + t_position;

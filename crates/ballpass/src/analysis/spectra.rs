@@ -68,7 +68,7 @@ use super::correlation::pairs_for;
 use super::preprocess::Prepared;
 use super::{pair_name, AnalyzeSettings, HiresMethod, Signal};
 use crate::error::{Error, Result};
-use crate::stats::{chi2_cdf, digamma, parabolic_peak, trigamma, welch_dof};
+use crate::stats::{digamma, gamma_p_many, gamma_p_with, parabolic_peak, trigamma, welch_dof};
 
 /// Parameters of one spectrum estimate, as resolved on the records.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -565,6 +565,11 @@ pub(crate) struct TestContext {
     nu: f64,
     inflation: f64,
     alpha: f64,
+    /// `ln Γ(ν/2)`, for the χ² CDFs.
+    ln_gamma_half_nu: f64,
+    /// The threshold without the floor's uncertainty for 1, 2, 3 tested
+    /// bins ([`TestContext::base`]).
+    bases: [f64; 3],
 }
 
 impl TestContext {
@@ -586,25 +591,47 @@ impl TestContext {
             (re * re + im * im) / (e * e)
         };
         let inflation = 1.0 + 2.0 * (rho(1.0) + rho(2.0) + rho(3.0));
+        let alpha = 1.0 - settings.confidence;
         Some(TestContext {
             nu,
             inflation,
-            alpha: 1.0 - settings.confidence,
+            alpha,
+            ln_gamma_half_nu: crate::stats::ln_gamma(0.5 * nu),
+            bases: [1, 2, 3].map(|n_b| Self::base_of(alpha, nu, n_b)),
         })
+    }
+
+    /// The threshold of the largest of `n_b` bins' `χ²_ν/ν` without the
+    /// floor's uncertainty.
+    fn base_of(alpha: f64, nu: f64, n_b: usize) -> f64 {
+        crate::stats::chi2_ppf((1.0 - alpha).powf(1.0 / n_b as f64), nu) / nu
+    }
+
+    /// [`TestContext::base_of`] for this spectrum (made once per context for
+    /// the 1 to 3 bins a test takes).
+    fn base(&self, n_b: usize) -> f64 {
+        match n_b {
+            1..=3 => self.bases[n_b - 1],
+            _ => Self::base_of(self.alpha, self.nu, n_b),
+        }
     }
 
     /// `P(max of n_b bins' χ²_ν/ν · e^{−ε} > t)`, `ε ~ N(0, var)`, the
     /// expectation over `ε` by 24-point Gauss–Hermite quadrature.
     fn tail(&self, t: f64, n_b: usize, var: f64) -> f64 {
-        let cdf = |x: f64| chi2_cdf(self.nu * x, self.nu).powi(n_b as i32);
+        // chi2_cdf(ν x, ν)^n_b, ln Γ(ν/2) made once.
+        let (a, lg) = (0.5 * self.nu, self.ln_gamma_half_nu);
         let sd = var.max(0.0).sqrt();
         if sd < 1e-9 {
-            return 1.0 - cdf(t);
+            return 1.0 - gamma_p_with(a, lg, 0.5 * (self.nu * t)).powi(n_b as i32);
         }
-        let e: f64 = GH_X
+        // The 24 nodes' CDFs side by side (the same bits as one by one).
+        let xs: [f64; 24] = std::array::from_fn(|i| 0.5 * (self.nu * (t * (sd * GH_X[i]).exp())));
+        let cdf = gamma_p_many(a, lg, &xs);
+        let e: f64 = cdf
             .iter()
             .zip(GH_W)
-            .map(|(z, w)| w * cdf(t * (sd * z).exp()))
+            .map(|(p, w)| w * p.powi(n_b as i32))
             .sum();
         (1.0 - e).clamp(0.0, 1.0)
     }
@@ -613,8 +640,7 @@ impl TestContext {
     /// thresholds without the floor's uncertainty and with ±6 of its σ, to
     /// 0.1 % (the threshold is reported, not tested against).
     fn threshold(&self, n_b: usize, var: f64) -> f64 {
-        let base =
-            crate::stats::chi2_ppf((1.0 - self.alpha).powf(1.0 / n_b as f64), self.nu) / self.nu;
+        let base = self.base(n_b);
         let sd = var.max(0.0).sqrt();
         let (mut lo, mut hi) = (base.ln() - 0.1, base.ln() + 6.0 * sd + 0.1);
         while hi - lo > 1e-3 {
@@ -892,6 +918,20 @@ pub(crate) fn harmonics(
     f_meas: Option<(f64, Signal)>,
     settings: &AnalyzeSettings,
 ) -> Vec<HarmonicRow> {
+    harmonics_reusing(s, f_pred, f_meas, settings, &[])
+}
+
+/// [`harmonics`], taking each row's test at the prediction from `known`
+/// where it holds that signal and harmonic: rows [`harmonics`] made of the
+/// same spectra, prediction and settings (the test is deterministic, so
+/// the values are the very ones it would compute again).
+pub(crate) fn harmonics_reusing(
+    s: &Spectra,
+    f_pred: f64,
+    f_meas: Option<(f64, Signal)>,
+    settings: &AnalyzeSettings,
+    known: &[HarmonicRow],
+) -> Vec<HarmonicRow> {
     let ctx = TestContext::new(s, settings);
     let alpha = 1.0 - settings.confidence;
     // Every (signal, k) test is independent of the others: all run in
@@ -905,7 +945,10 @@ pub(crate) fn harmonics(
                 .into_par_iter()
                 .map(|k| {
                     let kf = k as f64;
-                    let predicted = harmonic_value(s, psd, kf * f_pred, f_pred, false, ctx);
+                    let predicted = match known.iter().find(|r| r.signal == *sig && r.k == k) {
+                        Some(r) => r.predicted.clone(),
+                        None => harmonic_value(s, psd, kf * f_pred, f_pred, false, ctx),
+                    };
                     let measured = meas.and_then(|f| harmonic_value(s, psd, kf * f, f, true, ctx));
                     let tested = if measured.is_some() {
                         Some("measured".to_string())

@@ -142,7 +142,16 @@ pub fn gamma_p(a: f64, x: f64) -> f64 {
     if x <= 0.0 {
         return 0.0;
     }
-    let ln_pre = a * x.ln() - x - ln_gamma(a);
+    gamma_p_with(a, ln_gamma(a), x)
+}
+
+/// [`gamma_p`] with `ln_gamma_a = ln_gamma(a)` given (the same bits when
+/// it is).
+pub fn gamma_p_with(a: f64, ln_gamma_a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let ln_pre = a * x.ln() - x - ln_gamma_a;
     if x < a + 1.0 {
         let mut term = 1.0 / a;
         let mut sum = term;
@@ -183,6 +192,104 @@ pub fn gamma_p(a: f64, x: f64) -> f64 {
         }
         (1.0 - (ln_pre.exp() * h)).max(0.0)
     }
+}
+
+/// [`gamma_p`] at every `x` of `xs` with one `a`, `ln_gamma_a =
+/// ln_gamma(a)`: lane by lane the same operations in the same order, so
+/// the same bits (test `gamma_p_many_equals_gamma_p_bit_for_bit`), with
+/// the lanes' iterations interleaved (independent divisions overlap where
+/// one call is a chain of them). A lane stops where [`gamma_p`] would.
+pub fn gamma_p_many<const N: usize>(a: f64, ln_gamma_a: f64, xs: &[f64; N]) -> [f64; N] {
+    let mut out = [0.0f64; N];
+    let mut ln_pre = [0.0f64; N];
+    let mut series = [false; N];
+    let mut fraction = [false; N];
+    for j in 0..N {
+        let x = xs[j];
+        // NaN takes the continued fraction, as in `gamma_p`.
+        if x <= 0.0 {
+            continue;
+        }
+        ln_pre[j] = a * x.ln() - x - ln_gamma_a;
+        if x < a + 1.0 {
+            series[j] = true;
+        } else {
+            fraction[j] = true;
+        }
+    }
+    if series.contains(&true) {
+        let mut term = [1.0 / a; N];
+        let mut sum = term;
+        let mut active = series;
+        let mut ap = a;
+        for _ in 0..10_000 {
+            ap += 1.0;
+            for j in 0..N {
+                let t = term[j] * (xs[j] / ap);
+                let s = sum[j] + t;
+                if active[j] {
+                    term[j] = t;
+                    sum[j] = s;
+                    if t.abs() < s.abs() * 1e-17 {
+                        active[j] = false;
+                    }
+                }
+            }
+            if !active.contains(&true) {
+                break;
+            }
+        }
+        for j in 0..N {
+            if series[j] {
+                out[j] = (sum[j].ln() + ln_pre[j]).exp().min(1.0);
+            }
+        }
+    }
+    if fraction.contains(&true) {
+        let tiny = 1e-300;
+        let mut b = [0.0f64; N];
+        let mut c = [1.0 / tiny; N];
+        let mut d = [0.0f64; N];
+        let mut h = [0.0f64; N];
+        for j in 0..N {
+            b[j] = xs[j] + 1.0 - a;
+            d[j] = 1.0 / b[j];
+            h[j] = d[j];
+        }
+        let mut active = fraction;
+        for i in 1..10_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            for j in 0..N {
+                let bj = b[j] + 2.0;
+                let mut dj = an * d[j] + bj;
+                if dj.abs() < tiny {
+                    dj = tiny;
+                }
+                let mut cj = bj + an / c[j];
+                if cj.abs() < tiny {
+                    cj = tiny;
+                }
+                dj = 1.0 / dj;
+                let del = dj * cj;
+                if active[j] {
+                    (b[j], c[j], d[j]) = (bj, cj, dj);
+                    h[j] *= del;
+                    if (del - 1.0).abs() < 1e-16 {
+                        active[j] = false;
+                    }
+                }
+            }
+            if !active.contains(&true) {
+                break;
+            }
+        }
+        for j in 0..N {
+            if fraction[j] {
+                out[j] = (1.0 - (ln_pre[j].exp() * h[j])).max(0.0);
+            }
+        }
+    }
+    out
 }
 
 /// Chi-square CDF with `nu > 0` degrees of freedom: `P(nu/2, x/2)`.

@@ -44,95 +44,86 @@ impl LineScan {
         }
     }
 
-    /// Mean power of the segments of `s` at each frequency of `freqs`
-    /// (cycles/mm), `L` frequencies in lock step.
-    ///
-    /// Per frequency, exactly the arithmetic of one frequency alone
-    /// ([`tests::power_alone`] is the reference, checked bit for bit): a
-    /// phasor `e^{−i step n}` rotated sample by sample and renormalised
-    /// every 256 points, and per segment `Σ v·pr`, `−Σ v·pi` in sample
-    /// order. The phasor does not depend on the segment, so it is made
-    /// once for all of them, and `L` independent frequencies keep the
-    /// processor busy where one is a chain of dependent multiplications.
-    fn powers<const L: usize>(&self, s: Signal, freqs: &[f64]) -> Vec<f64> {
-        let n = self.window.len();
-        let segs: Vec<&[f64]> = self
-            .segments
+    /// The segments of `s`.
+    fn segments_of(&self, s: Signal) -> Vec<&[f64]> {
+        self.segments
             .iter()
             .filter(|(t, _)| *t == s)
             .map(|(_, v)| v.as_slice())
-            .collect();
-        let count = segs.len().max(1) as f64;
-        let mut table = vec![([0.0f64; L], [0.0f64; L]); n];
-        let mut out = Vec::with_capacity(freqs.len());
-        for chunk in freqs.chunks(L) {
-            // Unused lanes rotate by zero (cos 1, sin 0) and are dropped.
-            let (mut c, mut sn) = ([1.0f64; L], [0.0f64; L]);
-            for (j, f) in chunk.iter().enumerate() {
-                let step = std::f64::consts::TAU * f * self.dx;
-                (c[j], sn[j]) = (step.cos(), step.sin());
-            }
-            let (mut pr, mut pi) = ([1.0f64; L], [0.0f64; L]);
-            for (k, slot) in table.iter_mut().enumerate() {
-                *slot = (pr, pi);
-                for j in 0..L {
-                    let t = pr[j] * c[j] - pi[j] * sn[j];
-                    pi[j] = pr[j] * sn[j] + pi[j] * c[j];
-                    pr[j] = t;
-                }
-                if k % 256 == 255 {
-                    for j in 0..L {
-                        let a = (pr[j] * pr[j] + pi[j] * pi[j]).sqrt();
-                        pr[j] /= a;
-                        pi[j] /= a;
-                    }
-                }
-            }
-            let mut total = [0.0f64; L];
-            for seg in &segs {
-                let (mut re, mut im) = ([0.0f64; L], [0.0f64; L]);
-                for (v, (pr, pi)) in seg.iter().zip(&table) {
-                    for j in 0..L {
-                        re[j] += v * pr[j];
-                        im[j] -= v * pi[j];
-                    }
-                }
-                for j in 0..L {
-                    total[j] += re[j] * re[j] + im[j] * im[j];
-                }
-            }
-            out.extend(total[..chunk.len()].iter().map(|t| t / count));
-        }
-        out
+            .collect()
     }
 
-    /// Frequency of the largest mean power in `[lo, hi]`: a grid of 64
-    /// steps, then golden-section refinement of the best step to 1e-4 of
-    /// a step.
-    fn peak(&self, s: Signal, lo: f64, hi: f64) -> f64 {
+    /// Frequency of the largest mean power of the segments of `s` in each
+    /// `[lo, hi]` of `ranges`: a grid of 64 steps, then golden-section
+    /// refinement of the best step to 1e-4 of a step. The ranges are
+    /// searched side by side (their grids in one call, their golden
+    /// sections in lock step), each exactly as alone ([`tests::peak_alone`]
+    /// is the reference, checked bit for bit). `None` without segments.
+    fn peaks(&self, s: Signal, ranges: &[(f64, f64)]) -> Option<Vec<f64>> {
+        let segs = self.segments_of(s);
+        let powers = |f: &[f64]| {
+            ballpass_dsp::segment_powers(&segs, self.dx, f)
+                .expect("Welch segments of one length, finite frequencies")
+        };
+        if segs.is_empty() || ranges.is_empty() {
+            return (!segs.is_empty()).then(Vec::new);
+        }
         let n = 64;
-        let h = (hi - lo) / n as f64;
-        let grid: Vec<f64> = (0..=n).map(|j| lo + j as f64 * h).collect();
-        let p = self.powers::<8>(s, &grid);
-        // The last of equal maxima, as `Iterator::max_by` picks.
-        let best = (0..=n)
-            .max_by(|&a, &b| p[a].total_cmp(&p[b]))
-            .map(|j| grid[j])
-            .expect("grid");
-        let (mut a, mut b) = ((best - h).max(lo), (best + h).min(hi));
+        let grid: Vec<f64> = ranges
+            .iter()
+            .flat_map(|&(lo, hi)| {
+                let h = (hi - lo) / n as f64;
+                (0..=n).map(move |j| lo + j as f64 * h)
+            })
+            .collect();
+        let p = powers(&grid);
+        // Per range: (a, b, h).
+        let mut state: Vec<(f64, f64, f64)> = ranges
+            .iter()
+            .enumerate()
+            .map(|(r, &(lo, hi))| {
+                let h = (hi - lo) / n as f64;
+                let (p, grid) = (&p[r * (n + 1)..][..=n], &grid[r * (n + 1)..][..=n]);
+                // The last of equal maxima, as `Iterator::max_by` picks.
+                let best = (0..=n)
+                    .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+                    .map(|j| grid[j])
+                    .expect("grid");
+                ((best - h).max(lo), (best + h).min(hi), h)
+            })
+            .collect();
         let g = 0.5 * (5f64.sqrt() - 1.0);
-        while b - a > 1e-4 * h {
-            let (c, d) = (b - g * (b - a), a + g * (b - a));
-            let p = self.powers::<2>(s, &[c, d]);
-            if p[0] >= p[1] {
-                b = d;
-            } else {
-                a = c;
+        loop {
+            let active: Vec<usize> = (0..state.len())
+                .filter(|&r| state[r].1 - state[r].0 > 1e-4 * state[r].2)
+                .collect();
+            if active.is_empty() {
+                break;
+            }
+            let freqs: Vec<f64> = active
+                .iter()
+                .flat_map(|&r| {
+                    let (a, b, _) = state[r];
+                    [b - g * (b - a), a + g * (b - a)]
+                })
+                .collect();
+            let p = powers(&freqs);
+            for (i, &r) in active.iter().enumerate() {
+                let (c, d) = (freqs[2 * i], freqs[2 * i + 1]);
+                if p[2 * i] >= p[2 * i + 1] {
+                    state[r].1 = d;
+                } else {
+                    state[r].0 = c;
+                }
             }
         }
-        0.5 * (a + b)
+        Some(state.iter().map(|&(a, b, _)| 0.5 * (a + b)).collect())
     }
 }
+
+/// A line whose search holds a positive bin: its signal and PSD, the
+/// harmonic `k`, the searched bins `lo..=hi` and the largest one.
+type Found<'a> = (Signal, &'a [f64], usize, usize, usize, usize);
 
 /// Median of `χ²_ν / ν` (0.693 at ν = 2, 0.934 at 10, → 1); 1 without
 /// degrees of freedom.
@@ -154,15 +145,12 @@ pub(super) fn lines(
     scan: Option<&LineScan>,
 ) -> Vec<PositionLine> {
     let df = p.resolution_per_mm;
-    let wanted: Vec<(Signal, &[f64], usize)> = p
+    // Each line's search range and largest bin.
+    let found: Vec<Found<'_>> = p
         .auto
         .iter()
         .flat_map(|(s, psd)| (1..=harmonics).map(move |k| (*s, psd.as_slice(), k)))
-        .collect();
-    wanted
-        .into_par_iter()
         .filter_map(|(s, psd, k)| {
-            let s = &s;
             let f = k as f64 * p.line_per_mm;
             let lo = ((0.75 * f / df).ceil() as usize).max(1);
             let hi = ((1.25 * f / df).floor() as usize).min(psd.len().saturating_sub(3));
@@ -172,13 +160,31 @@ pub(super) fn lines(
             let i = (lo..=hi)
                 .max_by(|&a, &b| psd[a].total_cmp(&psd[b]))
                 .expect("non-empty");
-            if psd[i] <= 0.0 {
-                return None;
-            }
-            let measured = match scan {
-                Some(scan) => scan.peak(*s, (i as f64 - 1.0) * df, (i as f64 + 1.0) * df),
-                None => i as f64 * df,
-            };
+            (psd[i] > 0.0).then_some((s, psd, k, lo, hi, i))
+        })
+        .collect();
+    // Each line located between the bins around its largest one, the lines
+    // of one signal searched together, the signals in parallel (rayon).
+    let measured: Vec<f64> = p
+        .auto
+        .par_iter()
+        .map(|(s, _)| {
+            let bins: Vec<usize> = found.iter().filter(|l| l.0 == *s).map(|l| l.5).collect();
+            let ranges: Vec<(f64, f64)> = bins
+                .iter()
+                .map(|&i| ((i as f64 - 1.0) * df, (i as f64 + 1.0) * df))
+                .collect();
+            scan.and_then(|scan| scan.peaks(*s, &ranges))
+                .unwrap_or_else(|| bins.iter().map(|&i| i as f64 * df).collect())
+        })
+        .collect::<Vec<Vec<f64>>>()
+        .concat();
+    found
+        .into_iter()
+        .zip(measured)
+        .map(|((s, psd, k, lo, hi, i), measured)| {
+            let s = &s;
+            let f = k as f64 * p.line_per_mm;
             // The power is summed around the predicted line's bin, not the
             // largest one: where the line is weak, the largest bin of a
             // ±25 % search is often a peak of the floor's scatter, and
@@ -207,7 +213,7 @@ pub(super) fn lines(
             let band = p
                 .band
                 .map(|b| line_amplitude_band(power, floor_power, [b.lower_factor, b.upper_factor]));
-            Some(PositionLine {
+            PositionLine {
                 signal: *s,
                 k,
                 predicted_per_mm: f,
@@ -226,7 +232,7 @@ pub(super) fn lines(
                 amplitude: (2.0 * power).sqrt(),
                 amplitude_lower: band.map(|b| b[0]),
                 amplitude_upper: band.map(|b| b[1]),
-            })
+            }
         })
         .collect()
 }
@@ -236,9 +242,8 @@ mod tests {
     use super::*;
 
     /// The mean power of the segments of `s` at `f`, one frequency and one
-    /// segment at a time: the reference [`LineScan::powers`] must equal
-    /// bit for bit.
-    pub(super) fn power_alone(scan: &LineScan, s: Signal, f: f64) -> f64 {
+    /// segment at a time.
+    fn power_alone(scan: &LineScan, s: Signal, f: f64) -> f64 {
         let step = std::f64::consts::TAU * f * scan.dx;
         let (c, sn) = (step.cos(), step.sin());
         let mut total = 0.0;
@@ -264,11 +269,35 @@ mod tests {
         total / count.max(1) as f64
     }
 
+    /// One range searched alone, one frequency at a time: the reference
+    /// [`LineScan::peaks`] must equal bit for bit.
+    pub(super) fn peak_alone(scan: &LineScan, s: Signal, lo: f64, hi: f64) -> f64 {
+        let n = 64;
+        let h = (hi - lo) / n as f64;
+        let grid: Vec<f64> = (0..=n).map(|j| lo + j as f64 * h).collect();
+        let p: Vec<f64> = grid.iter().map(|&f| power_alone(scan, s, f)).collect();
+        let best = (0..=n)
+            .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+            .map(|j| grid[j])
+            .expect("grid");
+        let (mut a, mut b) = ((best - h).max(lo), (best + h).min(hi));
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        while b - a > 1e-4 * h {
+            let (c, d) = (b - g * (b - a), a + g * (b - a));
+            if power_alone(scan, s, c) >= power_alone(scan, s, d) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        0.5 * (a + b)
+    }
+
     #[test]
-    fn powers_in_lock_step_equal_one_frequency_at_a_time_bit_for_bit() {
+    fn ranges_searched_together_equal_each_alone_bit_for_bit() {
         // Two signals, runs of 2600 and 1100 points (several segments of
-        // 1024, one run with one): a line near 0.123 cycles/mm plus
-        // deterministic noise.
+        // 1024, one run with one): lines near 0.123 and 0.246 cycles/mm
+        // plus deterministic noise.
         let dx = 0.127;
         let w = ballpass_dsp::Window::Hann.values(1024).unwrap();
         let mut scan = LineScan::new(&w, dx);
@@ -283,31 +312,45 @@ mod tests {
             (Signal::Friction, 1100),
         ] {
             let x: Vec<f64> = (0..len)
-                .map(|i| (std::f64::consts::TAU * 0.123 * i as f64 * dx).sin() + 0.3 * noise())
+                .map(|i| {
+                    let t = std::f64::consts::TAU * i as f64 * dx;
+                    (0.123 * t).sin() + 0.4 * (0.246 * t).sin() + 0.3 * noise()
+                })
                 .collect();
             scan.add(s, &x);
         }
-        let freqs: Vec<f64> = (0..37).map(|j| 0.05 + 0.0071 * j as f64).collect();
-        for s in [Signal::Friction, Signal::VelocityError, Signal::Optical] {
-            let alone: Vec<u64> = freqs
+        let bin = 1.0 / (1024.0 * dx);
+        // Ranges of different widths, so that the golden sections stop
+        // after different numbers of steps.
+        let ranges = [
+            (0.123 - bin, 0.123 + bin),
+            (0.246 - 1.3 * bin, 0.246 + 0.7 * bin),
+            (0.05, 0.05 + 0.2 * bin),
+            (0.3, 0.3 + 3.0 * bin),
+        ];
+        for s in [Signal::Friction, Signal::VelocityError] {
+            let together: Vec<u64> = scan
+                .peaks(s, &ranges)
+                .unwrap()
                 .iter()
-                .map(|&f| power_alone(&scan, s, f).to_bits())
+                .map(|f| f.to_bits())
                 .collect();
-            let eight: Vec<u64> = scan
-                .powers::<8>(s, &freqs)
+            let alone: Vec<u64> = ranges
                 .iter()
-                .map(|p| p.to_bits())
+                .map(|&(lo, hi)| peak_alone(&scan, s, lo, hi).to_bits())
                 .collect();
-            let two: Vec<u64> = scan
-                .powers::<2>(s, &freqs)
+            assert_eq!(together, alone, "{s:?}");
+            let one: Vec<u64> = ranges
                 .iter()
-                .map(|p| p.to_bits())
+                .map(|&r| scan.peaks(s, &[r]).unwrap()[0].to_bits())
                 .collect();
-            assert_eq!(eight, alone, "{s:?}");
-            assert_eq!(two, alone, "{s:?}");
+            assert_eq!(one, alone, "{s:?}");
         }
-        // The peak search finds the line (the grid is 1/(1024 dx) wide per bin).
-        let f = scan.peak(Signal::Friction, 0.11, 0.135);
-        assert!((f - 0.123).abs() < 0.1 / (1024.0 * dx), "{f}");
+        // The search finds the lines (the grid is 1/(1024 dx) wide per bin).
+        let f = scan.peaks(Signal::Friction, &ranges[..2]).unwrap();
+        assert!((f[0] - 0.123).abs() < 0.1 * bin, "{f:?}");
+        assert!((f[1] - 0.246).abs() < 0.1 * bin, "{f:?}");
+        // No segments of a signal: nothing to search.
+        assert_eq!(scan.peaks(Signal::Optical, &ranges), None);
     }
 }

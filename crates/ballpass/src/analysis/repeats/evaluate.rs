@@ -176,7 +176,10 @@ pub(super) fn evaluate(
         };
         phases.push(ph);
     }
-    let harmonics = spectra::harmonics(hires, pred.f_c_hz, f_meas.zip(from), settings);
+    // The tests at the prediction are those of `pre` (same spectra,
+    // prediction and settings): taken, not recomputed.
+    let harmonics =
+        spectra::harmonics_reusing(hires, pred.f_c_hz, f_meas.zip(from), settings, &pre);
     // A signal shows f_c when any of its harmonics stands above its floor
     // after the family correction.
     let showing: Vec<Signal> = signals
