@@ -22,10 +22,6 @@ use crate::analysis::sync::{synchronous_average, SyncInput, SyncKey, SyncSetting
 use crate::analysis::{AnalyzeSettings, Signal};
 use crate::model::stage::PdLoop;
 
-/// Largest share of a record's friction samples read negative for the
-/// replay ([`design`]).
-const NEGATIVE_FRACTION: f64 = 0.01;
-
 /// Rounds of the table's design ([`design`]).
 pub(crate) const ROUNDS: usize = 4;
 
@@ -49,21 +45,6 @@ pub(crate) fn design(
     a: &crate::analysis::Analysis,
     bins: usize,
 ) -> Result<Design, String> {
-    // The replay needs the friction's level (the Coulomb part decides
-    // where the stage stalls); a friction read negative in more than 1 %
-    // of the samples has lost it (an AC-coupled load cell whose discharge
-    // was not undone).
-    for k in keys {
-        let neg = k.friction_n.iter().filter(|v| **v < 0.0).count();
-        if neg as f64 > NEGATIVE_FRACTION * k.friction_n.len() as f64 {
-            return Err(format!(
-                "the friction of {} is negative in {:.0} % of the samples: its level is \
-                 unknown (load-cell discharge not undone)",
-                k.source,
-                100.0 * neg as f64 / k.friction_n.len().max(1) as f64
-            ));
-        }
-    }
     let pitch = 2.0 * a.prediction.d_avg_mm;
     let (sum, count) = super::travel::travel_bins(keys, |k| &k.friction_n, pitch, bins);
     let mut table = super::travel::travel_table(&sum, &count)

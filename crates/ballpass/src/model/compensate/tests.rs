@@ -28,7 +28,6 @@ fn record(v: f64, pitch: f64, a: f64, seconds: f64) -> RecordKeys {
         .collect();
     let passage_mm = passages.iter().map(|&u| at_index(&x, u)).collect();
     RecordKeys {
-        source: "test".into(),
         fs_hz: fs,
         friction_n: f,
         position_mm: x,
@@ -81,7 +80,6 @@ fn two_records(shift: f64) -> Vec<RecordKeys> {
         .map(|k| 1.0 + k as f64 * pitch + 0.01 * pitch * (k as f64 / 6.0).sin())
         .collect();
     let rec = |xs: &[f64]| RecordKeys {
-        source: "test".into(),
         fs_hz: 1000.0,
         friction_n: vec![0.0; 2],
         position_mm: vec![xs[0], xs[xs.len() - 1]],

@@ -35,8 +35,6 @@ use crate::recording::{Channel, Recording};
 /// replay ([`super::replay`]).
 #[derive(Debug, Clone)]
 pub(crate) struct RecordKeys {
-    /// Record name.
-    pub source: String,
     /// Sampling rate, Hz.
     pub fs_hz: f64,
     /// Friction, N (discharge undone, low-passed).
@@ -110,7 +108,6 @@ pub(crate) fn record_keys(recs: &[Recording], a: &Analysis) -> Result<Vec<Record
             .collect();
         let passage_mm = passages.iter().map(|&u| at_index(x, u)).collect();
         out.push(RecordKeys {
-            source: name,
             fs_hz: fs,
             friction_n,
             position_mm: x.to_vec(),
@@ -243,7 +240,6 @@ mod tests {
         }
         let passage_mm = passages.iter().map(|&u| at_index(&xs, u)).collect();
         let keys = vec![RecordKeys {
-            source: "test".into(),
             fs_hz: fs,
             friction_n: f,
             position_mm: xs,
