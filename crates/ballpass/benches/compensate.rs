@@ -15,6 +15,15 @@
 //! whether or not the rule locked; a lock is false when that table misses
 //! the 80 % f_c reduction, a refusal is a miss when it meets it.
 //!
+//! With `--variants`, runs each bench with the product's table (the
+//! replay's, `ballpass::model::compensate`) and again with the table from
+//! the synchronous average (`force_sync_n`), and prints both with the
+//! prediction (designed on seeds 7 600 000, scored on 7 800 000).
+//!
+//! With `--rail`, each bench is also given as two halves of one frame (no
+//! re-zeroing), and the record-frame check (`RECORD_OFFSET_LIMIT`) is
+//! scored with the lock rule.
+//!
 //! With `--rounds`, compensates each bench in three rounds, each table
 //! built from the run with the previous one applied
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
@@ -25,6 +34,10 @@ use ballpass::validate::compensation::{bench, check, rail_check, rounds, RailChe
 fn main() {
     if std::env::args().any(|a| a == "--rail") {
         rail();
+        return;
+    }
+    if std::env::args().any(|a| a == "--variants") {
+        variants();
         return;
     }
     if std::env::args().any(|a| a == "--rounds") {
@@ -90,24 +103,26 @@ fn main() {
 /// The `--rail` measurement (module docs).
 fn rail() {
     let (n, seed) = n_and_seed(7_400_000);
-    println!("v_mm_s,condition,frame_shift_pitch,lock_fraction,locked,rail_reduction");
+    println!("v_mm_s,condition,frame_shift_pitch,lock_fraction,offset_spread,locked,rail_reduction,phase_reduction");
     let mut rows: Vec<RailCheck> = Vec::new();
     for i in 0..n {
         let s = bench(seed, i);
         // The shift of draw i, uniform in 0..1 pitch, from its own stream.
         let shift =
             ballpass::sim::rng::Rng::stream(ballpass::sim::rng::derive_seed(seed, i), 78).uniform();
-        for fs in [None, Some(shift)] {
+        for fs in [None, Some(0.0), Some(shift)] {
             match rail_check(&s, fs) {
                 Ok(c) => {
                     println!(
-                        "{:.3},{},{},{:.4},{},{:.3}",
+                        "{:.3},{},{},{:.4},{:.4},{},{:.3},{:.3}",
                         c.velocity_mm_s,
                         c.condition.name(),
                         c.frame_shift_pitch.map_or("".into(), |x| format!("{x:.3}")),
                         c.lock_fraction,
+                        c.offset_spread,
                         c.locked,
-                        c.rail_reduction
+                        c.rail_reduction,
+                        c.phase_reduction
                     );
                     rows.push(c);
                 }
@@ -115,23 +130,34 @@ fn rail() {
             }
         }
     }
-    for (what, one) in [("one record", true), ("two halves, frame re-zeroed", false)] {
-        let r: Vec<&RailCheck> = rows
-            .iter()
-            .filter(|c| c.frame_shift_pitch.is_none() == one)
-            .collect();
+    type Pick = fn(&RailCheck) -> bool;
+    let groups: [(&str, Pick); 3] = [
+        ("one record", |c| c.frame_shift_pitch.is_none()),
+        ("two halves, one frame", |c| {
+            c.frame_shift_pitch == Some(0.0)
+        }),
+        ("two halves, frame re-zeroed", |c| {
+            c.frame_shift_pitch.is_some_and(|x| x > 0.0)
+        }),
+    ];
+    for (what, pick) in groups {
+        let r: Vec<&RailCheck> = rows.iter().filter(|c| pick(c)).collect();
         let locked = r.iter().filter(|c| c.locked).count();
         let works = r.iter().filter(|c| c.rail_reduction >= 0.8).count();
         let false_lock = r
             .iter()
             .filter(|c| c.locked && c.rail_reduction < 0.8)
             .count();
+        let false_lock_vs_phase = r
+            .iter()
+            .filter(|c| c.locked && c.rail_reduction < 0.8 && c.phase_reduction >= 0.8)
+            .count();
         let missed = r
             .iter()
             .filter(|c| !c.locked && c.rail_reduction >= 0.8)
             .count();
         println!(
-            "# {what}: {} benches; locked {locked}; rail table meets -80 % {works}; false locks {false_lock}/{locked}; missed {missed}/{}",
+            "# {what}: {} benches; locked {locked}; rail table meets -80 % {works}; false locks {false_lock}/{locked} ({false_lock_vs_phase} where the passage table met -80 %); missed {missed}/{}",
             r.len(),
             r.len() - locked
         );
@@ -193,4 +219,36 @@ fn n_and_seed(default_seed: u64) -> (u64, u64) {
         .and_then(|a| a.parse().ok())
         .unwrap_or(default_seed);
     (n, seed)
+}
+
+/// The `--variants` measurement: the product's table against the table
+/// from the synchronous average, on the same benches.
+fn variants() {
+    let (n, seed) = n_and_seed(7_600_000);
+    println!(
+        "v_mm_s,condition,std_over_v,fc_before_um_s,std_before_um_s,fc_after_um_s,std_after_um_s,fc_pred_um_s,std_pred_um_s,fc_sync_table_um_s,std_sync_table_um_s"
+    );
+    for i in 0..n {
+        let s = bench(seed, i);
+        match ballpass::validate::compensation::check_variants(&s) {
+            Ok(c) => {
+                let p = &c.product;
+                println!(
+                    "{:.3},{},{:.3},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1}",
+                    p.velocity_mm_s,
+                    p.condition.name(),
+                    p.std_before_um_s * 1e-3 / p.velocity_mm_s,
+                    p.f_c_before_um_s,
+                    p.std_before_um_s,
+                    p.f_c_after_um_s,
+                    p.std_after_um_s,
+                    p.f_c_predicted_um_s,
+                    p.std_predicted_um_s,
+                    c.sync_table_um_s.0,
+                    c.sync_table_um_s.1,
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
 }

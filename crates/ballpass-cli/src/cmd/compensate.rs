@@ -93,6 +93,7 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
             range(&comp.force_n)
         )?;
         writeln!(so, "phase 0: {}", comp.phase_reference)?;
+        writeln!(so, "table from: {}", comp.table_text)?;
         writeln!(so, "rail: {}", comp.rail_note)?;
         writeln!(
             so,

@@ -145,8 +145,13 @@ pub struct RailCheck {
     pub frame_shift_pitch: Option<f64>,
     /// Rms distance of the passages from the fitted grid over the pitch.
     pub lock_fraction: f64,
+    /// Spread of the records' offsets from the grid over the pitch.
+    pub offset_spread: f64,
     /// Whether `compensate` gave a rail table.
     pub locked: bool,
+    /// f_c component reduction with the table keyed on the passages,
+    /// simulated in closed loop (the reference the rail table is held to).
+    pub phase_reduction: f64,
     /// f_c component reduction with the table keyed on the fitted rail
     /// grid (built whether or not it locked), simulated in closed loop.
     pub rail_reduction: f64,
@@ -192,10 +197,13 @@ pub fn rail_check(s: &SimSettings, frame_shift: Option<f64>) -> Result<RailCheck
         }
     };
     let comp = compensate(&recs, &pred, &settings, Some(gains))?;
-    let grid = comp.rail_grid.ok_or_else(|| Error::InvalidRecording {
-        source_name: sim.recording.source_name(),
-        reason: format!("no rail grid: {}", comp.rail_note),
-    })?;
+    let grid = comp
+        .rail_grid
+        .clone()
+        .ok_or_else(|| Error::InvalidRecording {
+            source_name: sim.recording.source_name(),
+            reason: format!("no rail grid: {}", comp.rail_note),
+        })?;
     let mut s1 = s.clone();
     s1.feedforward = Some(Feedforward {
         force_n: comp.force_n.clone(),
@@ -207,13 +215,20 @@ pub fn rail_check(s: &SimSettings, frame_shift: Option<f64>) -> Result<RailCheck
     let sim1 = simulate(&s1)?;
     let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
     let after = velocity_error_f_c(&a1, &sim1.recording)?;
+    let mut s2 = s.clone();
+    s2.feedforward = Some(comp.feedforward());
+    let sim2 = simulate(&s2)?;
+    let a2 = analyze(std::slice::from_ref(&sim2.recording), &pred, &settings)?;
+    let after_phase = velocity_error_f_c(&a2, &sim2.recording)?;
     Ok(RailCheck {
         velocity_mm_s: s.velocity_mm_s,
         condition: s.condition,
         seed: s.seed,
         frame_shift_pitch: frame_shift,
         lock_fraction: grid.lock_fraction,
+        offset_spread: grid.offset_spread,
         locked: comp.rail.is_some(),
+        phase_reduction: 1.0 - after_phase / comp.prediction.f_c_before_um_s,
         rail_reduction: 1.0 - after / comp.prediction.f_c_before_um_s,
     })
 }
@@ -258,4 +273,50 @@ pub fn rounds(s: &SimSettings, rounds: usize) -> Result<Vec<(f64, f64)>> {
         run.feedforward = Some(comp.feedforward());
     }
     Ok(out)
+}
+
+/// One bench under the product's table and the table from the
+/// synchronous average (the product's table before the replay).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VariantCheck {
+    /// The product's check.
+    pub product: CompensationCheck,
+    /// f_c component and std with the synchronous-average table,
+    /// simulated, µm/s.
+    pub sync_table_um_s: (f64, f64),
+}
+
+/// [`check`], and the same bench with the synchronous-average table.
+///
+/// # Errors
+/// As [`check`].
+pub fn check_variants(s: &SimSettings) -> Result<VariantCheck> {
+    use crate::sim::feedforward::{Feedforward, FeedforwardKey};
+    let product = check(s)?;
+    let sim = simulate(s)?;
+    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
+    let settings = AnalyzeSettings::default();
+    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let comp = compensate(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &settings,
+        Some(gains),
+    )?;
+    let mut s1 = s.clone();
+    s1.feedforward = Some(Feedforward {
+        force_n: comp.force_sync_n.clone(),
+        key: FeedforwardKey::OpticalPassage,
+    });
+    let sim1 = simulate(&s1)?;
+    let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
+    Ok(VariantCheck {
+        product,
+        sync_table_um_s: (
+            velocity_error_f_c(&a1, &sim1.recording)?,
+            a1.velocity_error
+                .as_ref()
+                .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
+        ),
+    })
 }

@@ -1,24 +1,41 @@
-//! A feedforward compensation table from the synchronous average, and the
-//! velocity error it is predicted to leave.
+//! A feedforward compensation table from the records, and the velocity
+//! error it is predicted to leave.
 //!
 //! # Table
 //!
-//! ```text
-//! u(φ_j) = m_f[j] − mean_j m_f[j],   φ_j = j / B   (B bins, spacing 1/B period)
-//! ```
+//! `u(φ_j)`, `φ_j = j / B` (B bins), a force in newtons the controller adds
+//! along the motion (it cancels the friction's periodic part; the mean
+//! friction is left to the position loop), keyed on the travel since the
+//! last optical passage over the ball pitch `2·d_avg`.
 //!
-//! `m_f` is the mean friction over one ball-pass period keyed on the
-//! optical passages ([`crate::analysis::sync`]); `u` is a force in newtons
-//! the controller adds along the motion (it cancels the friction's periodic
-//! part; the mean friction is left to the position loop). When the optical
-//! passages sit on a fixed grid of rail positions (the encoder position at
-//! each passage within 5 % of a pitch of `x_0 + k p` fitted by least
-//! squares), the same table is also given against rail position:
-//! `x_j = x_0 + φ_j p`, spacing `p / B`.
+//! - **Replay** (the table given when it can be made, [`replay::design`]):
+//!   the friction against travel ([`travel`]) is a first table; each of
+//!   [`replay::ROUNDS`] rounds replays the records' friction (a function of
+//!   position) through the stage with the table applied, and takes as the
+//!   next table the friction the stage meets, averaged over time against the
+//!   travel phase (where the stage dwells it weighs more, as in the velocity
+//!   error it causes). The fixed point is the periodic friction as the
+//!   compensated stage meets it: at a steady velocity it is the synchronous
+//!   average; near stall it lies between the friction against position
+//!   (what would act at the commanded velocity) and the average over the
+//!   uncompensated, stalling motion.
+//! - **Synchronous average** (when the replay cannot be made):
+//!   `u(φ_j) = m_f[j] − mean_j m_f[j]`, `m_f` the mean friction over one
+//!   period keyed on the optical passages ([`crate::analysis::sync`]). It
+//!   is also given, as `force_sync_n`, beside the replay's table.
+//!
+//! When the optical passages sit on a fixed grid of rail positions (the
+//! encoder position at each passage within 5 % of a pitch of `x_0 + k p`
+//! fitted by least squares) and the records share one encoder frame
+//! (each record's own grid phase, one intercept per record on a common
+//! pitch, within [`RECORD_OFFSET_LIMIT`] of the others), the same table is
+//! also given against rail position: `x_j = x_0 + φ_j p`, spacing `p / B`.
 //!
 //! # Prediction
 //!
-//! The stage responds to the net disturbance `f − u` through
+//! With the replay's table: the replay with it (f_c component of the
+//! replayed velocity error and the std of its low-passed version). Else
+//! linear: the stage responds to the net disturbance `f − u` through
 //! `v_e = −G_vf(jω)(f − u)` (thesis Eq. 6.6), so the periodic velocity
 //! error after compensation is, harmonic by harmonic of the table
 //! (`k = 1 … B/2 − 1`, `c_k` the bins' Fourier coefficients):
@@ -36,12 +53,15 @@
 
 use serde::Serialize;
 
+mod replay;
+mod travel;
+
 use crate::analysis::sync::{coefficient, SyncKey};
 use crate::analysis::{analyze, Analysis, AnalyzeSettings, Signal};
 use crate::bearing::Prediction;
 use crate::error::{Error, Result};
 use crate::model::stage::PdLoop;
-use crate::recording::{Channel, Recording};
+use crate::recording::Recording;
 
 /// Schema tag of `compensation.json`.
 pub const SCHEMA: &str = "ballpass.compensation/1";
@@ -50,6 +70,12 @@ pub const SCHEMA: &str = "ballpass.compensation/1";
 /// of the pitch, for the rail-position table.
 pub const RAIL_LOCK_FRACTION: f64 = 0.05;
 
+/// Largest spread of the records' mean distances from the rail grid, as a
+/// fraction of the pitch, for the rail-position table from several
+/// records (records of one encoder frame agree; a record re-zeroed in
+/// between sits apart). Set on training benches (docs/methods.md §14).
+pub const RECORD_OFFSET_LIMIT: f64 = 0.05;
+
 /// Velocity-error std, as a fraction of the velocity, above which the
 /// stage nearly stalls at the friction peaks and the linear prediction
 /// does not hold. On 80 simulated benches (seeds 7 000 000 and 7 100 000,
@@ -57,6 +83,13 @@ pub const RAIL_LOCK_FRACTION: f64 = 0.05;
 /// down); 24 of the 25 above 0.20 did not; the one between (0.103) met
 /// them. 0.15 is the middle of the gap from 0.103 to 0.211.
 pub const STALL_FRACTION: f64 = 0.15;
+
+/// What the near-stall warning says of the table there (measured on fresh
+/// simulated benches, docs/methods.md §14).
+const STALL_WORDS: &str =
+    "on simulated benches above 15 % the table (from the replay) lowered the \
+     std but often fell short of an 80 % f_c reduction, and the predicted residual is only a \
+     rough guide there. Try it with care (scaled down first)";
 
 /// The table against rail position.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -73,7 +106,7 @@ pub struct RailTable {
 
 /// The rail grid fitted to the optical passages, whether or not they lock
 /// to it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RailGrid {
     /// Encoder position of phase 0 (an optical passage), mm.
     pub x0_mm: f64,
@@ -84,6 +117,13 @@ pub struct RailGrid {
     /// The same as a fraction of the pitch (locked when ≤
     /// [`RAIL_LOCK_FRACTION`]).
     pub lock_fraction: f64,
+    /// Each record's phase on the grid relative to the first record's
+    /// (one intercept per record on a common pitch), fraction of the
+    /// pitch, within ±1/2 (records of one encoder frame agree).
+    pub record_offsets: Vec<f64>,
+    /// Largest minus smallest of `record_offsets` (0 for one record;
+    /// locked only when ≤ [`RECORD_OFFSET_LIMIT`]).
+    pub offset_spread: f64,
 }
 
 /// Where the stage model of the prediction came from.
@@ -101,6 +141,8 @@ pub enum StageSource {
 pub struct ResidualPrediction {
     /// Ball-pass frequency of the average, Hz.
     pub f_c_hz: f64,
+    /// How the figures after were predicted.
+    pub method: PredictionMethod,
     /// Amplitude of the velocity error's f_c component (fundamental of its
     /// synchronous average) measured, µm/s.
     pub f_c_before_um_s: f64,
@@ -112,6 +154,28 @@ pub struct ResidualPrediction {
     pub std_after_um_s: f64,
     /// Predicted periodic velocity error per bin with the table applied, µm/s.
     pub waveform_after_um_s: Vec<f64>,
+}
+
+/// Where the table came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TableSource {
+    /// The friction replayed through the stage with the table applied
+    /// ([`replay`]).
+    Replay,
+    /// The synchronous average of the friction (the replay could not be
+    /// made).
+    SyncAverage,
+}
+
+/// How the residual was predicted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PredictionMethod {
+    /// The records' friction replayed through the stage with the table.
+    Replay,
+    /// `R_k = V_k + G_vf U_k` (module docs).
+    Linear,
 }
 
 /// The compensation of one set of records (`compensation.json`).
@@ -137,6 +201,13 @@ pub struct Compensation {
     pub periods_used: usize,
     /// Force per bin (bin `j` at phase `j / B`), N, along the motion.
     pub force_n: Vec<f64>,
+    /// Where `force_n` came from.
+    pub table_source: TableSource,
+    /// The same in words.
+    pub table_text: String,
+    /// The synchronous average of the friction minus its mean, N (the
+    /// table as it was before the replay; for comparison).
+    pub force_sync_n: Vec<f64>,
     /// The table against rail position, when the passages lock to it.
     pub rail: Option<RailTable>,
     /// Why there is or is not a rail table.
@@ -257,16 +328,125 @@ pub fn from_analysis(
         }
     };
     let mean_f = f.mean.iter().sum::<f64>() / f.mean.len() as f64;
-    let force_n: Vec<f64> = f.mean.iter().map(|x| x - mean_f).collect();
+    let force_sync_n: Vec<f64> = f.mean.iter().map(|x| x - mean_f).collect();
     let b = s.bins;
     let w_c = std::f64::consts::TAU / s.period_s.mean;
-    // Periodic velocity error after: R_k = V_k + G_vf U_k, in µm/s.
+    let std_before = a
+        .velocity_error
+        .as_ref()
+        .map(|v| v.lowpassed_std_um_s)
+        .ok_or_else(|| bad("no velocity error".into()))?;
+    let keys = travel::record_keys(recs, a);
+    let (rail, rail_note, rail_grid) = rail_table(&keys, a, b);
+    let replayed = keys
+        .as_ref()
+        .map_err(Clone::clone)
+        .and_then(|k| replay::design(k, &stage, a, b));
+    let (force_n, table_source, table_text, prediction) = match replayed {
+        Ok(d) => (
+            d.table,
+            TableSource::Replay,
+            format!(
+                "friction as the compensated stage meets it: the records' friction against \
+                 encoder position replayed through the stage with the table applied, averaged \
+                 over time against the travel since the last passage, {} rounds from the \
+                 friction against travel",
+                replay::ROUNDS
+            ),
+            ResidualPrediction {
+                f_c_hz: 1.0 / s.period_s.mean,
+                method: PredictionMethod::Replay,
+                f_c_before_um_s: v.fundamental_amplitude,
+                f_c_after_um_s: d.after.f_c_um_s,
+                std_before_um_s: std_before,
+                std_after_um_s: d.after.std_um_s,
+                waveform_after_um_s: d.after.waveform_um_s,
+            },
+        ),
+        Err(why) => {
+            let lin = linear(&v.mean, &force_sync_n, &stage, w_c);
+            (
+                force_sync_n.clone(),
+                TableSource::SyncAverage,
+                format!(
+                    "the synchronous average of the friction (no replay through the stage: \
+                     {why})"
+                ),
+                ResidualPrediction {
+                    f_c_hz: 1.0 / s.period_s.mean,
+                    method: PredictionMethod::Linear,
+                    f_c_before_um_s: v.fundamental_amplitude,
+                    f_c_after_um_s: lin.f_c_um_s,
+                    std_before_um_s: std_before,
+                    std_after_um_s: (std_before.powi(2) - lin.var_before + lin.var_after)
+                        .max(0.0)
+                        .sqrt(),
+                    waveform_after_um_s: lin.waveform_um_s,
+                },
+            )
+        }
+    };
+    let mut warnings = Vec::new();
+    let vel = a.prediction.velocity_mm_s;
+    let stall = std_before * 1e-3 / vel;
+    if stall > STALL_FRACTION {
+        warnings.push(format!(
+            "the velocity error's std is {:.0} % of the velocity ({std_before:.0} µm/s at {vel} mm/s): \
+             the stage nearly stalls at the friction peaks; {STALL_WORDS}",
+            100.0 * stall,
+        ));
+    }
+    warnings.extend(a.warnings.iter().cloned());
+    Ok(Compensation {
+        schema: SCHEMA,
+        version: crate::VERSION,
+        sources: a.inputs.iter().map(|i| i.source.clone()).collect(),
+        velocity_mm_s: a.prediction.velocity_mm_s,
+        phase_reference: match table_source {
+            TableSource::Replay => format!(
+                "{}; the phase is the travel since that passage over the ball pitch 2·d_avg = \
+                 {:.4} mm (at the commanded velocity, the fraction of the period)",
+                s.key_text,
+                2.0 * a.prediction.d_avg_mm
+            ),
+            TableSource::SyncAverage => s.key_text.clone(),
+        },
+        bins: b,
+        phase_spacing: 1.0 / b as f64,
+        period_s: s.period_s.mean,
+        periods_used: s.periods_used,
+        force_n,
+        table_source,
+        table_text,
+        force_sync_n,
+        rail,
+        rail_note,
+        rail_grid,
+        stage_source,
+        stage,
+        stage_text,
+        prediction,
+        warnings,
+    })
+}
+
+/// The linear prediction of the periodic velocity error with `force`
+/// applied (module docs).
+struct Linear {
+    f_c_um_s: f64,
+    var_before: f64,
+    var_after: f64,
+    waveform_um_s: Vec<f64>,
+}
+
+fn linear(v_mean: &[f64], force: &[f64], stage: &PdLoop, w_c: f64) -> Linear {
+    let b = force.len();
     let mut after = vec![0.0; b];
     let (mut var_before, mut var_after) = (0.0, 0.0);
     let mut f1 = (0.0, 0.0);
     for k in 1..b / 2 {
-        let vk = coefficient(&v.mean, k);
-        let uk = coefficient(&force_n, k);
+        let vk = coefficient(v_mean, k);
+        let uk = coefficient(force, k);
         let g = stage.g_vf(k as f64 * w_c) * 1e6;
         let rk = (
             vk.0 + g.re * uk.0 - g.im * uk.1,
@@ -282,56 +462,12 @@ pub fn from_analysis(
             *a += 2.0 * (rk.0 * th.cos() - rk.1 * th.sin());
         }
     }
-    let std_before = a
-        .velocity_error
-        .as_ref()
-        .map(|v| v.lowpassed_std_um_s)
-        .ok_or_else(|| bad("no velocity error".into()))?;
-    let std_after = (std_before.powi(2) - var_before + var_after)
-        .max(0.0)
-        .sqrt();
-    let (rail, rail_note, rail_grid) = rail_table(recs, a, b);
-    let mut warnings = Vec::new();
-    let vel = a.prediction.velocity_mm_s;
-    let stall = std_before * 1e-3 / vel;
-    if stall > STALL_FRACTION {
-        warnings.push(format!(
-            "the velocity error's std is {:.0} % of the velocity ({std_before:.0} µm/s at {vel} mm/s): \
-             the stage nearly stalls at the friction peaks, where the linear prediction does not \
-             hold; on simulated benches above {:.0} % the table mostly fell short of an 80 % f_c \
-             reduction and often raised the std. Try it with care (scaled down first)",
-            100.0 * stall,
-            100.0 * STALL_FRACTION
-        ));
+    Linear {
+        f_c_um_s: 2.0 * f1.0.hypot(f1.1),
+        var_before,
+        var_after,
+        waveform_um_s: after,
     }
-    warnings.extend(a.warnings.iter().cloned());
-    Ok(Compensation {
-        schema: SCHEMA,
-        version: crate::VERSION,
-        sources: a.inputs.iter().map(|i| i.source.clone()).collect(),
-        velocity_mm_s: a.prediction.velocity_mm_s,
-        phase_reference: s.key_text.clone(),
-        bins: b,
-        phase_spacing: 1.0 / b as f64,
-        period_s: s.period_s.mean,
-        periods_used: s.periods_used,
-        force_n,
-        rail,
-        rail_note,
-        rail_grid,
-        stage_source,
-        stage,
-        stage_text,
-        prediction: ResidualPrediction {
-            f_c_hz: 1.0 / s.period_s.mean,
-            f_c_before_um_s: v.fundamental_amplitude,
-            f_c_after_um_s: 2.0 * f1.0.hypot(f1.1),
-            std_before_um_s: std_before,
-            std_after_um_s: std_after,
-            waveform_after_um_s: after,
-        },
-        warnings,
-    })
 }
 
 fn describe(g: &PdLoop) -> String {
@@ -341,32 +477,20 @@ fn describe(g: &PdLoop) -> String {
     )
 }
 
-/// The rail grid of the optical passages of every record (one encoder
-/// frame assumed), with the table when they lock to it.
+/// The rail grid of the optical passages of every record, with the table
+/// when they lock to it and the records share one encoder frame.
 fn rail_table(
-    recs: &[Recording],
+    keys: &std::result::Result<Vec<travel::RecordKeys>, String>,
     a: &Analysis,
     bins: usize,
 ) -> (Option<RailTable>, String, Option<RailGrid>) {
-    match rail_grid(recs, a) {
+    let grid = match keys {
+        Ok(k) => rail_grid(k, 2.0 * a.prediction.d_avg_mm),
+        Err(why) => Err(format!("no rail table: {why}")),
+    };
+    match grid {
         Err(why) => (None, why, None),
-        Ok(g) if g.lock_fraction <= RAIL_LOCK_FRACTION => (
-            Some(RailTable {
-                x0_mm: g.x0_mm,
-                pitch_mm: g.pitch_mm,
-                spacing_mm: g.pitch_mm / bins as f64,
-                lock_rms_mm: g.lock_rms_mm,
-            }),
-            format!(
-                "the passages lock to the rail: rms {:.1} % of the pitch from x0 + k·{:.4} mm \
-                 (limit {:.0} %)",
-                100.0 * g.lock_fraction,
-                g.pitch_mm,
-                100.0 * RAIL_LOCK_FRACTION
-            ),
-            Some(g),
-        ),
-        Ok(g) => (
+        Ok(g) if g.lock_fraction > RAIL_LOCK_FRACTION => (
             None,
             format!(
                 "no rail table: the passages wander {:.1} % of a pitch (rms) from a rail grid \
@@ -376,33 +500,53 @@ fn rail_table(
             ),
             Some(g),
         ),
+        Ok(g) if g.offset_spread > RECORD_OFFSET_LIMIT => (
+            None,
+            format!(
+                "no rail table: the records' passages sit {:.1} % of a pitch apart on the rail grid \
+                 (limit {:.0} %): the records do not share one encoder frame (re-homed or \
+                 re-zeroed between them?); use the table keyed on the passages, or records of \
+                 one frame",
+                100.0 * g.offset_spread,
+                100.0 * RECORD_OFFSET_LIMIT
+            ),
+            Some(g),
+        ),
+        Ok(g) => (
+            Some(RailTable {
+                x0_mm: g.x0_mm,
+                pitch_mm: g.pitch_mm,
+                spacing_mm: g.pitch_mm / bins as f64,
+                lock_rms_mm: g.lock_rms_mm,
+            }),
+            format!(
+                "the passages lock to the rail: rms {:.1} % of the pitch from x0 + k·{:.4} mm \
+                 (limit {:.0} %){}",
+                100.0 * g.lock_fraction,
+                g.pitch_mm,
+                100.0 * RAIL_LOCK_FRACTION,
+                if g.record_offsets.len() > 1 {
+                    format!(
+                        ", the records within {:.1} % of a pitch of each other (limit {:.0} %)",
+                        100.0 * g.offset_spread,
+                        100.0 * RECORD_OFFSET_LIMIT
+                    )
+                } else {
+                    String::new()
+                }
+            ),
+            Some(g),
+        ),
     }
 }
 
-/// The rail grid fitted to the optical passages of every record, or why
-/// there is none.
-fn rail_grid(recs: &[Recording], a: &Analysis) -> std::result::Result<RailGrid, String> {
-    let settings = crate::analysis::PassageSettings {
-        velocity_mm_s: Some(a.prediction.velocity_mm_s),
-        fit_pulses: 0,
-        ..Default::default()
-    };
-    let pitch0 = 2.0 * a.prediction.d_avg_mm;
-    let mut pos = Vec::new();
-    for r in recs {
-        let Some(x) = r.channel(Channel::Position) else {
-            return Err("no rail table: no encoder position".into());
-        };
-        let Ok(p) = crate::analysis::detect_passages(r, &settings) else {
-            return Err("no rail table: passages not found in every record".into());
-        };
-        let fs = r.fs_hz();
-        for q in &p.passages {
-            let u = ((q.time_s - r.meta.start_time_s) * fs).clamp(0.0, (x.len() - 1) as f64);
-            let i = (u.floor() as usize).min(x.len().saturating_sub(2));
-            pos.push(x[i] + (u - i as f64) * (x[i + 1] - x[i]));
-        }
-    }
+/// The rail grid fitted to the optical passages of every record (`pitch0`
+/// the predicted travel per period), or why there is none.
+fn rail_grid(keys: &[travel::RecordKeys], pitch0: f64) -> std::result::Result<RailGrid, String> {
+    let pos: Vec<f64> = keys
+        .iter()
+        .flat_map(|k| k.passage_mm.iter().copied())
+        .collect();
     if pos.len() < 3 {
         return Err("no rail table: fewer than 3 passages".into());
     }
@@ -416,18 +560,60 @@ fn rail_grid(recs: &[Recording], a: &Analysis) -> std::result::Result<RailGrid, 
         return Err("no rail table: the passage positions do not fit a line".into());
     };
     let (pitch, x0) = (fit.slope, fit.intercept);
-    let rms = (k
+    let resid: Vec<f64> = k
         .iter()
         .zip(&pos)
-        .map(|(k, x)| (x - x0 - k * pitch).powi(2))
-        .sum::<f64>()
-        / pos.len() as f64)
-        .sqrt();
+        .map(|(k, x)| x - x0 - k * pitch)
+        .collect();
+    let rms = (resid.iter().map(|r| r * r).sum::<f64>() / pos.len() as f64).sqrt();
+    // Each record's own phase on a common pitch: x = x0_r + k·p with one
+    // intercept per record (a step between records is not absorbed by the
+    // slope, as it is in the single line), offsets relative to the first
+    // record, wrapped to ±p/2, fraction of the pitch.
+    let mut spans = Vec::with_capacity(keys.len());
+    let mut at = 0;
+    for kk in keys {
+        let n = kk.passage_mm.len();
+        if n >= 2 {
+            spans.push(at..at + n);
+        }
+        at += n;
+    }
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    let means: Vec<(f64, f64)> = spans
+        .iter()
+        .map(|r| {
+            let n = r.len() as f64;
+            let km = k[r.clone()].iter().sum::<f64>() / n;
+            let xm = pos[r.clone()].iter().sum::<f64>() / n;
+            for i in r.clone() {
+                sxy += (k[i] - km) * (pos[i] - xm);
+                sxx += (k[i] - km).powi(2);
+            }
+            (km, xm)
+        })
+        .collect();
+    let p_common = if sxx > 0.0 { sxy / sxx } else { pitch };
+    let x0s: Vec<f64> = means.iter().map(|(km, xm)| xm - p_common * km).collect();
+    let record_offsets: Vec<f64> = x0s
+        .iter()
+        .map(|x| {
+            let d = (x - x0s[0]) / p_common.abs();
+            d - d.round()
+        })
+        .collect();
+    let spread = record_offsets
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max)
+        - record_offsets.iter().copied().fold(f64::INFINITY, f64::min);
     Ok(RailGrid {
         x0_mm: x0,
         pitch_mm: pitch,
         lock_rms_mm: rms,
         lock_fraction: rms / pitch.abs(),
+        record_offsets,
+        offset_spread: if spread.is_finite() { spread } else { 0.0 },
     })
 }
 
@@ -526,3 +712,6 @@ impl Compensation {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

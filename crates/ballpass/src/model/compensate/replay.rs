@@ -1,0 +1,221 @@
+//! The records' friction replayed through the identified stage, with and
+//! without the table: the prediction that still holds near stall.
+//!
+//! ```text
+//! friction   F(x): the record's friction against its encoder position (the
+//!            friction of a bearing follows the balls, that is position)
+//! stage      m y'' = −k y − c y' − F(x)·sat(x'/v_ε) + u(φ),  x = x_s + V t + y
+//! key        φ = (travel since the last passage position) / P,  P = 2·d_avg
+//! start      y = −mean F / k, y' = 0 at the record's first position
+//! ```
+//!
+//! integrated exactly per step (zero-order hold, [`crate::sim::stage`]) at
+//! ten steps per sample, until the record's last position. `sat` keeps the
+//! friction from pushing a stopped stage backwards (`v_ε` as the
+//! simulator's). The replayed velocity error is low-passed as the analysis
+//! does, and its f_c component is the fundamental of its synchronous
+//! average keyed on the times the replay crosses the passage positions;
+//! its std is that of the low-passed replay.
+
+use super::travel::{at_index, RecordKeys};
+use crate::analysis::sync::{synchronous_average, SyncInput, SyncKey, SyncSettings};
+use crate::analysis::{AnalyzeSettings, Signal};
+use crate::model::stage::PdLoop;
+
+/// Rounds of the table's design ([`design`]).
+pub(crate) const ROUNDS: usize = 4;
+
+/// The table designed by replay and the replay with it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Design {
+    /// Force per bin, N, zero mean.
+    pub table: Vec<f64>,
+    /// The replay with it.
+    pub after: Replayed,
+}
+
+/// The table of `bins` bins the compensated stage meets: starting from the
+/// friction against travel ([`super::travel`]), each round replays the
+/// records with the table and takes the friction met, averaged over time
+/// against the travel phase (a fixed point: the table equals the periodic
+/// friction as the stage moves with it applied); [`ROUNDS`] rounds.
+pub(crate) fn design(
+    keys: &[RecordKeys],
+    stage: &PdLoop,
+    a: &crate::analysis::Analysis,
+    bins: usize,
+) -> Result<Design, String> {
+    let pitch = 2.0 * a.prediction.d_avg_mm;
+    let (sum, count) = super::travel::travel_bins(keys, |k| &k.friction_n, pitch, bins);
+    let mut table = super::travel::travel_table(&sum, &count)
+        .ok_or("no period between two passages to average the friction over")?;
+    let v = a.prediction.velocity_mm_s;
+    for _ in 0..ROUNDS {
+        let r = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+        table = r
+            .friction_met_n
+            .ok_or("the replay did not reach the passages")?;
+    }
+    let after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+    Ok(Design { table, after })
+}
+
+/// Internal steps per sample.
+const OVERSAMPLE: usize = 10;
+
+/// The replay's velocity error.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Replayed {
+    /// f_c component (fundamental of the synchronous average), µm/s.
+    pub f_c_um_s: f64,
+    /// Std of the low-passed velocity error, µm/s (pooled over records).
+    pub std_um_s: f64,
+    /// Mean periodic velocity error per bin of the period (time phase
+    /// after the passage, as the synchronous average), µm/s, zero mean.
+    pub waveform_um_s: Vec<f64>,
+    /// The friction met, mean per bin of the travel phase over time (each
+    /// internal step weighs the same: where the stage dwells, it counts
+    /// more), minus its mean, when a table of that many bins was given.
+    pub friction_met_n: Option<Vec<f64>>,
+}
+
+/// Replays `keys` at `velocity_mm_s` through `stage`, with `table` (keyed
+/// on travel, pitch `pitch_mm`) when given.
+pub(crate) fn replay(
+    keys: &[RecordKeys],
+    stage: &PdLoop,
+    table: Option<&[f64]>,
+    pitch_mm: f64,
+    velocity_mm_s: f64,
+    settings: &AnalyzeSettings,
+) -> Result<Replayed, String> {
+    let st = crate::sim::StageSettings {
+        mass_kg: stage.mass_kg,
+        kkp_n_per_m: stage.stiffness_n_per_m,
+        kkd_n_s_per_m: stage.damping_n_s_per_m,
+    };
+    let mut outs: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
+    let nb = table.map_or(0, <[f64]>::len);
+    let (mut met_sum, mut met_count) = (vec![0.0; nb], vec![0usize; nb]);
+    for k in keys {
+        let fs = k.fs_hz;
+        let dt = 1.0 / (fs * OVERSAMPLE as f64);
+        let mut pd = crate::sim::stage::PdStage::new(&st, dt).map_err(|e| e.to_string())?;
+        let dir = k.direction();
+        // Travel along the motion, made non-decreasing (a backward step of
+        // the encoder keeps the friction met first).
+        let mut run = f64::NEG_INFINITY;
+        let travel: Vec<f64> = k
+            .position_mm
+            .iter()
+            .map(|&x| {
+                run = run.max(dir * (x - k.position_mm[0]));
+                run
+            })
+            .collect();
+        let end = *travel.last().unwrap_or(&0.0);
+        let passages: Vec<f64> = k
+            .passage_mm
+            .iter()
+            .map(|&x| dir * (x - k.position_mm[0]))
+            .collect();
+        let mean_f = k.friction_n.iter().sum::<f64>() / k.friction_n.len() as f64;
+        pd.set_state(-mean_f / stage.stiffness_n_per_m, 0.0);
+        let v = velocity_mm_s.abs() * 1e-3;
+        let m = stage.mass_kg;
+        let (mut ve, mut key_times) = (Vec::new(), Vec::new());
+        let (mut i_f, mut next_passage) = (0usize, 0usize);
+        let mut step = 0usize;
+        loop {
+            let t = step as f64 * dt;
+            // Travel, mm.
+            let s = (v * t + pd.deviation_m() + mean_f / stage.stiffness_n_per_m) * 1e3;
+            if s >= end || !s.is_finite() {
+                break;
+            }
+            while i_f + 1 < travel.len() && travel[i_f + 1] <= s {
+                i_f += 1;
+            }
+            let frac = if i_f + 1 < travel.len() && travel[i_f + 1] > travel[i_f] {
+                ((s - travel[i_f]) / (travel[i_f + 1] - travel[i_f])).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mag = at_index(&k.friction_n, i_f as f64 + frac).max(0.0);
+            let xdot = v + pd.velocity_error_m_s();
+            let v_eps = 1e-6f64.max(2.0 * mag * dt / m);
+            let f = mag * (xdot / v_eps).clamp(-1.0, 1.0);
+            while next_passage < passages.len() && passages[next_passage] <= s {
+                key_times.push(t);
+                next_passage += 1;
+            }
+            let u = match (table, next_passage) {
+                (Some(tb), j) if j > 0 => {
+                    let phi = (s - passages[j - 1]) / pitch_mm;
+                    // Bin j is the table's value at phase j/B: the
+                    // nearest bin.
+                    let b = (phi.rem_euclid(1.0) * nb as f64).round() as usize % nb;
+                    met_sum[b] += f;
+                    met_count[b] += 1;
+                    crate::analysis::sync::at_phase(tb, phi)
+                }
+                _ => 0.0,
+            };
+            if step % OVERSAMPLE == 0 {
+                // mm/s, as the analysis' velocity error.
+                ve.push(pd.velocity_error_m_s() * 1e3);
+            }
+            pd.step(f - u, 0.0);
+            step += 1;
+        }
+        outs.push((fs, ve, key_times));
+    }
+    // Low-pass and statistics as the analysis.
+    let mut filtered = Vec::new();
+    let mut var = (0.0, 0usize);
+    for (fs, ve, _) in &outs {
+        let y = match crate::analysis::preprocess::lowpass_filter(settings, *fs)
+            .map_err(|e| e.to_string())?
+        {
+            Some(lp) if ve.len() > 64 => lp.apply(ve).map_err(|e| e.to_string())?,
+            _ => ve.clone(),
+        };
+        let n = y.len().max(1) as f64;
+        let mean = y.iter().sum::<f64>() / n;
+        var.0 += y.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+        var.1 += y.len();
+        filtered.push(y);
+    }
+    let inputs: Vec<SyncInput<'_>> = outs
+        .iter()
+        .zip(&filtered)
+        .enumerate()
+        .map(|(i, ((fs, _, keys), y))| SyncInput {
+            source: format!("replay {i}"),
+            fs_hz: *fs,
+            friction_n: None,
+            velocity_error_mm_s: Some(y),
+            key_times_s: keys.clone(),
+        })
+        .collect();
+    // The replay is in mm/s; the average gives µm/s.
+    let avg = synchronous_average(
+        &inputs,
+        SyncKey::OpticalPassage,
+        None,
+        &SyncSettings::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    let w = avg
+        .waveform(Signal::VelocityError)
+        .ok_or("no velocity error in the replay")?;
+    let wm = w.mean.iter().sum::<f64>() / w.mean.len().max(1) as f64;
+    Ok(Replayed {
+        waveform_um_s: w.mean.iter().map(|v| v - wm).collect(),
+        f_c_um_s: w.fundamental_amplitude,
+        std_um_s: 1e3 * (var.0 / var.1.max(1) as f64).sqrt(),
+        friction_met_n: (nb > 0)
+            .then(|| super::travel::travel_table(&met_sum, &met_count))
+            .flatten(),
+    })
+}
