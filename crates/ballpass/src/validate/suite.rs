@@ -110,6 +110,11 @@ pub struct StageScore {
     pub within_tolerance: Rate,
     /// Of those, both true values inside the stated 95 % intervals.
     pub inside_intervals: Rate,
+    /// Of those, the true f_n inside its stated 95 % interval (coverage;
+    /// nominal 95 %).
+    pub f_n_inside_interval: Rate,
+    /// Of those, the true ζ inside its stated 95 % interval.
+    pub zeta_inside_interval: Rate,
 }
 
 /// Everything one suite run measured.
@@ -255,8 +260,12 @@ impl ValidationReport {
         if let Some(st) = &self.stage {
             let _ = writeln!(
                 o,
-                "stage identification: identified {}; of those within ±5 % f_n and ±20 % ζ {}; truth inside the 95 % intervals {}",
-                st.identified, st.within_tolerance, st.inside_intervals
+                "stage identification: identified {}; of those within ±5 % f_n and ±20 % ζ {}; truth inside the 95 % intervals {} (f_n {}, ζ {}; nominal 95 % each)",
+                st.identified,
+                st.within_tolerance,
+                st.inside_intervals,
+                st.f_n_inside_interval,
+                st.zeta_inside_interval
             );
         }
         if !self.failed.is_empty() {
@@ -286,9 +295,9 @@ fn wrap(x: f64) -> f64 {
 }
 
 /// One record's lag error (τc, `None` when not measurable) and stage
-/// outcome (`None` when not identified; else within tolerance, inside
-/// intervals).
-type RecordScore = (bool, Option<(f64, f64)>, Option<(bool, bool)>);
+/// outcome (`None` when not identified; else within tolerance, f_n inside
+/// its interval, ζ inside its interval).
+type RecordScore = (bool, Option<(f64, f64)>, Option<(bool, bool, bool)>);
 
 fn lags_and_stage(
     domain: &Domain,
@@ -336,11 +345,14 @@ fn lags_and_stage(
         error_p90_tau_c: q(0.9),
         error_max_tau_c: errs.last().copied(),
     };
-    let ids: Vec<(bool, bool)> = ok.iter().filter_map(|r| r.2).collect();
+    let ids: Vec<(bool, bool, bool)> = ok.iter().filter_map(|r| r.2).collect();
+    let count = |p: &dyn Fn(&(bool, bool, bool)) -> bool| ids.iter().filter(|r| p(r)).count();
     let stage = StageScore {
         identified: Rate::of(ids.len(), ok.len()),
-        within_tolerance: Rate::of(ids.iter().filter(|r| r.0).count(), ids.len()),
-        inside_intervals: Rate::of(ids.iter().filter(|r| r.1).count(), ids.len()),
+        within_tolerance: Rate::of(count(&|r| r.0), ids.len()),
+        inside_intervals: Rate::of(count(&|r| r.1 && r.2), ids.len()),
+        f_n_inside_interval: Rate::of(count(&|r| r.1), ids.len()),
+        zeta_inside_interval: Rate::of(count(&|r| r.2), ids.len()),
     };
     (lags, stage, failed)
 }
@@ -394,8 +406,11 @@ fn one_record(domain: &Domain, seed: u64) -> Result<RecordScore, String> {
         let fn_t = (st.kkp_n_per_m / st.mass_kg).sqrt() / std::f64::consts::TAU;
         let z_t = st.kkd_n_s_per_m / (2.0 * (st.mass_kg * st.kkp_n_per_m).sqrt());
         let within = (fe.value / fn_t - 1.0).abs() <= 0.05 && (ze.value / z_t - 1.0).abs() <= 0.2;
-        let inside = (fe.value - fn_t).abs() <= fe.ci95 && (ze.value - z_t).abs() <= ze.ci95;
-        Some((within, inside))
+        Some((
+            within,
+            (fe.value - fn_t).abs() <= fe.ci95,
+            (ze.value - z_t).abs() <= ze.ci95,
+        ))
     });
     Ok((eligible, lag, stage))
 }
