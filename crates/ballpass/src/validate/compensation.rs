@@ -7,9 +7,11 @@
 use serde::Serialize;
 
 use crate::analysis::{analyze, AnalyzeSettings, Signal};
+use crate::bearing::Prediction;
 use crate::error::{Error, Result};
-use crate::model::compensate::{compensate, StageSource};
+use crate::model::compensate::{compensate, Compensation, StageSource};
 use crate::model::stage::PdLoop;
+use crate::sim::feedforward::{Feedforward, FeedforwardKey};
 use crate::sim::{simulate, Condition, SimSettings};
 
 /// One bench's figures.
@@ -61,21 +63,51 @@ impl CompensationCheck {
 /// # Errors
 /// The simulator's, the analysis' and the compensation's errors.
 pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
+    let (comp, pred) = table_for(s)?;
+    check_table(s, &comp, &pred)
+}
+
+/// The compensation `ballpass compensate` builds for bench `s`, and the
+/// prediction it used.
+fn table_for(s: &SimSettings) -> Result<(Compensation, Prediction)> {
     let sim = simulate(s)?;
     let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
-    let settings = AnalyzeSettings::default();
     let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
     let comp = compensate(
         std::slice::from_ref(&sim.recording),
         &pred,
-        &settings,
+        &AnalyzeSettings::default(),
         Some(gains),
     )?;
+    Ok((comp, pred))
+}
+
+/// Bench `s` simulated with `ff` applied, and its f_c component and
+/// low-passed std of the velocity error, µm/s.
+fn closed_loop(s: &SimSettings, ff: Feedforward, pred: &Prediction) -> Result<(f64, f64)> {
     let mut s1 = s.clone();
-    s1.feedforward = Some(comp.feedforward());
+    s1.feedforward = Some(ff);
     let sim1 = simulate(&s1)?;
-    let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
-    let f_c_after = velocity_error_f_c(&a1, &sim1.recording)?;
+    let a1 = analyze(
+        std::slice::from_ref(&sim1.recording),
+        pred,
+        &AnalyzeSettings::default(),
+    )?;
+    Ok((
+        velocity_error_f_c(&a1, &sim1.recording)?,
+        a1.velocity_error
+            .as_ref()
+            .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
+    ))
+}
+
+/// [`check`] of the table `comp` built for bench `s`.
+fn check_table(
+    s: &SimSettings,
+    comp: &Compensation,
+    pred: &Prediction,
+) -> Result<CompensationCheck> {
+    let (f_c_after, std_after) = closed_loop(s, comp.feedforward(), pred)?;
     let p = &comp.prediction;
     Ok(CompensationCheck {
         velocity_mm_s: s.velocity_mm_s,
@@ -86,10 +118,7 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
         f_c_after_um_s: f_c_after,
         f_c_predicted_um_s: p.f_c_after_um_s,
         std_before_um_s: p.std_before_um_s,
-        std_after_um_s: a1
-            .velocity_error
-            .as_ref()
-            .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
+        std_after_um_s: std_after,
         std_predicted_um_s: p.std_after_um_s,
     })
 }
@@ -167,7 +196,6 @@ pub struct RailCheck {
 /// The simulator's, the analysis' and the compensation's errors.
 pub fn rail_check(s: &SimSettings, frame_shift: Option<f64>) -> Result<RailCheck> {
     use crate::recording::{Channels, Recording};
-    use crate::sim::feedforward::{Feedforward, FeedforwardKey};
     let sim = simulate(s)?;
     let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
     let settings = AnalyzeSettings::default();
@@ -204,22 +232,15 @@ pub fn rail_check(s: &SimSettings, frame_shift: Option<f64>) -> Result<RailCheck
             source_name: sim.recording.source_name(),
             reason: format!("no rail grid: {}", comp.rail_note),
         })?;
-    let mut s1 = s.clone();
-    s1.feedforward = Some(Feedforward {
+    let rail = Feedforward {
         force_n: comp.force_n.clone(),
         key: FeedforwardKey::RailPosition {
             x0_mm: grid.x0_mm,
             pitch_mm: grid.pitch_mm,
         },
-    });
-    let sim1 = simulate(&s1)?;
-    let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
-    let after = velocity_error_f_c(&a1, &sim1.recording)?;
-    let mut s2 = s.clone();
-    s2.feedforward = Some(comp.feedforward());
-    let sim2 = simulate(&s2)?;
-    let a2 = analyze(std::slice::from_ref(&sim2.recording), &pred, &settings)?;
-    let after_phase = velocity_error_f_c(&a2, &sim2.recording)?;
+    };
+    let (after, _) = closed_loop(s, rail, &pred)?;
+    let (after_phase, _) = closed_loop(s, comp.feedforward(), &pred)?;
     Ok(RailCheck {
         velocity_mm_s: s.velocity_mm_s,
         condition: s.condition,
@@ -291,32 +312,14 @@ pub struct VariantCheck {
 /// # Errors
 /// As [`check`].
 pub fn check_variants(s: &SimSettings) -> Result<VariantCheck> {
-    use crate::sim::feedforward::{Feedforward, FeedforwardKey};
-    let product = check(s)?;
-    let sim = simulate(s)?;
-    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
-    let settings = AnalyzeSettings::default();
-    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
-    let comp = compensate(
-        std::slice::from_ref(&sim.recording),
-        &pred,
-        &settings,
-        Some(gains),
-    )?;
-    let mut s1 = s.clone();
-    s1.feedforward = Some(Feedforward {
+    let (comp, pred) = table_for(s)?;
+    let product = check_table(s, &comp, &pred)?;
+    let sync = Feedforward {
         force_n: comp.force_sync_n.clone(),
         key: FeedforwardKey::OpticalPassage,
-    });
-    let sim1 = simulate(&s1)?;
-    let a1 = analyze(std::slice::from_ref(&sim1.recording), &pred, &settings)?;
+    };
     Ok(VariantCheck {
         product,
-        sync_table_um_s: (
-            velocity_error_f_c(&a1, &sim1.recording)?,
-            a1.velocity_error
-                .as_ref()
-                .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
-        ),
+        sync_table_um_s: closed_loop(s, sync, &pred)?,
     })
 }
