@@ -10,20 +10,11 @@ use ballpass::bearing::lookup;
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{entry_for, process_recording, CampaignSettings};
 use ballpass::campaign::sweep::sweep;
-use ballpass::sim::{simulate, SimSettings, Simulation};
+use ballpass::sim::Simulation;
 
-/// A good bearing whose only periodic force is the ball-pass ripple: no
-/// rail roughness (its random content at the line is the bench's business),
-/// load-cell and encoder noise kept; 30 s as the campaign's records.
-fn ripple_only(v: f64, seed: u64) -> Simulation {
-    let mut s = SimSettings {
-        velocity_mm_s: v,
-        seed,
-        ..Default::default()
-    };
-    s.friction.roughness_n = 0.0;
-    simulate(&s).unwrap()
-}
+#[path = "common/ripple.rs"]
+mod ripple;
+use ripple::ripple_only;
 
 fn process(sim: &Simulation, v: f64, repeat: u32) -> RecordResult {
     let g = lookup("sr25w").unwrap().geometry;

@@ -5,20 +5,11 @@ use ballpass::analysis::sync::SyncKey;
 use ballpass::analysis::{analyze, AnalyzeSettings, Signal};
 use ballpass::bearing::lookup;
 use ballpass::recording::{Channels, Recording};
-use ballpass::sim::{simulate, Condition, SimSettings, Simulation};
+use ballpass::sim::{simulate, Condition, SimSettings};
 
-/// A good bearing whose only periodic force is the ball-pass ripple: no
-/// roughness (its random f_c content would be ~45 % of the 0.06 N
-/// fundamental in a 30 s record, see docs/methods.md), load-cell noise kept.
-fn ripple_only(v: f64, seed: u64) -> Simulation {
-    let mut s = SimSettings {
-        velocity_mm_s: v,
-        seed,
-        ..Default::default()
-    };
-    s.friction.roughness_n = 0.0;
-    simulate(&s).unwrap()
-}
+#[path = "common/ripple.rs"]
+mod ripple;
+use ripple::ripple_only;
 
 fn analyse(rec: &Recording, v: f64) -> ballpass::analysis::Analysis {
     let pred = lookup("sr25w").unwrap().geometry.predict(v, 5).unwrap();
