@@ -82,6 +82,8 @@ pub(super) fn measure(
     let z = box_decimate(x, q);
     let nd = z.len();
     let integral = running_integral(&z, qf / fs);
+    // The record's mean times its duration, V s (`ac_plausible`).
+    let mean_ramp = z.iter().sum::<f64>() * qf / fs;
     let pd = tau_samples / qf;
     let splines = Splines::new(nd, pd);
     let distance = (settings.min_distance_periods * pd).max(1.0);
@@ -223,10 +225,9 @@ pub(super) fn measure(
                 .ok_or("the pulses found leave the pulse shape undetermined")?;
                 let si = both.pop().ok_or("no least-squares solution")?;
                 let mut sz = both.pop().ok_or("no least-squares solution")?;
-                let mut k = ac_rate(&sz, &si, &all, noise / qf.sqrt(), tau_samples / fs);
-                if k > 0.0 && !ac_plausible(k, &sz, &si, &pulses, (&z, &fast), &splines, qf / fs) {
-                    k = 0.0;
-                }
+                let k = ac_rate(&sz, &si, &all, noise / qf.sqrt(), tau_samples / fs)
+                    .filter(|&r| ac_plausible(r, &sz, &si, &pulses, &fast, &splines, mean_ramp))
+                    .map_or(0.0, |(k, _)| k);
                 if k != kappa {
                     kappa = k;
                     zr = restore(kappa);
@@ -513,21 +514,28 @@ fn ghosts(pulses: &[Pulse], nd: usize, grid: &Template, amps: [f64; 2]) -> [Opti
 /// end's mean: `block_noise / √(3 Σ a_k² dx)`, the step's `√2` that), or
 /// when `κ` exceeds `50 / τ_c`, or leaves no pulse shape. (A dip after the
 /// pulse is no measure: a skewed pulse's long tail fills it, and a rate
-/// that merely removes it is short of the true one.)
-fn ac_rate(hz: &Solution, hi: &Solution, pulses: &[Pulse], block_noise: f64, tau_c_s: f64) -> f64 {
+/// that merely removes it is short of the true one.) With `κ`, the restored
+/// template's peak.
+fn ac_rate(
+    hz: &Solution,
+    hi: &Solution,
+    pulses: &[Pulse],
+    block_noise: f64,
+    tau_c_s: f64,
+) -> Option<(f64, f64)> {
     let (tz, ti) = (&hz.template, &hi.template);
     let g = tz.h.len();
     if g < 2 * END_POINTS + 1 || ti.h.len() != g {
-        return 0.0;
+        return None;
     }
-    let Some(sh) = tz.shape() else { return 0.0 };
+    let sh = tz.shape()?;
     let step = |h: &[f64]| -> f64 {
         let k = END_POINTS as f64;
         h[g - END_POINTS..].iter().sum::<f64>() / k - h[..END_POINTS].iter().sum::<f64>() / k
     };
     let (dz, di) = (step(&tz.h), step(&ti.h));
     if di.is_nan() || di <= 0.0 {
-        return 0.0;
+        return None;
     }
     // Standard error of an end's mean over `END_POINTS` grid points
     // (each point the least-squares estimate from every pulse), and of the
@@ -539,20 +547,17 @@ fn ac_rate(hz: &Solution, hi: &Solution, pulses: &[Pulse], block_noise: f64, tau
             .sqrt();
     let se_step = std::f64::consts::SQRT_2 * se_end;
     if dz >= -(AC_LOBE * sh.peak).max(3.0 * se_step) {
-        return 0.0;
+        return None;
     }
     let kappa = -dz / di;
     if kappa > AC_MAX_RATE_PER_PERIOD / tau_c_s {
-        return 0.0;
+        return None;
     }
     let mut t = tz.clone();
     for (v, w) in t.h.iter_mut().zip(&ti.h) {
         *v += kappa * w;
     }
-    if t.shape().is_none() {
-        return 0.0;
-    }
-    kappa
+    Some((kappa, t.shape()?.peak))
 }
 
 /// Whether undoing an AC coupling of rate `kappa` leaves a light level a
@@ -569,25 +574,19 @@ fn ac_rate(hz: &Solution, hi: &Solution, pulses: &[Pulse], block_noise: f64, tau
 /// level, which no drift seen in `b` explains. The coupling is plausible
 /// when the ramp exceeds the range of `b` by less than
 /// [`AC_RAMP_EXCESS`] pulse heights.
+///
+/// `peak`: the restored template's peak (pulse amplitudes are in its
+/// units); `mean_ramp`: the record's mean of `z` times its duration, V s.
 fn ac_plausible(
-    kappa: f64,
+    (kappa, peak): (f64, f64),
     hz: &Solution,
     hi: &Solution,
     pulses: &[Pulse],
-    (z, fast): (&[f64], &[f64]),
+    fast: &[f64],
     splines: &Splines,
-    dt: f64,
+    mean_ramp: f64,
 ) -> bool {
-    let nd = z.len();
-    // The restored template's peak, and the median pulse in its units.
-    let mut t = hz.template.clone();
-    for (v, w) in t.h.iter_mut().zip(&hi.template.h) {
-        *v += kappa * w;
-    }
-    let Some(sh) = t.shape() else {
-        return true;
-    };
-    let peak = sh.peak;
+    let nd = fast.len();
     let amps: Vec<f64> = pulses.iter().map(|p| p.a.abs()).collect();
     let height = super::signal::median(&amps) * peak;
     if height.is_nan() || height <= 0.0 || nd == 0 {
@@ -607,8 +606,7 @@ fn ac_plausible(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v), hi.max(v))
         });
-    let mean = z.iter().sum::<f64>() / nd as f64;
-    let ramp = (kappa * mean * nd as f64 * dt).abs();
+    let ramp = (kappa * mean_ramp).abs();
     ramp - (hi_b - lo) < AC_RAMP_EXCESS * height
 }
 
