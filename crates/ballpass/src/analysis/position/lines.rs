@@ -241,32 +241,18 @@ pub(super) fn lines(
 mod tests {
     use super::*;
 
-    /// The mean power of the segments of `s` at `f`, one frequency and one
-    /// segment at a time.
+    /// The mean power of the segments of `s` at `f`, one frequency at a
+    /// time (the kernel is itself held bit for bit to a one-frequency,
+    /// one-segment loop in `ballpass_dsp::segment_power`'s tests).
     fn power_alone(scan: &LineScan, s: Signal, f: f64) -> f64 {
-        let step = std::f64::consts::TAU * f * scan.dx;
-        let (c, sn) = (step.cos(), step.sin());
-        let mut total = 0.0;
-        let mut count = 0usize;
-        for (_, seg) in scan.segments.iter().filter(|(t, _)| *t == s) {
-            let (mut re, mut im) = (0.0, 0.0);
-            let (mut pr, mut pi) = (1.0f64, 0.0f64);
-            for (n, v) in seg.iter().enumerate() {
-                re += v * pr;
-                im -= v * pi;
-                let t = pr * c - pi * sn;
-                pi = pr * sn + pi * c;
-                pr = t;
-                if n % 256 == 255 {
-                    let a = (pr * pr + pi * pi).sqrt();
-                    pr /= a;
-                    pi /= a;
-                }
-            }
-            total += re * re + im * im;
-            count += 1;
-        }
-        total / count.max(1) as f64
+        let segs: Vec<&[f64]> = scan
+            .segments
+            .iter()
+            .filter(|(t, _)| *t == s)
+            .map(|(_, seg)| seg.as_slice())
+            .collect();
+        ballpass_dsp::segment_powers(&segs, scan.dx, &[f]).expect("the scan's segments are valid")
+            [0]
     }
 
     /// One range searched alone, one frequency at a time: the reference
