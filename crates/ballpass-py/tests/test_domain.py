@@ -320,6 +320,32 @@ def test_campaigns_take_a_window_and_force_velocity(fleet, cli, tmp):
         assert split.to_dict()[key] == d.to_dict()[key], key
 
 
+def test_campaigns_segment_a_multi_speed_run_as_the_cli(cli, tmp):
+    """``segment=True`` is ``--segment``: two simulated lab runs (42, 83 and
+    125 mm/s forward and back in 25 s, velocities left empty) give a sweep
+    and a diagnosis equal to the command line's, each plateau a record at
+    its measured speed."""
+    rows = ["path,bearing,velocity_mm_s,repeat"]
+    for b in (1, 2):
+        cli("simulate", "--multi-speed", "--duration", "25", "--seed", 40 + b,
+            "-o", tmp / f"b{b}.csv")
+        rows.append(f"b{b}.csv,b{b},,1")
+    m = tmp / "manifest.csv"
+    m.write_text("\n".join(rows) + "\n")
+    cli("sweep", m, "--segment", "--only-bearing", "b1", "--no-report", "--out", tmp / "s")
+    s = ballpass.sweep(m, segment=True, only_bearings=["b1"])
+    assert s.to_dict() == read_json(tmp / "s" / "sweep.json")
+    plateaus = [r["plateau"] for r in s.to_dict()["record_results"]]
+    assert len(plateaus) == 6 and all(p is not None for p in plateaus)
+    assert {p["direction"] for p in plateaus} == {"forward", "backward"}
+    cli("diagnose", m, "--segment", "--no-report", "--out", tmp / "d")
+    d = ballpass.diagnose(m, segment=True)
+    assert d.to_dict() == read_json(tmp / "d" / "diagnosis.json")
+    # without it, an empty velocity is a failed record that says how
+    failed = ballpass.sweep(m).to_dict()["failed"]
+    assert len(failed) == 2 and all("--segment" in f["reason"] for f in failed), failed
+
+
 def test_diagnosis_split_into_records_and_batch_equals_the_whole(fleet):
     """process_record on each record (anywhere, pickled in between) and
     diagnose_records on the lot give the diagnose verdicts."""

@@ -435,19 +435,23 @@ def _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm):
 
 def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
           only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
-          harmonics: int = 5, window=None, force_velocity: bool = False, threads=None,
-          **load_options) -> Result:
+          harmonics: int = 5, window=None, force_velocity: bool = False,
+          segment: bool = False, threads=None, **load_options) -> Result:
     """A velocity sweep over a campaign, as ``ballpass sweep``: velocity-error
     trend, tau_c and tau_p against velocity, d_avg. ``source`` is a manifest
     CSV or a folder with ``pattern``; by default the bearing recorded at the
     most velocities. ``window=(t0, t1)`` (s) uses only that part of each
     record (``--window``); each record's velocity is checked against its
     encoder as :func:`analyze` does (``force_velocity``:
-    ``--force-velocity``). ``to_dict()`` equals ``sweep.json``."""
+    ``--force-velocity``). ``segment=True`` (``--segment``) splits each file
+    into its constant-velocity plateaus, each analysed at its own measured
+    speed (manifest velocities may then be left empty); the plateau of each
+    record is in its ``plateau``. ``to_dict()`` equals ``sweep.json``."""
     data, _ = _native.campaign(
         "sweep", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics), None,
         _load_json(load_options), _pool(threads), _window(window), bool(force_velocity),
+        bool(segment),
     )
     return Result(data, kind="Sweep")
 
@@ -456,7 +460,8 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
              only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
              harmonics: int = 5, low_band_hz: float = 25.0, spike_spreads: float = 8.0,
              bad_false_alarm: float = 1e-4, settings: dict | None = None, window=None,
-             force_velocity: bool = False, threads=None, **load_options) -> Result:
+             force_velocity: bool = False, segment: bool = False, threads=None,
+             **load_options) -> Result:
     """A batch of bearings, as ``ballpass diagnose``: friction spectra,
     harmonics, the friction of each ball-pass period and a verdict per
     bearing (worst first in ``.result.bearings``). ``source`` is a manifest
@@ -468,9 +473,9 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
     (``--bad-false-alarm``: false-alarm probability per good bearing of the
     spike count for "bad"); ``settings`` sets any ``DiagnoseSettings`` field
     (e.g. ``{"suspect_false_alarm": 0.01, "sticking": {"smoothing_periods":
-    0.01}}``) and wins over the keywords. ``window=(t0, t1)`` (s) and
-    ``force_velocity`` are ``--window`` and ``--force-velocity``, as for
-    :func:`sweep`. ``to_dict()`` equals ``diagnosis.json``;
+    0.01}}``) and wins over the keywords. ``window=(t0, t1)`` (s),
+    ``force_velocity`` and ``segment`` are ``--window``,
+    ``--force-velocity`` and ``--segment``, as for :func:`sweep`. ``to_dict()`` equals ``diagnosis.json``;
     ``.friction_spectra`` is ``friction_spectra.csv`` (columns
     ``psd_friction_<bearing>_n2_per_hz``)."""
     data, spectra = _native.campaign(
@@ -478,6 +483,7 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics),
         _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm),
         _load_json(load_options), _pool(threads), _window(window), bool(force_velocity),
+        bool(segment),
     )
     return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
 
