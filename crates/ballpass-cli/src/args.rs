@@ -3,14 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use ballpass::bearing::{self, Geometry};
-use ballpass::recording::profile::{parse_delimiter, GeometryOverride};
-use ballpass::recording::{Format, LoadOptions, LoadOverrides, Profile, SourceOverride, TimeUnit};
+use ballpass::bearing::Geometry;
+use ballpass::recording::{BearingRequest, Format, LoadOptions, LoadRequest, Profile, TimeUnit};
 use ballpass::report::{write_report, Report, ReportFiles, ReportOptions};
 use clap::{Args, ValueEnum};
-
-/// Catalog key used when neither a flag nor a profile names a bearing.
-pub const DEFAULT_BEARING: &str = "sr25w";
 
 /// Which bearing: a catalog key or a custom geometry.
 #[derive(Debug, Clone, Args)]
@@ -40,38 +36,18 @@ impl BearingArgs {
     /// As [`BearingArgs::geometry`], but without `--bearing` the `fallback`
     /// (a profile's bearing) is the base before the sr25w default.
     pub fn resolve(&self, fallback: Option<(String, Geometry)>) -> Result<(String, Geometry)> {
-        let (name, base) = match (&self.bearing, fallback) {
-            (Some(key), _) => catalog(key)?,
-            (None, Some(f)) => f,
-            (None, None) => catalog(DEFAULT_BEARING)?,
-        };
-        let balls = match self.balls {
-            None => None,
-            Some(n) => Some(u32::try_from(n).ok().filter(|&n| n > 0).with_context(|| {
-                format!("invalid balls in race: must be a whole number from 1, got {n}")
-            })?),
-        };
-        let over = GeometryOverride {
+        Ok(self.request().resolve(fallback)?)
+    }
+
+    /// The library's form of these flags.
+    pub fn request(&self) -> BearingRequest {
+        BearingRequest {
+            bearing: self.bearing.clone(),
             ball_diameter_mm: self.ball_diameter,
             free_space_mm: self.free_space,
-            balls_in_race: balls,
-        };
-        let g = over.apply(base)?;
-        let name = if over.is_empty() || name.ends_with("(custom geometry)") {
-            name
-        } else {
-            format!("{name} (custom geometry)")
-        };
-        Ok((name, g))
+            balls_in_race: self.balls,
+        }
     }
-}
-
-fn catalog(key: &str) -> Result<(String, Geometry)> {
-    let entry = bearing::lookup(key).with_context(|| {
-        let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
-        format!("unknown bearing '{key}' (catalog: {})", keys.join(", "))
-    })?;
-    Ok((entry.name.to_string(), entry.geometry))
 }
 
 /// File format on the command line.
@@ -269,28 +245,6 @@ impl From<TimeUnitArg> for TimeUnit {
     }
 }
 
-impl DialectArgs {
-    /// Sets what these flags give on top of `o`.
-    fn apply(&self, o: &mut LoadOptions) {
-        if self.fs_from.is_some() {
-            o.fs_from = self.fs_from.clone();
-        }
-        if let Some(u) = self.time_unit {
-            o.time_unit = Some(u.into());
-        }
-        if self.decimal_comma {
-            o.decimal_comma = Some(true);
-        }
-        if self.skip_lines.is_some() {
-            o.skip_lines = self.skip_lines;
-        }
-        if self.fill_gaps.is_some() {
-            o.gaps.fill_max_s = self.fill_gaps;
-        }
-        o.gaps.split |= self.split_gaps;
-    }
-}
-
 impl LoadArgs {
     /// The profile named by `--profile`, if any.
     pub fn profile(&self) -> Result<Option<Profile>> {
@@ -304,50 +258,43 @@ impl LoadArgs {
     /// Load options: defaults, then the profile, then the flags; with the
     /// bearing resolved (flag, profile, sr25w) and the settings validated.
     pub fn options(&self) -> Result<LoadOptions> {
-        let profile = self.profile()?;
-        let mut o = match &profile {
-            Some(p) => p.load_options()?,
-            None => LoadOptions::default(),
-        };
-        if let Some(f) = self.format {
-            o.format = Some(f.into());
-        }
-        if let Some(d) = &self.delimiter {
-            o.delimiter = Some(parse_delimiter(d)?);
-        }
-        LoadOverrides {
+        Ok(self.request().options()?)
+    }
+
+    /// The library's form of these flags.
+    pub fn request(&self) -> LoadRequest {
+        let d = &self.dialect;
+        let b = self.bearing.request();
+        LoadRequest {
+            profile: self.profile.clone(),
+            format: self.format.map(Into::into),
+            delimiter: self.delimiter.clone(),
             fs_hz: self.fs,
-            time: self.time_col.clone(),
+            time_col: self.time_col.clone(),
             ignore_time: self.ignore_time,
-            sources: [
-                (
-                    &self.friction_col,
-                    self.friction_scale,
-                    self.friction_offset,
-                ),
-                (
-                    &self.position_col,
-                    self.position_scale,
-                    self.position_offset,
-                ),
-                (&self.optical_col, self.optical_scale, self.optical_offset),
-            ]
-            .map(|(name, scale, offset)| SourceOverride {
-                name: name.clone(),
-                scale,
-                offset,
-            }),
+            friction_col: self.friction_col.clone(),
+            position_col: self.position_col.clone(),
+            optical_col: self.optical_col.clone(),
+            friction_scale: self.friction_scale,
+            friction_offset: self.friction_offset,
+            position_scale: self.position_scale,
+            position_offset: self.position_offset,
+            optical_scale: self.optical_scale,
+            optical_offset: self.optical_offset,
             velocity_mm_s: self.velocity,
             test_id: self.test_id.clone(),
             min_periods: self.min_periods,
+            fs_from: d.fs_from.clone(),
+            time_unit: d.time_unit.map(Into::into),
+            decimal_comma: d.decimal_comma,
+            skip_lines: d.skip_lines,
+            fill_gaps_s: d.fill_gaps,
+            split_gaps: d.split_gaps,
+            bearing: b.bearing,
+            ball_diameter_mm: b.ball_diameter_mm,
+            free_space_mm: b.free_space_mm,
+            balls_in_race: b.balls_in_race,
         }
-        .apply(&mut o);
-        self.dialect.apply(&mut o);
-        let (name, g) = self.bearing.resolve(o.bearing_fallback())?;
-        o.bearing = Some(name);
-        o.geometry = Some(g);
-        o.validate()?;
-        Ok(o)
     }
 }
 

@@ -6,33 +6,22 @@ use std::borrow::Cow;
 use std::ffi::OsStr;
 use std::path::Path;
 
+use ballpass::error::{is_unsafe_char, push_escaped};
+
 /// Longest line the CLI prints for an error, warning or note, in
 /// characters: long enough for any real message with two full paths.
 pub const MAX_LINE_CHARS: usize = 2000;
 
-/// Whether `c` must not reach a terminal raw: C0 and C1 controls, DEL, and
-/// the Unicode marks that reorder or hide text (bidi overrides and
-/// isolates, line and paragraph separators).
-fn is_unsafe(c: char) -> bool {
-    c.is_control()
-        || matches!(c, '\u{2028}' | '\u{2029}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
-}
-
-/// `s` with every unsafe character written as an escape (`\n`, `\r`, `\t`,
-/// `\u{1b}`); `s` itself when it has none.
+/// `s` with every character that must not reach a terminal raw escaped
+/// ([`ballpass::error::push_escaped`]: `\n`, `\r`, `\t`, `\x1b`,
+/// `\u{202e}`); `s` itself when it has none.
 pub fn escape(s: &str) -> Cow<'_, str> {
-    if !s.chars().any(is_unsafe) {
+    if !s.chars().any(is_unsafe_char) {
         return Cow::Borrowed(s);
     }
     let mut out = String::with_capacity(s.len() + 8);
     for c in s.chars() {
-        match c {
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if is_unsafe(c) => out.push_str(&format!("\\u{{{:x}}}", c as u32)),
-            c => out.push(c),
-        }
+        push_escaped(&mut out, c);
     }
     Cow::Owned(out)
 }
@@ -76,7 +65,7 @@ pub fn shell_word(arg: &OsStr) -> String {
         return String::from_utf8_lossy(bytes).into_owned();
     }
     let needs_ansi = match arg.to_str() {
-        Some(s) => s.chars().any(is_unsafe),
+        Some(s) => s.chars().any(is_unsafe_char),
         None => true,
     };
     if !needs_ansi {
@@ -92,7 +81,7 @@ pub fn shell_word(arg: &OsStr) -> String {
                 '\n' => out.push_str("\\n"),
                 '\r' => out.push_str("\\r"),
                 '\t' => out.push_str("\\t"),
-                c if is_unsafe(c) => {
+                c if is_unsafe_char(c) => {
                     let mut buf = [0u8; 4];
                     for b in c.encode_utf8(&mut buf).bytes() {
                         out.push_str(&format!("\\x{b:02x}"));
@@ -125,7 +114,7 @@ mod tests {
     #[test]
     fn controls_are_escaped_and_plain_text_is_kept() {
         assert!(matches!(escape("plain é text"), Cow::Borrowed(_)));
-        assert_eq!(escape("a\nb\r\x1b[2Jc\t"), "a\\nb\\r\\u{1b}[2Jc\\t");
+        assert_eq!(escape("a\nb\r\x1b[2Jc\t"), "a\\nb\\r\\x1b[2Jc\\t");
         assert_eq!(escape("x\u{202e}y"), "x\\u{202e}y");
     }
 

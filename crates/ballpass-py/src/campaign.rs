@@ -9,6 +9,7 @@ use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
 use ballpass::campaign::output::{CampaignOutput, DIAGNOSIS_SCHEMA, SWEEP_SCHEMA};
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
+use ballpass::campaign::segments::plan;
 use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
     export, from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind, Manifest,
@@ -27,7 +28,12 @@ use crate::recording::LoadArgs;
 /// The manifest CSV at `source`, or the recordings of the folder `source`
 /// matching `pattern` (bearing from `load`'s arguments when the pattern has
 /// no `{bearing}`).
-fn read_source(source: &Path, pattern: Option<&str>, load: &LoadArgs) -> PyResult<Manifest> {
+fn read_source(
+    source: &Path,
+    pattern: Option<&str>,
+    load: &LoadArgs,
+    segment: bool,
+) -> PyResult<Manifest> {
     if source.is_dir() {
         let Some(p) = pattern else {
             return Err(errors::value(format!(
@@ -36,7 +42,10 @@ fn read_source(source: &Path, pattern: Option<&str>, load: &LoadArgs) -> PyResul
             )));
         };
         let bearing = load.options()?.bearing;
-        from_directory(source, p, bearing.as_deref(), load.velocity_mm_s()).map_err(errors::domain)
+        // Segmented runs measure their speeds: none needs to be given (NaN:
+        // "measured", as an empty manifest cell).
+        let velocity = load.velocity_mm_s().or(segment.then_some(f64::NAN));
+        from_directory(source, p, bearing.as_deref(), velocity).map_err(errors::domain)
     } else {
         if pattern.is_some() {
             return Err(errors::value(format!(
@@ -58,7 +67,7 @@ fn manifest<'py>(
     pattern: Option<&str>,
     load: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let m = read_source(&source, pattern, &LoadArgs::parse(load)?)?;
+    let m = read_source(&source, pattern, &LoadArgs::parse(load)?, false)?;
     convert::serialize(py, &m)
 }
 
@@ -77,7 +86,7 @@ fn selection<'py>(
     load: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let kind = campaign_kind(kind)?;
-    let m = read_source(&source, pattern, &LoadArgs::parse(load)?)?;
+    let m = read_source(&source, pattern, &LoadArgs::parse(load)?, false)?;
     let Selection { entries, notes } =
         select(&m, kind, &only_bearings, &only_velocities).map_err(errors::domain)?;
     let d = PyDict::new(py);
@@ -316,7 +325,7 @@ fn diagnose_records<'py>(
 /// campaign's answer). Returns `(sweep.json or diagnosis.json as a dict,
 /// extra tables)`.
 #[pyfunction]
-#[pyo3(signature = (kind, source, pattern=None, only_bearings=Vec::new(), only_velocities=Vec::new(), lowpass_hz=20.0, harmonics=5, diagnosis=None, load=None, pool=None, window=None, force_velocity=false))]
+#[pyo3(signature = (kind, source, pattern=None, only_bearings=Vec::new(), only_velocities=Vec::new(), lowpass_hz=20.0, harmonics=5, diagnosis=None, load=None, pool=None, window=None, force_velocity=false, segment=false))]
 #[allow(clippy::too_many_arguments)]
 fn campaign<'py>(
     py: Python<'py>,
@@ -332,6 +341,7 @@ fn campaign<'py>(
     pool: Option<Bound<'py, ThreadPool>>,
     window: Option<&str>,
     force_velocity: bool,
+    segment: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     let kind = campaign_kind(kind)?;
     let load = LoadArgs::parse(load)?;
@@ -340,21 +350,33 @@ fn campaign<'py>(
         CampaignKind::Sweep => None,
         CampaignKind::Diagnose => Some(&ds),
     };
-    let settings = campaign_settings(lowpass_hz, harmonics, diagnosis, window, force_velocity)?;
-    let manifest = read_source(&source, pattern, &load)?;
-    let Selection { entries, notes } =
-        select(&manifest, kind, &only_bearings, &only_velocities).map_err(errors::domain)?;
+    let mut settings = campaign_settings(lowpass_hz, harmonics, diagnosis, window, force_velocity)?;
+    // `--segment`: each file split into its constant-velocity plateaus.
+    settings.segment = segment.then(Default::default);
+    let manifest = read_source(&source, pattern, &load, segment)?;
     let opts = load.options()?;
     let fallback = opts
         .geometry
         .ok_or_else(|| errors::value("no bearing geometry"))?;
-    let outcome = pool::run(py, pool.as_ref(), || {
-        run_batch(
-            &entries,
+    let (outcome, planned) = pool::run(py, pool.as_ref(), || {
+        let mut planned = plan(
+            manifest,
+            kind,
+            &only_bearings,
+            &only_velocities,
+            &opts,
+            fallback,
+            &settings,
+        )?;
+        let outcome = run_batch(
+            &planned.selection.entries,
             |e| process_entry(e, &opts, fallback, &settings),
             |_, _| {},
-        )
-    });
+        );
+        Ok::<_, ballpass::Error>((planned.finish(outcome), planned))
+    })
+    .map_err(errors::domain)?;
+    let (manifest, notes) = (planned.manifest, planned.selection.notes);
     let src = manifest.source.display().to_string();
     match kind {
         CampaignKind::Diagnose => diagnosis_output(py, src, &outcome, &notes, &settings, &ds),

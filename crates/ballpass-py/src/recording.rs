@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
-use ballpass::bearing::{self, Geometry};
-use ballpass::recording::profile::{parse_delimiter, GeometryOverride};
-use ballpass::recording::{self as rec, Channel, Channels, LoadOptions, Metadata, Profile};
+use ballpass::bearing::Geometry;
+use ballpass::recording::{self as rec, Channel, Channels, LoadOptions, Metadata};
+use ballpass::recording::{BearingRequest, LoadRequest};
 use ballpass::sim::{self, SimSettings};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -251,82 +251,22 @@ impl PyRecording {
 }
 
 /// The keyword arguments of `ballpass.load` (the command line's input
-/// flags, by their Python names); `None` or absent: the profile's value,
-/// else the default.
-#[derive(Debug, Default, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct LoadArgs {
-    profile: Option<PathBuf>,
-    format: Option<serde_json::Value>,
-    delimiter: Option<String>,
-    fs_hz: Option<f64>,
-    time_col: Option<String>,
-    ignore_time: bool,
-    friction_col: Option<String>,
-    position_col: Option<String>,
-    optical_col: Option<String>,
-    friction_scale: Option<f64>,
-    friction_offset: Option<f64>,
-    position_scale: Option<f64>,
-    position_offset: Option<f64>,
-    optical_scale: Option<f64>,
-    optical_offset: Option<f64>,
-    velocity_mm_s: Option<f64>,
-    test_id: Option<String>,
-    min_periods: Option<f64>,
-    #[serde(flatten)]
-    pub bearing: BearingArgs,
-}
+/// flags, by their Python names: the library's [`LoadRequest`]); `None` or
+/// absent: the profile's value, else the default.
+#[derive(Debug, Default)]
+pub struct LoadArgs(LoadRequest);
 
 /// Which bearing: a catalog key, a custom geometry over it, or both.
 #[derive(Debug, Default, Clone, Deserialize)]
-#[serde(default)]
-pub struct BearingArgs {
-    pub bearing: Option<String>,
-    pub ball_diameter_mm: Option<f64>,
-    pub free_space_mm: Option<f64>,
-    pub balls_in_race: Option<u32>,
-}
-
-/// The catalog key used when neither an argument nor a profile names a
-/// bearing (as on the command line).
-pub const DEFAULT_BEARING: &str = "sr25w";
+#[serde(transparent)]
+pub struct BearingArgs(BearingRequest);
 
 impl BearingArgs {
     /// `(name, geometry)`: the catalog entry of `bearing`, else `fallback`,
     /// else sr25w; with the given fields overriding its geometry (the name
     /// then says `(custom geometry)`).
     pub fn resolve(&self, fallback: Option<(String, Geometry)>) -> PyResult<(String, Geometry)> {
-        let from_catalog = |key: &str| -> PyResult<(String, Geometry)> {
-            let e = bearing::lookup(key).ok_or_else(|| {
-                let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
-                errors::value(format!(
-                    "unknown bearing {key:?} (catalog: {})",
-                    keys.join(", ")
-                ))
-            })?;
-            Ok((e.name.to_string(), e.geometry))
-        };
-        let (name, base) = match (&self.bearing, fallback) {
-            (Some(key), _) => from_catalog(key)?,
-            (None, Some(f)) => f,
-            (None, None) => from_catalog(DEFAULT_BEARING)?,
-        };
-        let over = GeometryOverride {
-            ball_diameter_mm: self.ball_diameter_mm,
-            free_space_mm: self.free_space_mm,
-            balls_in_race: self.balls_in_race,
-        };
-        let g = over.apply(base).map_err(errors::domain)?;
-        let custom = !over.is_empty() && !name.ends_with("(custom geometry)");
-        Ok((
-            if custom {
-                format!("{name} (custom geometry)")
-            } else {
-                name
-            },
-            g,
-        ))
+        self.0.resolve(fallback).map_err(errors::domain)
     }
 }
 
@@ -335,67 +275,21 @@ impl LoadArgs {
     pub fn parse(json: Option<&str>) -> PyResult<Self> {
         match json {
             None => Ok(Self::default()),
-            Some(t) => {
-                serde_json::from_str(t).map_err(|e| errors::value(format!("load options: {e}")))
-            }
+            Some(t) => serde_json::from_str(t)
+                .map(Self)
+                .map_err(|e| errors::value(format!("load options: {e}"))),
         }
     }
 
     /// Load options: defaults, then the profile, then the arguments given;
     /// the bearing resolved (argument, profile, sr25w) and validated.
     pub fn options(&self) -> PyResult<LoadOptions> {
-        let mut o = match &self.profile {
-            Some(p) => Profile::read(p)
-                .and_then(|p| p.load_options())
-                .map_err(errors::domain)?,
-            None => LoadOptions::default(),
-        };
-        if let Some(f) = &self.format {
-            o.format = Some(
-                serde_json::from_value(f.clone())
-                    .map_err(|e| errors::value(format!("invalid format {f}: {e}")))?,
-            );
-        }
-        if let Some(d) = &self.delimiter {
-            o.delimiter = Some(parse_delimiter(d).map_err(errors::domain)?);
-        }
-        rec::LoadOverrides {
-            fs_hz: self.fs_hz,
-            time: self.time_col.clone(),
-            ignore_time: self.ignore_time,
-            sources: [
-                (
-                    &self.friction_col,
-                    self.friction_scale,
-                    self.friction_offset,
-                ),
-                (
-                    &self.position_col,
-                    self.position_scale,
-                    self.position_offset,
-                ),
-                (&self.optical_col, self.optical_scale, self.optical_offset),
-            ]
-            .map(|(name, scale, offset)| rec::SourceOverride {
-                name: name.clone(),
-                scale,
-                offset,
-            }),
-            velocity_mm_s: self.velocity_mm_s,
-            test_id: self.test_id.clone(),
-            min_periods: self.min_periods,
-        }
-        .apply(&mut o);
-        let (name, g) = self.bearing.resolve(o.bearing_fallback())?;
-        o.bearing = Some(name);
-        o.geometry = Some(g);
-        o.validate().map_err(errors::domain)?;
-        Ok(o)
+        self.0.options().map_err(errors::domain)
     }
 
     /// The velocity given as an argument (not the profile's or the file's).
     pub fn velocity_mm_s(&self) -> Option<f64> {
-        self.velocity_mm_s
+        self.0.velocity_mm_s
     }
 }
 

@@ -72,6 +72,44 @@ def test_simulate_equals_the_cli(recs):
     assert rec.fs_hz == loaded.fs_hz == 1000.0 and len(rec) == 20000
 
 
+def test_load_reads_a_lab_dialect_as_the_cli(recs, cli, tmp):
+    """A CSV as a lab's logger writes it (two metadata lines, a units row,
+    decimal commas and semicolons, time in ms, one missing sample) reads
+    with the command line's dialect options: the same samples as the
+    canonical file, and `inspect` through the CLI agrees on the length."""
+    rec = ballpass.load(recs / "r3.csv")
+    n = 2000
+    lines = ["logger: bench 2", "date: 2026-11-24",
+             "t;friction;position;optical", "ms;N;mm;V"]
+    for i in range(n):
+        if i == 700:
+            continue  # a dropped sample: a gap of one step
+        cells = [repr(1000.0 * i / float(rec.fs_hz)), repr(float(rec.friction_n[i])),
+                 repr(float(rec.position_mm[i])), repr(float(rec.optical_v[i]))]
+        lines.append(";".join(c.replace(".", ",") for c in cells))
+    f = tmp / "lab.csv"
+    f.write_text("\n".join(lines) + "\n")
+    opts = dict(delimiter="semicolon", decimal_comma=True, skip_lines=2, time_col="t",
+                time_unit="ms", friction_col="friction", position_col="position",
+                optical_col="optical", min_periods=0.1)
+    with pytest.raises(ValueError, match="gap"):
+        ballpass.load(f, **opts)
+    got = ballpass.load(f, fill_gaps_s=0.0015, **opts)
+    assert len(got) == n and got.fs_hz == rec.fs_hz
+    keep = np.arange(n) != 700
+    # decimal-comma text of the shortest round-trip repr: exact where read
+    assert np.array_equal(got.friction_n[keep], rec.friction_n[:n][keep])
+    assert np.array_equal(got.optical_v[keep], rec.optical_v[:n][keep])
+    # the filled sample lies between its neighbours (linear fill)
+    lo, hi = sorted((rec.position_mm[699], rec.position_mm[701]))
+    assert lo <= got.position_mm[700] <= hi
+    out = cli("inspect", f, "--delimiter", "semicolon", "--decimal-comma", "--skip-lines", "2",
+              "--time-col", "t", "--time-unit", "ms", "--friction-col", "friction",
+              "--position-col", "position", "--optical-col", "optical", "--fill-gaps", "0.0015",
+              "--min-periods", "0.1")
+    assert str(n) in out, out
+
+
 def test_analyze_equals_the_cli(recs, cli, tmp):
     for files, flags, kw in (
         (["r3.csv"], [], {}),
@@ -318,6 +356,33 @@ def test_campaigns_take_a_window_and_force_velocity(fleet, cli, tmp):
                                       window=(2, None))
     for key in ("result", "record_results", "settings"):
         assert split.to_dict()[key] == d.to_dict()[key], key
+
+
+def test_campaigns_segment_a_multi_speed_run_as_the_cli(cli, tmp):
+    """``segment=True`` is ``--segment``: two simulated lab runs (42, 83 and
+    125 mm/s forward and back in 25 s, velocities left empty) give a sweep
+    and a diagnosis equal to the command line's, each plateau a record at
+    its measured speed."""
+    rows = ["path,bearing,velocity_mm_s,repeat"]
+    for b in (1, 2):
+        cli("simulate", "--multi-speed", "--duration", "25", "--seed", 40 + b,
+            "-o", tmp / f"b{b}.csv")
+        rows.append(f"b{b}.csv,b{b},,1")
+    m = tmp / "manifest.csv"
+    m.write_text("\n".join(rows) + "\n")
+    cli("sweep", m, "--segment", "--only-bearing", "b1", "--no-report", "--out", tmp / "s")
+    s = ballpass.sweep(m, segment=True, only_bearings=["b1"])
+    assert s.to_dict() == read_json(tmp / "s" / "sweep.json")
+    plateaus = [r["plateau"] for r in s.to_dict()["record_results"]]
+    assert len(plateaus) == 6 and all(p is not None for p in plateaus)
+    assert {p["direction"] for p in plateaus} == {"forward", "backward"}
+    cli("diagnose", m, "--segment", "--no-report", "--out", tmp / "d")
+    d = ballpass.diagnose(m, segment=True)
+    assert d.to_dict() == read_json(tmp / "d" / "diagnosis.json")
+    # without it, an empty velocity is a failed record that says how (the
+    # sweep takes one bearing: one record)
+    failed = ballpass.sweep(m).to_dict()["failed"]
+    assert len(failed) == 1 and "--segment" in failed[0]["reason"], failed
 
 
 def test_diagnosis_split_into_records_and_batch_equals_the_whole(fleet):

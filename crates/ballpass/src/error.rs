@@ -155,6 +155,30 @@ pub fn shown_path(path: &std::path::Path) -> String {
     excerpt_within(&path.display().to_string(), PATH_CHARS)
 }
 
+/// Whether `c` must not reach a terminal or a log raw: C0 and C1
+/// controls, DEL, and the Unicode marks that hide or reorder text
+/// (zero-width characters, bidi overrides and isolates, line and paragraph
+/// separators, the byte-order mark).
+pub fn is_unsafe_char(c: char) -> bool {
+    c.is_control()
+        || matches!(c, '\u{200b}'..='\u{200f}' | '\u{2028}'..='\u{202e}' | '\u{2066}'..='\u{2069}' | '\u{feff}')
+}
+
+/// Appends `c` to `out`, escaped when [`is_unsafe_char`]: `\n`, `\r`, `\t`,
+/// `\x1b` for the other ASCII controls, `\u{202e}` beyond ASCII.
+pub fn push_escaped(out: &mut String, c: char) {
+    match c {
+        '\n' => out.push_str("\\n"),
+        '\r' => out.push_str("\\r"),
+        '\t' => out.push_str("\\t"),
+        c if (c as u32) < 0x80 && c.is_control() => {
+            out.push_str(&format!("\\x{:02x}", c as u32));
+        }
+        c if is_unsafe_char(c) => out.push_str(&format!("\\u{{{:x}}}", c as u32)),
+        c => out.push(c),
+    }
+}
+
 /// [`excerpt`] keeping at most `max_chars` characters.
 pub fn excerpt_within(s: &str, max_chars: usize) -> String {
     let mut out = String::new();
@@ -163,20 +187,7 @@ pub fn excerpt_within(s: &str, max_chars: usize) -> String {
             out.push_str(&format!("… ({} characters)", s.chars().count()));
             return out;
         }
-        match c {
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if (c as u32) < 0x80 && c.is_control() => {
-                out.push_str(&format!("\\x{:02x}", c as u32));
-            }
-            c if c.is_control()
-                || matches!(c, '\u{200b}'..='\u{200f}' | '\u{2028}'..='\u{202e}' | '\u{2066}'..='\u{2069}' | '\u{feff}') =>
-            {
-                out.push_str(&format!("\\u{{{:x}}}", c as u32));
-            }
-            c => out.push(c),
-        }
+        push_escaped(&mut out, c);
     }
     out
 }

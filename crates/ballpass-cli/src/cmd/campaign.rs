@@ -11,11 +11,11 @@ use ballpass::campaign::diagnose::{diagnose, DiagnoseSettings};
 use ballpass::campaign::output::{DIAGNOSIS_SCHEMA, SWEEP_SCHEMA};
 use ballpass::campaign::record::RecordResult;
 use ballpass::campaign::run::{geometry_for, process_entry, CampaignSettings};
-use ballpass::campaign::segments::{load_entry, segment_manifest};
+use ballpass::campaign::segments::{load_entry, plan, Planned};
 use ballpass::campaign::sweep::sweep;
 use ballpass::campaign::{
-    export, from_directory, read_manifest, run_batch, select, BatchOutcome, CampaignKind,
-    CampaignOutput, Manifest, ManifestEntry, Selection,
+    export, from_directory, read_manifest, run_batch, BatchOutcome, CampaignKind, CampaignOutput,
+    Manifest, ManifestEntry, Selection,
 };
 use ballpass::report::campaign::{
     diagnosis_parts, friction_examples, sweep_parts, FrictionTrace, ReportParts,
@@ -143,38 +143,29 @@ fn run(
     settings: &CampaignSettings,
 ) -> Result<Batch> {
     let out = output::open_dir(&a.out, command)?;
-    let mut manifest = read_source(a)?;
+    let manifest = read_source(a)?;
     let load = a.load.options()?;
     let fallback = load.geometry.context("no bearing geometry")?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.jobs.unwrap_or(0))
         .build()?;
     // A multi-speed run: its plateaus are the records.
-    let (mut unsegmented, mut segment_notes) = (Vec::new(), Vec::new());
-    if settings.segment.is_some() {
-        let s = pool.install(|| segment_manifest(&manifest, &load, fallback, settings));
-        if s.manifest.entries.is_empty() {
-            let why: Vec<String> = s
-                .failed
-                .iter()
-                .filter_map(|r| r.result.as_ref().err().cloned())
-                .collect();
-            bail!("no plateau found in any file: {}", why.join("; "));
-        }
-        manifest = s.manifest;
-        unsegmented = s.failed;
-        segment_notes = s.notes;
-    }
-    let Selection {
-        mut entries,
-        mut notes,
-    } = select(&manifest, kind, &a.only_bearing, &a.only_velocity)?;
-    notes.splice(0..0, segment_notes);
-    let bar = crate::output::progress(entries.len(), "records");
+    let mut planned = pool.install(|| {
+        plan(
+            manifest,
+            kind,
+            &a.only_bearing,
+            &a.only_velocity,
+            &load,
+            fallback,
+            settings,
+        )
+    })?;
+    let bar = crate::output::progress(planned.selection.entries.len(), "records");
     let t0 = Instant::now();
     let outcome = pool.install(|| {
         run_batch(
-            &entries,
+            &planned.selection.entries,
             |e| process_entry(e, &load, fallback, settings),
             |done, _| {
                 if let Some(b) = &bar {
@@ -187,9 +178,12 @@ fn run(
         b.finish_and_clear();
     }
     // Files that could not be segmented are failed records.
-    entries.extend(unsegmented.iter().map(|r| r.entry.clone()));
-    let mut outcome = outcome;
-    outcome.records.extend(unsegmented);
+    let outcome = planned.finish(outcome);
+    let Planned {
+        manifest,
+        selection: Selection { entries, notes },
+        ..
+    } = planned;
     Ok(Batch {
         manifest,
         entries,

@@ -104,7 +104,8 @@ _LOAD_KEYS = (
     "profile", "format", "delimiter", "fs_hz", "time_col", "ignore_time",
     "friction_col", "position_col", "optical_col", "friction_scale",
     "friction_offset", "position_scale", "position_offset", "optical_scale",
-    "optical_offset", "velocity_mm_s", "test_id", "min_periods", "bearing",
+    "optical_offset", "velocity_mm_s", "test_id", "min_periods", "fs_from",
+    "time_unit", "decimal_comma", "skip_lines", "fill_gaps_s", "bearing",
     "ball_diameter_mm", "free_space_mm", "balls_in_race",
 )
 
@@ -193,16 +194,23 @@ def load(path: str | os.PathLike, *, profile=None, format=None, delimiter=None,
          position_col=None, optical_col=None, friction_scale=None,
          friction_offset=None, position_scale=None, position_offset=None,
          optical_scale=None, optical_offset=None, velocity_mm_s=None, test_id=None,
-         min_periods=None, bearing=None, ball_diameter_mm=None, free_space_mm=None,
-         balls_in_race=None) -> Recording:
-    """Reads one recording file (CSV/TSV or MATLAB .mat v5/v7) with the
-    command line's mapping options: a bench ``profile`` (TOML) first, then
-    these arguments. Columns ``time_s, friction_N, position_mm, optical_V``
-    by default; ``*_col`` names others, ``*_scale``/``*_offset`` convert
-    raw numbers (value = raw * scale + offset, in N, mm, V); ``fs_hz`` is
-    needed without a time column. Raises FileNotFoundError/OSError for a
-    file that cannot be read, ValueError naming the line or channel for bad
-    content."""
+         min_periods=None, fs_from=None, time_unit=None, decimal_comma=False,
+         skip_lines=None, fill_gaps_s=None, bearing=None,
+         ball_diameter_mm=None, free_space_mm=None, balls_in_race=None) -> Recording:
+    """Reads one recording file (CSV/TSV, MATLAB .mat v5/v7/v7.3, NI .tdms,
+    MDF .mf4; ``FILE#GROUP`` names one run of a TDMS file) with the command
+    line's mapping options: a bench ``profile`` (TOML) first, then these
+    arguments. Columns ``time_s, friction_N, position_mm, optical_V`` by
+    default; ``*_col`` names others, ``*_scale``/``*_offset`` convert raw
+    numbers (value = raw * scale + offset, in N, mm, V); ``fs_hz`` is needed
+    without a time column or ``fs_from`` (a MAT scalar or struct field
+    holding the rate, e.g. ``'bearing.sr'``). CSV dialects as the command
+    line's flags: ``time_unit`` (``'s'``, ``'ms'``, ``'us'``),
+    ``decimal_comma``, ``skip_lines`` (metadata lines before the header);
+    gaps (NaN, missing time stamps) are refused, naming their place, unless
+    ``fill_gaps_s`` fills those up to that long (s, linear). Raises
+    FileNotFoundError/OSError for a file that cannot be read, ValueError
+    naming the line or channel for bad content."""
     opts = dict(
         profile=profile, format=format, delimiter=delimiter, fs_hz=fs_hz,
         time_col=time_col, ignore_time=ignore_time or None, friction_col=friction_col,
@@ -211,6 +219,8 @@ def load(path: str | os.PathLike, *, profile=None, format=None, delimiter=None,
         position_scale=position_scale, position_offset=position_offset,
         optical_scale=optical_scale, optical_offset=optical_offset,
         velocity_mm_s=velocity_mm_s, test_id=test_id, min_periods=min_periods,
+        fs_from=fs_from, time_unit=time_unit, decimal_comma=decimal_comma or None,
+        skip_lines=skip_lines, fill_gaps_s=fill_gaps_s,
         bearing=bearing, ball_diameter_mm=ball_diameter_mm,
         free_space_mm=free_space_mm, balls_in_race=balls_in_race,
     )
@@ -435,19 +445,23 @@ def _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm):
 
 def sweep(source, *, pattern: str | None = None, only_bearings: Iterable[str] = (),
           only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
-          harmonics: int = 5, window=None, force_velocity: bool = False, threads=None,
-          **load_options) -> Result:
+          harmonics: int = 5, window=None, force_velocity: bool = False,
+          segment: bool = False, threads=None, **load_options) -> Result:
     """A velocity sweep over a campaign, as ``ballpass sweep``: velocity-error
     trend, tau_c and tau_p against velocity, d_avg. ``source`` is a manifest
     CSV or a folder with ``pattern``; by default the bearing recorded at the
     most velocities. ``window=(t0, t1)`` (s) uses only that part of each
     record (``--window``); each record's velocity is checked against its
     encoder as :func:`analyze` does (``force_velocity``:
-    ``--force-velocity``). ``to_dict()`` equals ``sweep.json``."""
+    ``--force-velocity``). ``segment=True`` (``--segment``) splits each file
+    into its constant-velocity plateaus, each analysed at its own measured
+    speed (manifest velocities may then be left empty); the plateau of each
+    record is in its ``plateau``. ``to_dict()`` equals ``sweep.json``."""
     data, _ = _native.campaign(
         "sweep", os.fspath(source), pattern, list(only_bearings),
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics), None,
         _load_json(load_options), _pool(threads), _window(window), bool(force_velocity),
+        bool(segment),
     )
     return Result(data, kind="Sweep")
 
@@ -456,7 +470,8 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
              only_velocities: Iterable[float] = (), lowpass_hz: float = 20.0,
              harmonics: int = 5, low_band_hz: float = 25.0, spike_spreads: float = 8.0,
              bad_false_alarm: float = 1e-4, settings: dict | None = None, window=None,
-             force_velocity: bool = False, threads=None, **load_options) -> Result:
+             force_velocity: bool = False, segment: bool = False, threads=None,
+             **load_options) -> Result:
     """A batch of bearings, as ``ballpass diagnose``: friction spectra,
     harmonics, the friction of each ball-pass period and a verdict per
     bearing (worst first in ``.result.bearings``). ``source`` is a manifest
@@ -468,9 +483,9 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
     (``--bad-false-alarm``: false-alarm probability per good bearing of the
     spike count for "bad"); ``settings`` sets any ``DiagnoseSettings`` field
     (e.g. ``{"suspect_false_alarm": 0.01, "sticking": {"smoothing_periods":
-    0.01}}``) and wins over the keywords. ``window=(t0, t1)`` (s) and
-    ``force_velocity`` are ``--window`` and ``--force-velocity``, as for
-    :func:`sweep`. ``to_dict()`` equals ``diagnosis.json``;
+    0.01}}``) and wins over the keywords. ``window=(t0, t1)`` (s),
+    ``force_velocity`` and ``segment`` are ``--window``,
+    ``--force-velocity`` and ``--segment``, as for :func:`sweep`. ``to_dict()`` equals ``diagnosis.json``;
     ``.friction_spectra`` is ``friction_spectra.csv`` (columns
     ``psd_friction_<bearing>_n2_per_hz``)."""
     data, spectra = _native.campaign(
@@ -478,6 +493,7 @@ def diagnose(source, *, pattern: str | None = None, only_bearings: Iterable[str]
         [float(v) for v in only_velocities], float(lowpass_hz), int(harmonics),
         _diagnosis_json(settings, low_band_hz, spike_spreads, bad_false_alarm),
         _load_json(load_options), _pool(threads), _window(window), bool(force_velocity),
+        bool(segment),
     )
     return Result(data, {"friction_spectra": Table(spectra)}, "Diagnosis")
 

@@ -39,3 +39,21 @@ pub fn lookup(key: &str) -> Option<&'static CatalogEntry> {
         .collect();
     CATALOG.iter().find(|e| e.key == norm)
 }
+
+/// [`lookup`], or an error naming the key and listing the catalog.
+///
+/// # Errors
+/// [`crate::Error::InvalidSetting`] naming `bearing`.
+pub fn find(key: &str) -> crate::Result<&'static CatalogEntry> {
+    lookup(key).ok_or_else(|| {
+        let keys: Vec<_> = CATALOG.iter().map(|e| e.key).collect();
+        crate::Error::setting(
+            "bearing",
+            format!(
+                "unknown bearing '{}' (catalog: {})",
+                crate::error::excerpt(key),
+                keys.join(", ")
+            ),
+        )
+    })
+}

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 
 pub mod catalog;
 
-pub use catalog::{lookup, CatalogEntry, CATALOG};
+pub use catalog::{find, lookup, CatalogEntry, CATALOG};
 
 /// Geometry of one ball circuit of a linear guide.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -23,10 +23,11 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::batch::RecordOutcome;
+use super::batch::{BatchOutcome, RecordOutcome};
 use super::manifest::{Manifest, ManifestEntry};
 use super::record::RecordResult;
 use super::run::{geometry_for, CampaignSettings};
+use super::select::{select, CampaignKind, Selection};
 use crate::bearing::Geometry;
 use crate::error::{Error, Result};
 use crate::recording::segment::{group_speeds, plateaus_found, split, window, Plateau};
@@ -58,6 +59,78 @@ pub struct SegmentedManifest {
     pub failed: Vec<RecordOutcome<RecordResult>>,
     /// What was done, in words (the outputs' selection notes).
     pub notes: Vec<String>,
+}
+
+/// A campaign's records, ready to run: the manifest (its files replaced by
+/// their plateaus when segmenting), the selection made from it, and the
+/// files that could not be segmented, as failed records.
+#[derive(Debug, Clone)]
+pub struct Planned {
+    /// The manifest the selection was made from.
+    pub manifest: Manifest,
+    /// The records to process and how they were chosen (segmentation notes
+    /// first).
+    pub selection: Selection,
+    /// Files that could not be segmented, listed as failed records.
+    pub unsegmented: Vec<RecordOutcome<RecordResult>>,
+}
+
+impl Planned {
+    /// The outcome of running `selection.entries`, with the files that
+    /// could not be segmented appended as failed records (entries too).
+    pub fn finish(
+        &mut self,
+        mut outcome: BatchOutcome<RecordResult>,
+    ) -> BatchOutcome<RecordResult> {
+        self.selection
+            .entries
+            .extend(self.unsegmented.iter().map(|r| r.entry.clone()));
+        outcome.records.append(&mut self.unsegmented);
+        outcome
+    }
+}
+
+/// The records `ballpass sweep` or `ballpass diagnose` process from
+/// `manifest`: with `settings.segment`, every file split into its plateaus
+/// first ([`segment_manifest`]); then the selection for `kind`
+/// ([`select`]).
+///
+/// # Errors
+/// The selection's errors, and [`Error::InvalidRecording`] naming each
+/// file's reason when segmenting finds no plateau in any file.
+pub fn plan(
+    manifest: Manifest,
+    kind: CampaignKind,
+    only_bearings: &[String],
+    only_velocities: &[f64],
+    load_options: &LoadOptions,
+    fallback: Geometry,
+    settings: &CampaignSettings,
+) -> Result<Planned> {
+    let (manifest, unsegmented, segment_notes) = if settings.segment.is_some() {
+        let s = segment_manifest(&manifest, load_options, fallback, settings);
+        if s.manifest.entries.is_empty() {
+            let why: Vec<String> = s
+                .failed
+                .iter()
+                .filter_map(|r| r.result.as_ref().err().cloned())
+                .collect();
+            return Err(Error::InvalidRecording {
+                source_name: manifest.source.display().to_string(),
+                reason: format!("no plateau found in any file: {}", why.join("; ")),
+            });
+        }
+        (s.manifest, s.failed, s.notes)
+    } else {
+        (manifest, Vec::new(), Vec::new())
+    };
+    let mut selection = select(&manifest, kind, only_bearings, only_velocities)?;
+    selection.notes.splice(0..0, segment_notes);
+    Ok(Planned {
+        manifest,
+        selection,
+        unsegmented,
+    })
 }
 
 /// The options an entry's file is loaded with: its bearing and geometry,

@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 pub mod inspect;
 pub mod io;
 pub mod profile;
+pub mod request;
 pub mod segment;
 
 pub use io::{
@@ -20,6 +21,7 @@ pub use io::{
     LoadOverrides, SourceOverride, TimeUnit,
 };
 pub use profile::Profile;
+pub use request::{BearingRequest, LoadRequest};
 
 /// The three measured channels of the testbed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]

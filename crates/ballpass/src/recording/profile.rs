@@ -185,7 +185,7 @@ impl Profile {
     pub fn bearing(&self) -> Result<Option<(String, Geometry)>> {
         let geometry = self.geometry.unwrap_or_default();
         let entry = match &self.bearing {
-            Some(key) => Some(lookup(key)?),
+            Some(key) => Some(bearing::find(key)?),
             None if geometry.is_empty() => return Ok(None),
             None => None,
         };
@@ -317,20 +317,6 @@ fn line_of(text: &str, table: Option<&str>, key: &str) -> Option<usize> {
         }
     }
     None
-}
-
-fn lookup(key: &str) -> Result<&'static bearing::CatalogEntry> {
-    bearing::lookup(key).ok_or_else(|| {
-        let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
-        Error::setting(
-            "bearing",
-            format!(
-                "unknown bearing '{}' (catalog: {})",
-                crate::error::excerpt(key),
-                keys.join(", ")
-            ),
-        )
-    })
 }
 
 /// Parses a delimiter name: a single ASCII character, or `tab`, `comma`,

@@ -333,13 +333,7 @@ impl SimSettings {
     /// # Errors
     /// [`Error::InvalidSetting`] for an unknown bearing key.
     pub fn for_bearing(key: &str, velocity_mm_s: f64) -> Result<Self> {
-        let entry = bearing::lookup(key).ok_or_else(|| {
-            let keys: Vec<_> = bearing::CATALOG.iter().map(|e| e.key).collect();
-            Error::setting(
-                "bearing",
-                format!("unknown bearing '{key}' (catalog: {})", keys.join(", ")),
-            )
-        })?;
+        let entry = bearing::find(key)?;
         Ok(Self {
             velocity_mm_s,
             bearing: entry.key.into(),
