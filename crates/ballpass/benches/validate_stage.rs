@@ -36,6 +36,8 @@ struct Row {
     truth: [f64; 3],
     id: Option<StageIdentification>,
     n_d: f64,
+    load_cell_tau_s: Option<f64>,
+    restored_tau_s: Option<f64>,
     spectra: Option<StageSpectra>,
     error: Option<String>,
 }
@@ -57,6 +59,8 @@ fn one(domain: &Domain, seed: u64, keep: bool) -> Row {
         truth: truth_of(&s.stage),
         id: None,
         n_d: 0.0,
+        load_cell_tau_s: s.load_cell.time_constant_s,
+        restored_tau_s: None,
         spectra: None,
         error: None,
     };
@@ -78,6 +82,7 @@ fn one(domain: &Domain, seed: u64, keep: bool) -> Row {
         Ok(Some(sp)) => {
             row.id = Some(identify(&sp));
             row.n_d = sp.n_d;
+            row.restored_tau_s = sp.restored_tau_s;
             if keep {
                 row.spectra = Some(sp);
             }
@@ -165,7 +170,7 @@ fn main() {
                 })
             };
             let line = serde_json::json!({
-                "seed": r.seed, "fs": r.fs_hz, "T": r.duration_s, "noise": r.noise_n, "n_d": r.n_d,
+                "seed": r.seed, "fs": r.fs_hz, "tau": r.load_cell_tau_s, "tau_hat": r.restored_tau_s, "T": r.duration_s, "noise": r.noise_n, "n_d": r.n_d,
                 "truth": r.truth,
                 "identified": id.is_some_and(|i| i.identified),
                 "f_n": est(id.and_then(|i| i.natural_frequency_hz)),

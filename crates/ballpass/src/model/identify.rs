@@ -73,7 +73,7 @@ use ballpass_dsp::{Complex64, Welch, WelchSettings};
 use joint::{joint_fit, JointFit};
 use serde::Serialize;
 
-use crate::analysis::load_cell::{restore_friction, LoadCellCorrection};
+use crate::analysis::load_cell::{restore_friction, DcRestoration, LoadCellCorrection};
 use crate::error::{Error, Result};
 use crate::recording::{Channel, Recording};
 
@@ -95,6 +95,11 @@ pub struct StageSpectra {
     pub records: usize,
     /// Equivalent segments (all records), for the error of `H1`.
     pub n_d: f64,
+    /// Time constant of the load-cell discharge undone in the friction
+    /// before these spectra were taken, s (`None`: friction as recorded).
+    /// Pooled records with different ones keep the mean of `1/τ` (the
+    /// restoration's deviation from 1 is linear in it).
+    pub restored_tau_s: Option<f64>,
 }
 
 /// Segment length of the identification spectra for a record of `n`
@@ -149,6 +154,7 @@ impl StageSpectra {
             p_fv: set.cross.into_iter().next().unwrap_or_default(),
             records: 1,
             n_d: nu / 2.0,
+            restored_tau_s: None,
         })
     }
 
@@ -173,9 +179,18 @@ impl StageSpectra {
             return Ok(None);
         };
         let fs = rec.fs_hz();
-        let (friction, _) = restore_friction(f, fs, period_s, correction)?;
+        let (friction, dc) = restore_friction(f, fs, period_s, correction)?;
         let nperseg = nperseg_for(friction.len(), fs);
-        StageSpectra::of_signals(&friction, p, fs, velocity_mm_s, nperseg).map(Some)
+        StageSpectra::of_signals(&friction, p, fs, velocity_mm_s, nperseg)
+            .map(|sp| Some(sp.restored_with(&dc)))
+    }
+
+    /// These spectra with the load cell's restoration `dc` recorded (the
+    /// fit models what it did to the friction: module docs).
+    #[must_use]
+    pub fn restored_with(mut self, dc: &DcRestoration) -> StageSpectra {
+        self.restored_tau_s = dc.tau_s.filter(|t| dc.applied && *t > 0.0);
+        self
     }
 
     /// The spectra from a friction channel (discharge already undone) and
@@ -219,6 +234,10 @@ impl StageSpectra {
         for (a, b) in self.p_fv.iter_mut().zip(&other.p_fv) {
             *a += b;
         }
+        let rate = |s: &StageSpectra| s.restored_tau_s.map_or(0.0, |t| 1.0 / t);
+        let (a, b) = (self.records as f64, other.records as f64);
+        let mean_rate = (rate(self) * a + rate(other) * b) / (a + b);
+        self.restored_tau_s = (mean_rate > 0.0).then(|| 1.0 / mean_rate);
         self.records += other.records;
         self.n_d += other.n_d;
         true
@@ -353,9 +372,31 @@ fn z_model(p: &[f64; N_PARAMS], w: f64) -> Complex64 {
     Complex64::new(p[0] + p[1] * w * w, p[2] * w - p[3] / w)
 }
 
-/// Parameters of the joint fit: the four of the stage and chain, then the
-/// friction channel's white noise density.
-const N_PARAMS: usize = 5;
+/// Parameters of the joint fit: the four of the stage and chain, the
+/// friction channel's white noise density, and the rate `1/τ` of the load
+/// cell's own high-pass (module docs).
+const N_PARAMS: usize = 6;
+
+/// The restoration's transfer at `ω` (`fs` the rate, `tau` the time
+/// constant undone): `1 + 1/(j ω' τ)`, the trapezoidal integration of
+/// [`crate::analysis::load_cell::restore`] at the bilinear-warped
+/// `ω' = 2 fs tan(ω / (2 fs))`; 1 when nothing was undone.
+fn restoration(w: f64, fs: f64, tau: Option<f64>) -> Complex64 {
+    match tau {
+        Some(tau) => {
+            let wp = 2.0 * fs * (w / (2.0 * fs)).tan();
+            Complex64::new(1.0, -1.0 / (wp * tau))
+        }
+        None => Complex64::new(1.0, 0.0),
+    }
+}
+
+/// The measured `Z` the model predicts without the noise bias: the stage
+/// and chain ([`z_model`]) times the load cell's own high-pass
+/// `1 / (1 + (1/τ) / (j ω))` (rate `p[5]`) and the restoration `rh`.
+fn z_chain(p: &[f64; N_PARAMS], w: f64, rh: Complex64) -> Complex64 {
+    z_model(p, w) * rh / Complex64::new(1.0, -p[5] / w)
+}
 
 fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     let df = s.freq_hz.get(1).copied().unwrap_or(0.0);
@@ -392,6 +433,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         z: Complex64,
         q: f64,
         pff: f64,
+        rh: Complex64,
     }
     let mut bins: Vec<Bin> = Vec::new();
     let mut band: Option<[f64; 2]> = None;
@@ -416,6 +458,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             z,
             q: ress[i] / pff / (d * d),
             pff,
+            rh: restoration(w, s.fs_hz, s.restored_tau_s),
         });
         band = Some(match band {
             None => [f, f],
@@ -450,7 +493,11 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     let dof_h = n_d - 1.0;
     let z0: Vec<Complex64> = bins.iter().map(|b| b.z).collect();
     let mut z = z0.clone();
-    let mut z_reg = z0.clone();
+    // The model's measured Z with and without the noise bias: the
+    // regressors of the noise and of the load cell's high-pass (from the
+    // data on the first pass).
+    let mut z_noisy = z0.clone();
+    let mut z_clean = z0.clone();
     let mut model: Option<[f64; N_PARAMS]> = None;
     let mut fit: Option<JointFit> = None;
     for _ in 0..FIT_PASSES {
@@ -458,7 +505,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             .iter()
             .zip(&z0)
             .map(|(b, zd)| {
-                let zm = model.map_or(*zd, |p| z_model(&p, b.w));
+                let zm = model.map_or(*zd, |p| z_chain(&p, b.w, b.rh));
                 (b.q * zm.norm_sqr() * zm.norm_sqr() / (2.0 * dof_h)).max(f64::MIN_POSITIVE)
             })
             .collect();
@@ -466,11 +513,18 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             .iter()
             .enumerate()
             .flat_map(|(k, b)| {
-                let re = [1.0, b.w * b.w, 0.0, 0.0, z_reg[k].re / b.pff];
-                let im = [0.0, 0.0, b.w, -1.0 / b.w, z_reg[k].im / b.pff];
+                let j = Complex64::new(0.0, 1.0);
+                let r: [Complex64; N_PARAMS] = [
+                    b.rh,
+                    b.rh * (b.w * b.w),
+                    b.rh * j * b.w,
+                    -b.rh * j / b.w,
+                    z_noisy[k] * (b.rh.norm_sqr() / b.pff),
+                    z_clean[k] * j / b.w,
+                ];
                 [
-                    (re, z[k].re, var[k], b.i),
-                    (im, z[k].im, var[k], b.i + nb_all),
+                    (r.map(|c| c.re), z[k].re, var[k], b.i),
+                    (r.map(|c| c.im), z[k].im, var[k], b.i + nb_all),
                 ]
             })
             .collect();
@@ -482,10 +536,14 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         // P_ff but not in the force on the stage), and the bias of the
         // window near the resonance, both from the model.
         for (k, b) in bins.iter().enumerate() {
-            let zm = z_model(&p, b.w);
-            z_reg[k] = zm / (1.0 - p[4] / b.pff);
+            let zm = z_chain(&p, b.w, b.rh);
+            z_clean[k] = zm;
+            z_noisy[k] = zm / (1.0 - p[4] * b.rh.norm_sqr() / b.pff);
             let f0 = b.w / std::f64::consts::TAU;
-            let at = |f: f64| z_model(&p, std::f64::consts::TAU * f);
+            let at = |f: f64| {
+                let w = std::f64::consts::TAU * f;
+                z_chain(&p, w, restoration(w, s.fs_hz, s.restored_tau_s))
+            };
             let (zl, zh) = (at(f0 - df), at(f0 + df));
             let z1 = (zh - zl) / (2.0 * df);
             let z2 = (zh - zm * 2.0 + zl) / (df * df);
