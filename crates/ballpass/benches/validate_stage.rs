@@ -8,16 +8,19 @@
 //! with exact binomial intervals).
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_stage -- [train|fresh|SEED] [N] [--list] [--dump DIR]
+//! cargo bench -p ballpass --bench validate_stage -- [train|fresh|fresh2|SEED] [N] [--list] [--dump DIR]
 //! ```
 //!
 //! `train` draws bench seeds 3_000_001..=3_000_000+N (the seeds the interval
 //! was designed on), `fresh` seeds 9_100_001..=9_100_000+N (never looked at
-//! before the rule was frozen); a number starts there. `--list` prints one
+//! before the first estimator was frozen; seen since), `fresh2` seeds
+//! 9_200_001..=9_200_000+N (never looked at before the load-cell, chain and
+//! residual-correlation terms were frozen); a number starts there. `--list` prints one
 //! line per identified stage; `--dump DIR` writes each bench's spectra up to
 //! a quarter of the rate (`seed.bin`: little-endian f64 rows of frequency,
-//! P_ff, P_vv, Re P_fv, Im P_fv) and `index.jsonl` (the truth and the
-//! estimate) for offline study.
+//! P_ff, P_vv, Re P_fv, Im P_fv) and `index.jsonl` (the truth, the load
+//! cell's time constant and the one the analysis undid, and the estimate)
+//! for offline study.
 
 use std::io::Write;
 
@@ -125,10 +128,11 @@ fn main() {
     let first = match set {
         "train" => 3_000_001,
         "fresh" => 9_100_001,
+        "fresh2" => 9_200_001,
         other => match other.parse::<u64>() {
             Ok(s) => s,
             Err(_) => {
-                eprintln!("unknown set {other}: train, fresh or a first seed");
+                eprintln!("unknown set {other}: train, fresh, fresh2 or a first seed");
                 std::process::exit(2);
             }
         },
