@@ -8,16 +8,19 @@
 //! with exact binomial intervals).
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_stage -- [train|fresh|SEED] [N] [--list] [--dump DIR]
+//! cargo bench -p ballpass --bench validate_stage -- [train|fresh|fresh2|SEED] [N] [--list] [--dump DIR]
 //! ```
 //!
 //! `train` draws bench seeds 3_000_001..=3_000_000+N (the seeds the interval
 //! was designed on), `fresh` seeds 9_100_001..=9_100_000+N (never looked at
-//! before the rule was frozen); a number starts there. `--list` prints one
+//! before the first estimator was frozen; seen since), `fresh2` seeds
+//! 9_200_001..=9_200_000+N (never looked at before the load-cell, chain and
+//! residual-correlation terms were frozen); a number starts there. `--list` prints one
 //! line per identified stage; `--dump DIR` writes each bench's spectra up to
 //! a quarter of the rate (`seed.bin`: little-endian f64 rows of frequency,
-//! P_ff, P_vv, Re P_fv, Im P_fv) and `index.jsonl` (the truth and the
-//! estimate) for offline study.
+//! P_ff, P_vv, Re P_fv, Im P_fv) and `index.jsonl` (the truth, the load
+//! cell's time constant and the one the analysis undid, and the estimate)
+//! for offline study.
 
 use std::io::Write;
 
@@ -36,6 +39,8 @@ struct Row {
     truth: [f64; 3],
     id: Option<StageIdentification>,
     n_d: f64,
+    load_cell_tau_s: Option<f64>,
+    restored_tau_s: Option<f64>,
     spectra: Option<StageSpectra>,
     error: Option<String>,
 }
@@ -57,6 +62,8 @@ fn one(domain: &Domain, seed: u64, keep: bool) -> Row {
         truth: truth_of(&s.stage),
         id: None,
         n_d: 0.0,
+        load_cell_tau_s: s.load_cell.time_constant_s,
+        restored_tau_s: None,
         spectra: None,
         error: None,
     };
@@ -78,6 +85,7 @@ fn one(domain: &Domain, seed: u64, keep: bool) -> Row {
         Ok(Some(sp)) => {
             row.id = Some(identify(&sp));
             row.n_d = sp.n_d;
+            row.restored_tau_s = sp.restored_tau_s;
             if keep {
                 row.spectra = Some(sp);
             }
@@ -120,10 +128,11 @@ fn main() {
     let first = match set {
         "train" => 3_000_001,
         "fresh" => 9_100_001,
+        "fresh2" => 9_200_001,
         other => match other.parse::<u64>() {
             Ok(s) => s,
             Err(_) => {
-                eprintln!("unknown set {other}: train, fresh or a first seed");
+                eprintln!("unknown set {other}: train, fresh, fresh2 or a first seed");
                 std::process::exit(2);
             }
         },
@@ -165,7 +174,7 @@ fn main() {
                 })
             };
             let line = serde_json::json!({
-                "seed": r.seed, "fs": r.fs_hz, "T": r.duration_s, "noise": r.noise_n, "n_d": r.n_d,
+                "seed": r.seed, "fs": r.fs_hz, "tau": r.load_cell_tau_s, "tau_hat": r.restored_tau_s, "T": r.duration_s, "noise": r.noise_n, "n_d": r.n_d,
                 "truth": r.truth,
                 "identified": id.is_some_and(|i| i.identified),
                 "f_n": est(id.and_then(|i| i.natural_frequency_hz)),

@@ -51,14 +51,15 @@ fn identify_stage(
     let nperseg = crate::model::identify::nperseg_for(n_min, fs);
     let mut pooled = crate::model::identify::StageSpectra::default();
     for (r, fr) in recs.iter().zip(restored) {
-        if let (Some((f, _)), Some(p)) = (fr, r.channel(Channel::Position)) {
+        if let (Some((f, dc)), Some(p)) = (fr, r.channel(Channel::Position)) {
             let sp = crate::model::identify::StageSpectra::of_signals(
                 f,
                 p,
                 fs,
                 pred.velocity_mm_s,
                 nperseg,
-            )?;
+            )?
+            .restored_with(dc);
             pooled.add(&sp);
         }
     }

@@ -17,24 +17,42 @@
 //! ```
 //!
 //! A real bench measures the force through anti-alias filters and
-//! sample-and-hold, a small delay `τ_d` between force and velocity error
-//! that bends the phase of `Z` where `m ω` is large. To first order in
-//! `ω τ_d`, `Z_meas = Z (1 − j ω τ_d)`, which stays linear in four
-//! parameters:
+//! sample-and-hold: a low-pass chain between force and velocity error that
+//! bends the phase of `Z` and lowers its magnitude where `m ω` is large.
+//! To second order in `ω`, `Z_meas = Z (1 − j ω τ_d − s ω²)` (a pure delay
+//! `τ_d` alone leaves the chain's second-order term, which for the usual
+//! second-order anti-alias filter at `f_c` is `s = 1/(2π f_c)²`, as a
+//! misfit smooth across frequency that biases `m`: f_n read low on stiff
+//! stages measured at high rates). That stays linear in five parameters:
 //!
 //! ```text
-//! Re Z = (K K_D − τ_d K K_P) + τ_d m ω²,     Im Z = (m − τ_d K K_D) ω − K K_P / ω
+//! Re Z = (K K_D − τ_d K K_P) + (τ_d m − s K K_D) ω²
+//! Im Z = (m − τ_d K K_D + s K K_P) ω − K K_P / ω − s m ω³
 //! ```
 //!
-//! The load cell's own noise is in `P_ff` but not in the force that moves
-//! the stage, so `H1` reads `|H|` low by the factor `1 − P_nn / P_ff`
-//! (`P_nn` its noise density, white over the band); in `Z` that is
-//! `Z_meas = Z / (1 − P_nn / P_ff)`, i.e. `Z_meas = Z + P_nn Z_meas / P_ff`:
-//! a fifth parameter, linear (its regressor `Z_meas / P_ff` taken from the
-//! model after the first pass), that the fit estimates with the others; its
-//! uncertainty widens the others' intervals where it correlates with them.
+//! At the other end of the band, a quartz load cell's charge amplifier is
+//! a first-order high-pass `1/(1 + 1/(j ω τ))`, and ballpass undoes it
+//! with its own estimate `τ̂` of the time constant (trapezoidal
+//! integration: `R̂ = 1 + 1/(j ω' τ̂)`, `ω'` the bilinear-warped frequency);
+//! what reaches `H1` is `Z_meas = Z R̂ / (1 + 1/(j ω τ))`. `R̂` is known
+//! ([`StageSpectra::restored_tau_s`]); the load cell's own `1/τ` (0 for a
+//! DC-coupled sensor) is fitted: `Z_meas = Z R̂ − (1/τ) Z_meas / (j ω)`, a
+//! sixth linear parameter whose regressor `Z_meas / (j ω)` is taken from
+//! the model after the first pass. Without it an error of the estimate `τ̂`
+//! (or a high-pass nobody undid) bends `Z` at low frequency and biases
+//! `K K_P`: f_n read low with stated intervals that held it on 60 % of
+//! benches with `τ` below 3 s.
 //!
-//! The five parameters are fitted as one weighted least squares over the
+//! The load cell's own noise is in `P_ff` but not in the force that moves
+//! the stage, so `H1` reads `|H|` low by the factor `1 − |R̂|² P_nn / P_ff`
+//! (`P_nn` its noise density, white over the band at the sensor, raised by
+//! the restoration at low frequency); in `Z` that is
+//! `Z_meas = Z + |R̂|² P_nn Z_meas / P_ff`: a seventh linear parameter (its
+//! regressor from the model after the first pass), that the fit estimates
+//! with the others; its uncertainty widens the others' intervals where it
+//! correlates with them.
+//!
+//! The seven parameters are fitted as one weighted least squares over the
 //! bins whose coherence, averaged over ±4 neighbouring bins, is significant
 //! (99 %), repeated four times:
 //!
@@ -56,11 +74,17 @@
 //!   `H1` carries the square of the windowed DFT's bin correlation: 4/9 at
 //!   one bin, 1/36 at two); treating the bins as independent understates
 //!   the variance about twofold;
-//! - the covariance is scaled up by the reduced χ² when the model misfits.
+//! - the covariance is scaled up by the reduced χ² when the model misfits;
+//! - a second sandwich takes `Σ` from the residuals themselves, correlated
+//!   across bins as far as they are (Newey–West with a Bartlett kernel, its
+//!   bandwidth chosen from the residuals' lag-one correlation by Andrews'
+//!   rule): a misfit that is smooth across frequency makes neighbouring
+//!   residuals alike, which the χ² scaling reads as independent noise. The
+//!   larger of the two variances is stated.
 //!
-//! `(m, K K_D, K K_P, τ_d)` follow by a fixed-point solve. The fit is
-//! repeated over the two decades around the resonance found. Then
-//! with 95 % intervals by the delta method (numerical gradients). The stage is **identified**
+//! `(m, K K_D, K K_P, τ_d, s)` follow by a fixed-point solve. The fit is
+//! repeated over the two decades around the resonance found, with 95 %
+//! intervals by the delta method (numerical gradients). The stage is **identified**
 //! when those intervals are within ±5 % (f_n) and ±20 % (ζ), and the
 //! spectral resolution is fine enough for the resonance (at most a quarter
 //! of its half-power bandwidth `2 ζ f_n`); otherwise the answer is "not
@@ -68,12 +92,14 @@
 //! resonance, most often because the friction does not excite it).
 
 mod joint;
+mod model;
 
 use ballpass_dsp::{Complex64, Welch, WelchSettings};
 use joint::{joint_fit, JointFit};
+use model::{restoration, z_chain, Stage, NOISE, N_PARAMS, N_STAGE};
 use serde::Serialize;
 
-use crate::analysis::load_cell::{restore_friction, LoadCellCorrection};
+use crate::analysis::load_cell::{restore_friction, DcRestoration, LoadCellCorrection};
 use crate::error::{Error, Result};
 use crate::recording::{Channel, Recording};
 
@@ -95,6 +121,11 @@ pub struct StageSpectra {
     pub records: usize,
     /// Equivalent segments (all records), for the error of `H1`.
     pub n_d: f64,
+    /// Time constant of the load-cell discharge undone in the friction
+    /// before these spectra were taken, s (`None`: friction as recorded).
+    /// Pooled records with different ones keep the mean of `1/τ` (the
+    /// restoration's deviation from 1 is linear in it).
+    pub restored_tau_s: Option<f64>,
 }
 
 /// Segment length of the identification spectra for a record of `n`
@@ -149,6 +180,7 @@ impl StageSpectra {
             p_fv: set.cross.into_iter().next().unwrap_or_default(),
             records: 1,
             n_d: nu / 2.0,
+            restored_tau_s: None,
         })
     }
 
@@ -173,9 +205,18 @@ impl StageSpectra {
             return Ok(None);
         };
         let fs = rec.fs_hz();
-        let (friction, _) = restore_friction(f, fs, period_s, correction)?;
+        let (friction, dc) = restore_friction(f, fs, period_s, correction)?;
         let nperseg = nperseg_for(friction.len(), fs);
-        StageSpectra::of_signals(&friction, p, fs, velocity_mm_s, nperseg).map(Some)
+        StageSpectra::of_signals(&friction, p, fs, velocity_mm_s, nperseg)
+            .map(|sp| Some(sp.restored_with(&dc)))
+    }
+
+    /// These spectra with the load cell's restoration `dc` recorded (the
+    /// fit models what it did to the friction: module docs).
+    #[must_use]
+    pub fn restored_with(mut self, dc: &DcRestoration) -> StageSpectra {
+        self.restored_tau_s = dc.tau_s.filter(|t| dc.applied && *t > 0.0);
+        self
     }
 
     /// The spectra from a friction channel (discharge already undone) and
@@ -219,6 +260,10 @@ impl StageSpectra {
         for (a, b) in self.p_fv.iter_mut().zip(&other.p_fv) {
             *a += b;
         }
+        let rate = |s: &StageSpectra| s.restored_tau_s.map_or(0.0, |t| 1.0 / t);
+        let (a, b) = (self.records as f64, other.records as f64);
+        let mean_rate = (rate(self) * a + rate(other) * b) / (a + b);
+        self.restored_tau_s = (mean_rate > 0.0).then(|| 1.0 / mean_rate);
         self.records += other.records;
         self.n_d += other.n_d;
         true
@@ -347,16 +392,6 @@ fn running_mean(x: &[f64], half: usize) -> Vec<f64> {
         .collect()
 }
 
-/// `Z` of the stage seen through the chain, at `ω`, from the linear
-/// parameters (module docs).
-fn z_model(p: &[f64; N_PARAMS], w: f64) -> Complex64 {
-    Complex64::new(p[0] + p[1] * w * w, p[2] * w - p[3] / w)
-}
-
-/// Parameters of the joint fit: the four of the stage and chain, then the
-/// friction channel's white noise density.
-const N_PARAMS: usize = 5;
-
 fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     let df = s.freq_hz.get(1).copied().unwrap_or(0.0);
     let n_d = s.n_d.max(1.0);
@@ -392,6 +427,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         z: Complex64,
         q: f64,
         pff: f64,
+        rh: Complex64,
     }
     let mut bins: Vec<Bin> = Vec::new();
     let mut band: Option<[f64; 2]> = None;
@@ -416,6 +452,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             z,
             q: ress[i] / pff / (d * d),
             pff,
+            rh: restoration(w, s.fs_hz, s.restored_tau_s),
         });
         band = Some(match band {
             None => [f, f],
@@ -450,7 +487,11 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     let dof_h = n_d - 1.0;
     let z0: Vec<Complex64> = bins.iter().map(|b| b.z).collect();
     let mut z = z0.clone();
-    let mut z_reg = z0.clone();
+    // The model's measured Z with and without the noise bias: the
+    // regressors of the noise and of the load cell's high-pass (from the
+    // data on the first pass).
+    let mut z_noisy = z0.clone();
+    let mut z_clean = z0.clone();
     let mut model: Option<[f64; N_PARAMS]> = None;
     let mut fit: Option<JointFit> = None;
     for _ in 0..FIT_PASSES {
@@ -458,19 +499,27 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             .iter()
             .zip(&z0)
             .map(|(b, zd)| {
-                let zm = model.map_or(*zd, |p| z_model(&p, b.w));
+                let zm = model.map_or(*zd, |p| z_chain(&p, b.w, b.rh));
                 (b.q * zm.norm_sqr() * zm.norm_sqr() / (2.0 * dof_h)).max(f64::MIN_POSITIVE)
             })
             .collect();
-        let rows: Vec<([f64; N_PARAMS], f64, f64, usize)> = bins
+        let rows: Vec<joint::Row> = bins
             .iter()
             .enumerate()
             .flat_map(|(k, b)| {
-                let re = [1.0, b.w * b.w, 0.0, 0.0, z_reg[k].re / b.pff];
-                let im = [0.0, 0.0, b.w, -1.0 / b.w, z_reg[k].im / b.pff];
+                let j = Complex64::new(0.0, 1.0);
+                let r: [Complex64; N_PARAMS] = [
+                    b.rh,
+                    b.rh * (b.w * b.w),
+                    b.rh * j * b.w,
+                    -b.rh * j / b.w,
+                    -b.rh * j * (b.w * b.w * b.w),
+                    z_noisy[k] * (b.rh.norm_sqr() / b.pff),
+                    z_clean[k] * j / b.w,
+                ];
                 [
-                    (re, z[k].re, var[k], b.i),
-                    (im, z[k].im, var[k], b.i + nb_all),
+                    (r.map(|c| c.re), z[k].re, var[k], b.i, b.i),
+                    (r.map(|c| c.im), z[k].im, var[k], b.i + nb_all, b.i),
                 ]
             })
             .collect();
@@ -482,10 +531,14 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         // P_ff but not in the force on the stage), and the bias of the
         // window near the resonance, both from the model.
         for (k, b) in bins.iter().enumerate() {
-            let zm = z_model(&p, b.w);
-            z_reg[k] = zm / (1.0 - p[4] / b.pff);
+            let zm = z_chain(&p, b.w, b.rh);
+            z_clean[k] = zm;
+            z_noisy[k] = zm / (1.0 - p[NOISE] * b.rh.norm_sqr() / b.pff);
             let f0 = b.w / std::f64::consts::TAU;
-            let at = |f: f64| z_model(&p, std::f64::consts::TAU * f);
+            let at = |f: f64| {
+                let w = std::f64::consts::TAU * f;
+                z_chain(&p, w, restoration(w, s.fs_hz, s.restored_tau_s))
+            };
             let (zl, zh) = (at(f0 - df), at(f0 + df));
             let z1 = (zh - zl) / (2.0 * df);
             let z2 = (zh - zm * 2.0 + zl) / (df * df);
@@ -502,13 +555,13 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     let dof = (2.0 * nb as f64 - N_PARAMS as f64).max(1.0);
     let red = fit.chi2 / dof;
     let inflate = red.max(1.0);
-    let p = [fit.theta[0], fit.theta[1], fit.theta[2], fit.theta[3]];
-    let mut cov = [[0.0; 4]; 4];
-    for (i, row) in cov.iter_mut().enumerate() {
-        for (j, c) in row.iter_mut().enumerate() {
-            *c = fit.cov[i][j] * inflate;
-        }
-    }
+    let p: [f64; N_STAGE] = std::array::from_fn(|i| fit.theta[i]);
+    // The two covariances of the stage parameters (module docs): the
+    // window's, scaled by the reduced χ², and the residuals' own.
+    let cov: [[f64; N_STAGE]; N_STAGE] =
+        std::array::from_fn(|i| std::array::from_fn(|j| fit.cov[i][j] * inflate));
+    let cov_hac: [[f64; N_STAGE]; N_STAGE] =
+        std::array::from_fn(|i| std::array::from_fn(|j| fit.cov_hac[i][j]));
     out.reduced_chi2 = Some(red);
     let Some(st) = Stage::from_params(p) else {
         out.text = format!(
@@ -520,7 +573,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     };
     // Delta method with a numerical gradient of each derived value in p.
     let var_of = |g: &dyn Fn(&Stage) -> f64| -> f64 {
-        let mut grad = [0.0; 4];
+        let mut grad = [0.0; N_STAGE];
         for (k, gk) in grad.iter_mut().enumerate() {
             let h = 1e-6 * p[k].abs().max(1e-300);
             let mut hi = p;
@@ -532,9 +585,22 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
                 _ => f64::NAN,
             };
         }
-        (0..4)
-            .map(|i| (0..4).map(|j| grad[i] * cov[i][j] * grad[j]).sum::<f64>())
-            .sum()
+        let quad = |c: &[[f64; N_STAGE]; N_STAGE]| -> f64 {
+            (0..N_STAGE)
+                .map(|i| {
+                    (0..N_STAGE)
+                        .map(|j| grad[i] * c[i][j] * grad[j])
+                        .sum::<f64>()
+                })
+                .sum()
+        };
+        // The larger: NaN (a failed gradient) stays NaN.
+        let (a, b) = (quad(&cov), quad(&cov_hac));
+        if a.is_nan() || b.is_nan() {
+            f64::NAN
+        } else {
+            a.max(b)
+        }
     };
     let est = |v: f64, var: f64| Estimate {
         value: v,
@@ -581,53 +647,6 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         )
     };
     out
-}
-
-/// The stage and measurement-chain delay behind the linear parameters
-/// `p = [c − τ k, τ m, m − τ c, k]`.
-#[derive(Debug, Clone, Copy)]
-struct Stage {
-    m: f64,
-    c: f64,
-    k: f64,
-    tau: f64,
-}
-
-impl Stage {
-    /// Solves for `(m, c, k, τ)` by fixed-point iteration from `τ = 0`
-    /// (it contracts while `τ² k / m` is small, i.e. the delay is small
-    /// against the resonance's period); `None` when non-physical or not
-    /// converged.
-    fn from_params(p: [f64; 4]) -> Option<Stage> {
-        let k = p[3];
-        let (mut m, mut c, mut tau) = (p[2], p[0], 0.0);
-        for _ in 0..200 {
-            if m.is_nan() || m <= 0.0 {
-                return None;
-            }
-            let tau_next = p[1] / m;
-            let m_next = p[2] + tau_next * c;
-            let c_next = p[0] + tau_next * k;
-            let done = (tau_next - tau).abs() <= 1e-13 * tau_next.abs().max(1e-9)
-                && (m_next - m).abs() <= 1e-13 * m.abs();
-            tau = tau_next;
-            m = m_next;
-            c = c_next;
-            if done {
-                break;
-            }
-        }
-        let st = Stage { m, c, k, tau };
-        (m > 0.0 && c > 0.0 && k > 0.0 && tau.is_finite() && st.f_n().is_finite()).then_some(st)
-    }
-
-    fn f_n(&self) -> f64 {
-        (self.k / self.m).sqrt() / std::f64::consts::TAU
-    }
-
-    fn zeta(&self) -> f64 {
-        self.c / (2.0 * (self.m * self.k).sqrt())
-    }
 }
 
 #[cfg(test)]
@@ -687,7 +706,11 @@ mod tests {
     /// 0.4 %; in a Monte-Carlo of this kind the estimator this replaced
     /// held ζ on none), and the spread-to-stated ratio of f_n, ζ and the
     /// peak gain within 0.7–1.45 (the ratio's own error over 60 records is
-    /// ~9 %; the replaced estimator's was 1.7 for ζ).
+    /// ~9 %; the replaced estimator's was 1.7 for ζ). The model here is
+    /// right (no chain, no load-cell high-pass), so the terms that widen the
+    /// intervals under misfit (the residuals' own correlation, the chain and
+    /// high-pass parameters) must not inflate them: stated/spread at most
+    /// 1.45 as well.
     #[test]
     fn intervals_match_a_monte_carlo_spread() {
         use crate::sim::rng::Rng;
@@ -742,14 +765,20 @@ mod tests {
                 .sqrt();
             let stated = est.iter().map(|e| e[k].ci95 / 1.96).sum::<f64>() / runs as f64;
             let ratio = spread / stated;
+            eprintln!("{name}: {inside}/{runs} inside, spread/stated {ratio:.2}");
             assert!(
                 inside >= 50,
                 "{name}: {inside}/{runs} intervals hold the truth (spread/stated {ratio:.2}, mean {mean} vs {})",
                 truth[k]
             );
             assert!(
-                (0.7..=1.45).contains(&ratio),
-                "{name}: spread {spread} against stated {stated} ({ratio:.2})"
+                ratio <= 1.45,
+                "{name}: spread {spread} against stated {stated} ({ratio:.2}): intervals too narrow"
+            );
+            assert!(
+                stated / spread <= 1.45,
+                "{name}: stated {stated} against spread {spread} ({:.2}): intervals inflated on a well-specified model",
+                stated / spread
             );
         }
     }
