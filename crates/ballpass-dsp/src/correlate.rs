@@ -354,23 +354,28 @@ fn lanes(a: L, b: L, f: impl Fn(f64, f64) -> f64) -> L {
     std::array::from_fn(|t| f(a[t], b[t]))
 }
 
+/// The part [`forward_pair`] and [`inverse_pair`] share, in every lane:
+/// with `s = a + b` and `d = a - b`, `(s.re, d.im, s.im tre + d.re tim,
+/// s.im tim - d.re tre)`.
+#[inline(always)]
+fn twiddled(a: (L, L), b: (L, L), tre: L, tim: L) -> (L, L, L, L) {
+    let (sum_re, sum_im) = (lanes(a.0, b.0, |a, b| a + b), lanes(a.1, b.1, |a, b| a + b));
+    let (diff_re, diff_im) = (lanes(a.0, b.0, |a, b| a - b), lanes(a.1, b.1, |a, b| a - b));
+    (
+        sum_re,
+        diff_im,
+        std::array::from_fn(|t| sum_im[t] * tre[t] + diff_re[t] * tim[t]),
+        std::array::from_fn(|t| sum_im[t] * tim[t] - diff_re[t] * tre[t]),
+    )
+}
+
 /// [`forward_pair`] in every lane: the same operations in the same order.
 #[inline(always)]
 fn forward_lanes(w: (L, L), zk: (L, L), zj: (L, L)) -> ((L, L), (L, L)) {
-    let tre = w.0.map(|v| v * 0.5);
-    let tim = w.1.map(|v| v * 0.5);
-    let (sum_re, sum_im) = (
-        lanes(zk.0, zj.0, |a, b| a + b),
-        lanes(zk.1, zj.1, |a, b| a + b),
-    );
-    let (diff_re, diff_im) = (
-        lanes(zk.0, zj.0, |a, b| a - b),
-        lanes(zk.1, zj.1, |a, b| a - b),
-    );
+    let (tre, tim) = (w.0.map(|v| v * 0.5), w.1.map(|v| v * 0.5));
+    let (sum_re, diff_im, twiddled_re, twiddled_im) = twiddled(zk, zj, tre, tim);
     let half_sum_re = sum_re.map(|v| 0.5 * v);
     let half_diff_im = diff_im.map(|v| 0.5 * v);
-    let twiddled_re: L = std::array::from_fn(|t| sum_im[t] * tre[t] + diff_re[t] * tim[t]);
-    let twiddled_im: L = std::array::from_fn(|t| sum_im[t] * tim[t] - diff_re[t] * tre[t]);
     (
         (
             lanes(half_sum_re, twiddled_re, |a, b| a + b),
@@ -387,16 +392,7 @@ fn forward_lanes(w: (L, L), zk: (L, L), zj: (L, L)) -> ((L, L), (L, L)) {
 #[inline(always)]
 fn inverse_lanes(w: (L, L), xk: (L, L), xj: (L, L)) -> ((L, L), (L, L)) {
     let (tre, tim) = (w.0, w.1.map(|v| -v));
-    let (sum_re, sum_im) = (
-        lanes(xk.0, xj.0, |a, b| a + b),
-        lanes(xk.1, xj.1, |a, b| a + b),
-    );
-    let (diff_re, diff_im) = (
-        lanes(xk.0, xj.0, |a, b| a - b),
-        lanes(xk.1, xj.1, |a, b| a - b),
-    );
-    let twiddled_re: L = std::array::from_fn(|t| sum_im[t] * tre[t] + diff_re[t] * tim[t]);
-    let twiddled_im: L = std::array::from_fn(|t| sum_im[t] * tim[t] - diff_re[t] * tre[t]);
+    let (sum_re, diff_im, twiddled_re, twiddled_im) = twiddled(xk, xj, tre, tim);
     (
         (
             lanes(sum_re, twiddled_re, |a, b| a - b),
