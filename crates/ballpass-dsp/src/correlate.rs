@@ -85,7 +85,13 @@ pub fn correlation_lags(nx: usize, ny: usize) -> Vec<i64> {
     if nx == 0 || ny == 0 {
         return Vec::new();
     }
-    (-(ny as i64 - 1)..=(nx as i64 - 1)).collect()
+    // A half-open range (an inclusive one keeps an end flag that stops
+    // the loop from vectorising), filled in the widest vectors.
+    let (first, end) = (1 - ny as i64, nx as i64);
+    crate::simd::widest(
+        #[inline(always)]
+        || (first..end).collect(),
+    )
 }
 
 /// Full-lag correlation of `x` and `y` with a one-off [`Correlator`].
@@ -234,7 +240,7 @@ fn pack(x: &[f64], out: &mut [Complex<f64>]) {
 /// `zy` equal to `zx`), one bin pair `(k, m - k)` at a time: the forward
 /// post-processing, the product and the inverse pre-processing in one
 /// pass, with realfft's operations in realfft's order (the values equal
-/// the separate passes' up to the sign of a zero; tested).
+/// the separate passes' bit for bit; tested).
 #[inline(always)]
 fn product_pass<const AUTO: bool>(
     fft: &HalfComplex,
@@ -297,97 +303,132 @@ fn product_pass<const AUTO: bool>(
     }
 }
 
-/// [`P`] complex bins as interleaved `[re, im, re, im, ..]` lanes: the
-/// block arithmetic of [`pair_block`] does the same operation in every
-/// lane (with lane shuffles), which the compiler turns into vector code.
-type V = [f64; 2 * P];
-
-/// Bin pairs per block of [`pair_block`] (8 measured faster than 2, 4 or
-/// 16 on AVX-512 and AVX2 code).
+/// Bin pairs per block of [`pair_block`].
 const P: usize = 8;
 
+/// One component (real or imaginary parts) of [`P`] bins, one bin per
+/// lane: the block arithmetic is the same operation in every lane, which
+/// the compiler turns into plain vector code (no lane shuffles but those
+/// that split the interleaved bins on load and join them on store).
+type L = [f64; P];
+
+/// The real and imaginary parts of `b`, lane `t` holding `b[t]` (or
+/// `b[P - 1 - t]` when `rev`).
 #[inline(always)]
-fn ld(b: &[Complex<f64>; P], rev: bool) -> V {
-    std::array::from_fn(|i| {
-        let c = b[if rev { P - 1 - i / 2 } else { i / 2 }];
+fn split(b: &[Complex<f64>; P], rev: bool) -> (L, L) {
+    // Interleaved first (one plain load), then picked lane by lane.
+    let v: [f64; 2 * P] = std::array::from_fn(|i| {
+        let c = b[i / 2];
         if i % 2 == 0 {
             c.re
         } else {
             c.im
         }
-    })
+    });
+    let at = |t: usize| if rev { P - 1 - t } else { t };
+    (
+        std::array::from_fn(|t| v[2 * at(t)]),
+        std::array::from_fn(|t| v[2 * at(t) + 1]),
+    )
 }
 
+/// The inverse of [`split`].
 #[inline(always)]
-fn st(o: &mut [Complex<f64>; P], v: V, rev: bool) {
-    for t in 0..P {
-        o[if rev { P - 1 - t } else { t }] = Complex::new(v[2 * t], v[2 * t + 1]);
+fn join(o: &mut [Complex<f64>; P], (re, im): (L, L), rev: bool) {
+    let at = |t: usize| if rev { P - 1 - t } else { t };
+    let v: [f64; 2 * P] = std::array::from_fn(|i| {
+        if i % 2 == 0 {
+            re[at(i / 2)]
+        } else {
+            im[at(i / 2)]
+        }
+    });
+    for (c, p) in o.iter_mut().zip(v.chunks_exact(2)) {
+        *c = Complex::new(p[0], p[1]);
     }
 }
 
-/// `f(a[i], b[i])` in every lane.
+/// `f(a[t], b[t])` in every lane.
 #[inline(always)]
-fn lanes(a: V, b: V, f: impl Fn(f64, f64) -> f64) -> V {
-    std::array::from_fn(|i| f(a[i], b[i]))
+fn lanes(a: L, b: L, f: impl Fn(f64, f64) -> f64) -> L {
+    std::array::from_fn(|t| f(a[t], b[t]))
 }
 
-/// Lane `i` from lane `pick(i)` of `a`.
+/// The part [`forward_pair`] and [`inverse_pair`] share, in every lane:
+/// with `s = a + b` and `d = a - b`, `(s.re, d.im, s.im tre + d.re tim,
+/// s.im tim - d.re tre)`.
 #[inline(always)]
-fn shuffle(a: V, pick: impl Fn(usize) -> usize) -> V {
-    std::array::from_fn(|i| a[pick(i)])
+fn twiddled(a: (L, L), b: (L, L), tre: L, tim: L) -> (L, L, L, L) {
+    let (sum_re, sum_im) = (lanes(a.0, b.0, |a, b| a + b), lanes(a.1, b.1, |a, b| a + b));
+    let (diff_re, diff_im) = (lanes(a.0, b.0, |a, b| a - b), lanes(a.1, b.1, |a, b| a - b));
+    (
+        sum_re,
+        diff_im,
+        std::array::from_fn(|t| sum_im[t] * tre[t] + diff_re[t] * tim[t]),
+        std::array::from_fn(|t| sum_im[t] * tim[t] - diff_re[t] * tre[t]),
+    )
 }
 
-/// Lane `i` times `c[i % 2]`.
+/// [`forward_pair`] in every lane: the same operations in the same order.
 #[inline(always)]
-fn alt(a: V, c: [f64; 2]) -> V {
-    std::array::from_fn(|i| a[i] * c[i % 2])
+fn forward_lanes(w: (L, L), zk: (L, L), zj: (L, L)) -> ((L, L), (L, L)) {
+    let (tre, tim) = (w.0.map(|v| v * 0.5), w.1.map(|v| v * 0.5));
+    let (sum_re, diff_im, twiddled_re, twiddled_im) = twiddled(zk, zj, tre, tim);
+    let half_sum_re = sum_re.map(|v| 0.5 * v);
+    let half_diff_im = diff_im.map(|v| 0.5 * v);
+    (
+        (
+            lanes(half_sum_re, twiddled_re, |a, b| a + b),
+            lanes(half_diff_im, twiddled_im, |a, b| a + b),
+        ),
+        (
+            lanes(half_sum_re, twiddled_re, |a, b| a - b),
+            lanes(twiddled_im, half_diff_im, |a, b| a - b),
+        ),
+    )
 }
 
-/// [`forward_pair`] on [`P`] bin pairs, interleaved: with `s = zk + zj`,
-/// `d = zk - zj`, `A = (s.re, d.im) / 2` and
-/// `T = s.im (w.re, w.im) / 2 + d.re (w.im, -w.re) / 2`, `X[k] = A + T` and
-/// `X[j] = conj(A - T)` (realfft's roundings).
+/// [`inverse_pair`] in every lane: the same operations in the same order.
 #[inline(always)]
-fn forward_block(w: V, zk: V, zj: V) -> (V, V) {
-    let sum = lanes(zk, zj, |a, b| a + b);
-    let diff = lanes(zk, zj, |a, b| a - b);
-    let half = alt(shuffle(sum, |i| i), [0.5, 0.0]);
-    let half = lanes(half, alt(diff, [0.0, 0.5]), |a, b| a + b);
-    let t1 = lanes(shuffle(sum, |i| i | 1), alt(w, [0.5, 0.5]), |a, b| a * b);
-    let t2 = lanes(
-        shuffle(diff, |i| i & !1),
-        alt(shuffle(w, |i| i ^ 1), [0.5, -0.5]),
-        |a, b| a * b,
-    );
-    let t = lanes(t1, t2, |a, b| a + b);
-    let xk = lanes(half, t, |a, b| a + b);
-    let xj = alt(lanes(half, t, |a, b| a - b), [1.0, -1.0]);
-    (xk, xj)
+fn inverse_lanes(w: (L, L), xk: (L, L), xj: (L, L)) -> ((L, L), (L, L)) {
+    let (tre, tim) = (w.0, w.1.map(|v| -v));
+    let (sum_re, diff_im, twiddled_re, twiddled_im) = twiddled(xk, xj, tre, tim);
+    (
+        (
+            lanes(sum_re, twiddled_re, |a, b| a - b),
+            lanes(diff_im, twiddled_im, |a, b| a - b),
+        ),
+        (
+            lanes(sum_re, twiddled_re, |a, b| a + b),
+            std::array::from_fn(|t| -twiddled_im[t] - diff_im[t]),
+        ),
+    )
 }
 
-/// [`inverse_pair`] on [`P`] bin pairs, interleaved: with `s = xk + xj`,
-/// `d = xk - xj`, `B = (s.re, d.im)` and
-/// `T = s.im (w.re, -w.im) + d.re (-w.im, -w.re)`, the inputs are `B - T`
-/// at `k` and `conj(B + T)` at `j`.
+/// The product of [`product_pass`] in every lane: `x conj(y)` as
+/// `num_complex` computes it (`(x.re b.re - x.im b.im, x.re b.im + x.im
+/// b.re)` with `b = conj y`), or `(|x|^2, 0)` when `AUTO`.
 #[inline(always)]
-fn inverse_block(w: V, xk: V, xj: V) -> (V, V) {
-    let sum = lanes(xk, xj, |a, b| a + b);
-    let diff = lanes(xk, xj, |a, b| a - b);
-    let b = std::array::from_fn(|i| if i % 2 == 0 { sum[i] } else { diff[i] });
-    let t1 = lanes(shuffle(sum, |i| i | 1), alt(w, [1.0, -1.0]), |a, b| a * b);
-    let t2 = lanes(
-        shuffle(diff, |i| i & !1),
-        alt(shuffle(w, |i| i ^ 1), [-1.0, -1.0]),
-        |a, b| a * b,
-    );
-    let t = lanes(t1, t2, |a, b| a + b);
-    let qk = lanes(b, t, |a, b| a - b);
-    let qj = alt(lanes(b, t, |a, b| a + b), [1.0, -1.0]);
-    (qk, qj)
+fn product_lanes<const AUTO: bool>(x: (L, L), y: (L, L)) -> (L, L) {
+    if AUTO {
+        (
+            std::array::from_fn(|t| x.0[t] * x.0[t] + x.1[t] * x.1[t]),
+            [0.0; P],
+        )
+    } else {
+        let (b_re, b_im) = (y.0, y.1.map(|v| -v));
+        (
+            std::array::from_fn(|t| x.0[t] * b_re[t] - x.1[t] * b_im[t]),
+            std::array::from_fn(|t| x.0[t] * b_im[t] + x.1[t] * b_re[t]),
+        )
+    }
 }
 
 /// [`P`] bin pairs of [`product_pass`]: pair `t` is `xl[t]` with
-/// `xh[P - 1 - t]` (and the same for `y` and the outputs), twiddle `w[t]`.
+/// `xh[P - 1 - t]` (and the same for `y` and the outputs), twiddle `w[t]`;
+/// each lane does the single-pair functions' operations
+/// ([`forward_pair`], the product, [`inverse_pair`]), so the values are
+/// theirs bit for bit (tested).
 #[inline(always)]
 fn pair_block<const AUTO: bool>(
     w: &[Complex<f64>],
@@ -412,32 +453,20 @@ fn pair_block<const AUTO: bool>(
         }
         return;
     };
-    let w = ld(w, false);
-    let (xk, xj) = forward_block(w, ld(xl, false), ld(xh, true));
+    let w = split(w, false);
+    let (xk, xj) = forward_lanes(w, split(xl, false), split(xh, true));
     let (pk, pj) = if AUTO {
-        // (|x|^2, 0): re * re + im * im in the real lane.
-        let sq = |x: V| {
-            let p = lanes(x, x, |a, b| a * b);
-            alt(
-                lanes(shuffle(p, |i| i & !1), shuffle(p, |i| i | 1), |a, b| a + b),
-                [1.0, 0.0],
-            )
-        };
-        (sq(xk), sq(xj))
+        (product_lanes::<true>(xk, xk), product_lanes::<true>(xj, xj))
     } else {
-        let (yk, yj) = forward_block(w, ld(yl, false), ld(yh, true));
-        // x conj(y): (x.re y.re - x.im (-y.im), x.re (-y.im) + x.im y.re).
-        let mul = |x: V, y: V| {
-            let c = alt(y, [1.0, -1.0]);
-            let a = lanes(shuffle(x, |i| i & !1), c, |a, b| a * b);
-            let b = lanes(shuffle(x, |i| i | 1), shuffle(c, |i| i ^ 1), |a, b| a * b);
-            lanes(a, alt(b, [-1.0, 1.0]), |a, b| a + b)
-        };
-        (mul(xk, yk), mul(xj, yj))
+        let (yk, yj) = forward_lanes(w, split(yl, false), split(yh, true));
+        (
+            product_lanes::<false>(xk, yk),
+            product_lanes::<false>(xj, yj),
+        )
     };
-    let (qk, qj) = inverse_block(w, pk, pj);
-    st(ol, qk, false);
-    st(oh, qj, true);
+    let (qk, qj) = inverse_lanes(w, pk, pj);
+    join(ol, qk, false);
+    join(oh, qj, true);
 }
 
 /// A reusable full-lag correlator: holds FFT plans and buffers for the
@@ -879,19 +908,41 @@ mod tests {
                     })
                     .collect()
             };
-            let (zx, zy) = (z(37, 13), z(17, 5));
-            let zero = Complex::new(0.0, 0.0);
-            let (mut cross, mut auto) = (vec![zero; m], vec![zero; m]);
-            crate::simd::widest(|| product_pass::<false>(&fft, &zx, &zy, &mut cross));
-            crate::simd::widest(|| product_pass::<true>(&fft, &zx, &zx, &mut auto));
-            // Equal values (the block code may differ in the sign of a zero).
-            assert_eq!(cross, product_pass_by_pairs(&fft, &zx, &zy, false), "{len}");
-            assert_eq!(auto, product_pass_by_pairs(&fft, &zx, &zx, true), "{len}");
-            let (mut base_cross, mut base_auto) = (vec![zero; m], vec![zero; m]);
-            product_pass::<false>(&fft, &zx, &zy, &mut base_cross);
-            product_pass::<true>(&fft, &zx, &zx, &mut base_auto);
-            assert_eq!(cross, base_cross, "{len}");
-            assert_eq!(auto, base_auto, "{len}");
+            // Bins with zero parts too, so that the signs of zeros are
+            // checked as well.
+            let with_zeros = |mut v: Vec<Complex<f64>>| {
+                for (i, c) in v.iter_mut().enumerate() {
+                    match i % 5 {
+                        1 => c.re = 0.0,
+                        3 => *c = Complex::new(-0.0, 0.0),
+                        _ => {}
+                    }
+                }
+                v
+            };
+            for (zx, zy) in [
+                (z(37, 13), z(17, 5)),
+                (with_zeros(z(37, 13)), with_zeros(z(3, 5))),
+            ] {
+                let zero = Complex::new(0.0, 0.0);
+                let (mut cross, mut auto) = (vec![zero; m], vec![zero; m]);
+                crate::simd::widest(|| product_pass::<false>(&fft, &zx, &zy, &mut cross));
+                crate::simd::widest(|| product_pass::<true>(&fft, &zx, &zx, &mut auto));
+                let bits = |v: &[Complex<f64>]| -> Vec<(u64, u64)> {
+                    v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+                };
+                // The same bits, zeros' signs included, in the wide and the
+                // baseline instance.
+                let by_pairs = product_pass_by_pairs(&fft, &zx, &zy, false);
+                assert_eq!(bits(&cross), bits(&by_pairs), "{len}");
+                let by_pairs = product_pass_by_pairs(&fft, &zx, &zx, true);
+                assert_eq!(bits(&auto), bits(&by_pairs), "{len}");
+                let (mut base_cross, mut base_auto) = (vec![zero; m], vec![zero; m]);
+                product_pass::<false>(&fft, &zx, &zy, &mut base_cross);
+                product_pass::<true>(&fft, &zx, &zx, &mut base_auto);
+                assert_eq!(bits(&cross), bits(&base_cross), "{len}");
+                assert_eq!(bits(&auto), bits(&base_auto), "{len}");
+            }
         }
     }
 

@@ -27,12 +27,12 @@
 //! period, phases, harmonic tests, synchronous average).
 //!
 //! Measured on the shared 2-core machine with `--cpu` (mean CPU time of 60
-//! runs, one thread, load average 7; two runs agreed within 0.05 ms):
-//! checks 0.13-0.18 ms, load-cell correction 1.33 ms, optical passages
-//! 6.2 ms, position-domain spectra 2.9 ms, the rest 7.35 ms, analyze
-//! 17.8 ms. (Best wall time in the same minute: 0.15, 1.28, 10.1, 2.85,
-//! 17.7, 32.0 ms: at that load the wall clock mostly measures the waits
-//! for a core.)
+//! runs, one thread, load average 8; two runs): checks 0.11-0.13 ms,
+//! load-cell correction 0.70-0.79 ms, optical passages 5.6-5.7 ms,
+//! position-domain spectra 2.85-2.87 ms, the rest 6.3-6.5 ms, analyze
+//! 15.6 ms. (The previous release, another session at load 7: 0.13-0.18,
+//! 1.33, 6.2, 2.9, 7.35, 17.8 ms. At that load the best wall time mostly
+//! measures the waits for a core: 32 ms whole against 17.8 ms CPU.)
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};

@@ -905,7 +905,8 @@ def gradient(f, *varargs, axis=None, edge_order=1):
     ``f`` per unit of the spacing (mm and s give mm/s)."""
     if (type(f) is np.ndarray and f.ndim == 1 and f.dtype == np.float64
             and axis in (None, 0, -1) and edge_order in (1, 2)
-            and (not varargs or (len(varargs) == 1 and np.ndim(varargs[0]) == 0))):
+            and (not varargs or (len(varargs) == 1
+                                 and (type(varargs[0]) in (float, int) or np.ndim(varargs[0]) == 0)))):
         # The common call, numpy.gradient(f, dt) of one signal: straight to
         # the kernel (it checks the length and the samples).
         if f.shape[0] < edge_order + 1:

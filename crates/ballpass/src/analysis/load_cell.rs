@@ -164,7 +164,7 @@ pub fn fit_discharge(y: &[f64], fs_hz: f64, period_s: f64) -> Option<DischargeFi
         .map(|k| (tau_lo.ln() + (tau_hi / tau_lo).ln() * k as f64 / 240.0).exp())
         .collect();
     // The grid's fits are independent: in parallel (rayon), in order.
-    let rss: Vec<f64> = grid.par_iter().map(|&t| blocks.fit(t).2).collect();
+    let rss = blocks.profile(&grid);
     let best = (0..grid.len()).min_by(|&a, &b| rss[a].total_cmp(&rss[b]))?;
     let tau = golden_min(
         grid[best.saturating_sub(1)].ln(),
@@ -209,7 +209,7 @@ pub fn fit_discharge(y: &[f64], fs_hz: f64, period_s: f64) -> Option<DischargeFi
             } else {
                 f64::INFINITY
             };
-            let profile: Vec<f64> = grid.par_iter().map(|&t| coarse.fit(t).2).collect();
+            let profile = coarse.profile(&grid);
             let limit = rss_c * (1.0 + f_ppf(0.95, 1.0, n - 3.0) / (n - 3.0));
             (
                 n > 6.0 && f > f_ppf(0.999, 2.0, n - 3.0),
@@ -253,6 +253,9 @@ fn golden_min(mut a: f64, mut b: f64, f: impl Fn(f64) -> f64) -> f64 {
     }
     0.5 * (a + b)
 }
+
+/// Time constants fitted side by side by [`Blocks::rss_lanes`].
+const LANES: usize = 8;
 
 /// A record as means of consecutive blocks of `w` samples, and the
 /// discharge model averaged the same way.
@@ -328,6 +331,62 @@ impl Blocks {
             .map(|(bi, si)| (si - c - a * bi).powi(2))
             .sum();
         (c, a, rss)
+    }
+
+    /// The RSS of [`Blocks::fit`] at each of `taus`, the same bits: the
+    /// fits run [`LANES`] at a time in lock step (each lane does one fit's
+    /// operations in its order, so the serial sums interleave instead of
+    /// waiting on each other), the groups in parallel (rayon), in order.
+    fn profile(&self, taus: &[f64]) -> Vec<f64> {
+        taus.par_chunks(LANES)
+            .flat_map_iter(|group| {
+                let mut t = [f64::NAN; LANES];
+                t[..group.len()].copy_from_slice(group);
+                self.rss_lanes(t).into_iter().take(group.len())
+            })
+            .collect()
+    }
+
+    /// [`Blocks::fit`]'s RSS for [`LANES`] time constants, lane by lane the
+    /// operations of [`Blocks::basis_and_sum`] and [`Blocks::fit`] in their
+    /// order (tested bit for bit).
+    fn rss_lanes(&self, taus: [f64; LANES]) -> [f64; LANES] {
+        let wf = self.w as f64;
+        let mut v = [0.0; LANES];
+        let mut r = [0.0; LANES];
+        for l in 0..LANES {
+            let a = 1.0 / (self.fs * taus[l]);
+            v[l] = if a * wf < 1e-12 {
+                1.0
+            } else {
+                (-a * wf).exp_m1() / (wf * (-a).exp_m1())
+            };
+            r[l] = (-a * wf).exp();
+        }
+        let mut sum = [-0.0; LANES];
+        let mut b = vec![[0.0; LANES]; self.s.len()];
+        for out in b.iter_mut() {
+            *out = v;
+            sum = std::array::from_fn(|l| sum[l] + v[l]);
+            v = std::array::from_fn(|l| v[l] * r[l]);
+        }
+        let m = b.len() as f64;
+        let ms = self.s_mean;
+        let mb = sum.map(|s| s / m);
+        let (mut sbb, mut sbs) = ([0.0; LANES], [0.0; LANES]);
+        for (bi, si) in b.iter().zip(&self.s) {
+            let d: [f64; LANES] = std::array::from_fn(|l| bi[l] - mb[l]);
+            sbb = std::array::from_fn(|l| sbb[l] + d[l] * d[l]);
+            sbs = std::array::from_fn(|l| sbs[l] + d[l] * (si - ms));
+        }
+        let a: [f64; LANES] =
+            std::array::from_fn(|l| if sbb[l] > 0.0 { sbs[l] / sbb[l] } else { 0.0 });
+        let c: [f64; LANES] = std::array::from_fn(|l| ms - a[l] * mb[l]);
+        let mut rss = [-0.0; LANES];
+        for (bi, si) in b.iter().zip(&self.s) {
+            rss = std::array::from_fn(|l| rss[l] + (si - c[l] - a[l] * bi[l]).powi(2));
+        }
+        rss
     }
 
     /// The matched-filter amplitude of a decay of `tau` starting at block
@@ -550,6 +609,32 @@ mod tests {
         let x = restore(&y, fs, tau, 0.0);
         for v in x.iter().step_by(997) {
             assert!((v - 3.0).abs() < 1e-4, "{v}");
+        }
+    }
+
+    /// The lock-step profile gives every fit's RSS bit for bit, over a
+    /// group left incomplete (11 time constants: 8 + 3), on fine and
+    /// coarse blocks of a decaying, rippled record.
+    #[test]
+    fn profile_equals_the_fits_bit_for_bit() {
+        let fs = 1000.0;
+        let y: Vec<f64> = (0..12_000)
+            .map(|i| {
+                let t = i as f64 / fs;
+                1.5 * (-t / 0.8).exp()
+                    + 0.2
+                    + 0.05 * (7.0 * t).sin()
+                    + 1e-3 * ((i * 37 % 101) as f64)
+            })
+            .collect();
+        let blocks = Blocks::new(&y, fs, 20);
+        let taus: Vec<f64> = (0..11).map(|k| 0.05 * 1.7f64.powi(k)).collect();
+        for b in [&blocks, &blocks.coarse(0.3)] {
+            let lanes = b.profile(&taus);
+            assert_eq!(lanes.len(), taus.len());
+            for (t, rss) in taus.iter().zip(&lanes) {
+                assert_eq!(rss.to_bits(), b.fit(*t).2.to_bits(), "τ {t}");
+            }
         }
     }
 

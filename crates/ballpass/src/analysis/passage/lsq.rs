@@ -60,7 +60,9 @@ impl Splines {
     #[inline]
     fn at(&self, i: usize) -> (usize, [f64; 4]) {
         let t = i as f64 / self.knot;
-        let j = (t.floor() as usize).min(self.count - 4);
+        // `t >= 0`: the cast is the floor, without the library call
+        // `floor` is on the x86_64 baseline (the same `j`).
+        let j = (t as usize).min(self.count - 4);
         (j, bspline_weights(t - j as f64))
     }
 
@@ -71,7 +73,8 @@ impl Splines {
         at.iter()
             .map(|&x| {
                 let t = (x / self.knot).clamp(0.0, top);
-                let j = (t.floor() as usize).min(self.count - 4);
+                // `t >= 0` (or NaN): the cast is the floor, as in `at`.
+                let j = (t as usize).min(self.count - 4);
                 let w = bspline_weights(t - j as f64);
                 w.iter().zip(&beta[j..j + 4]).map(|(w, b)| w * b).sum()
             })
@@ -271,6 +274,44 @@ pub(super) fn dense_solve(a: &mut [f64], m: usize, rhs: &mut [Vec<f64>]) -> bool
     true
 }
 
+/// `D −= Cᵀ X` (`C`, `X`: `nb × m` row-major; `D`: `m × m`), computed on
+/// the lower triangle and mirrored. Each entry is the plain loop's sum
+/// `Σ_j C[j][r] X[j][c]`, added from `-0.0` in `j` order, so the bits are
+/// those of `(0..nb).map(..).sum()`; [`SCHUR_LANES`] entries of a row run
+/// side by side so that their serial sums interleave instead of waiting on
+/// each other (tested bit for bit).
+fn subtract_schur(dense: &mut [f64], cross: &[f64], x: &[f64], m: usize, nb: usize) {
+    const L: usize = SCHUR_LANES;
+    // X with its rows padded to whole groups of lanes (zeros).
+    let mp = m.div_ceil(L) * L;
+    let mut xp = vec![0.0; nb * mp];
+    for (dst, src) in xp.chunks_exact_mut(mp).zip(x.chunks_exact(m)) {
+        dst[..m].copy_from_slice(src);
+    }
+    for r in 0..m {
+        for c0 in (0..=r).step_by(L) {
+            let mut s = [-0.0f64; L];
+            for (j, xr) in xp.chunks_exact(mp).enumerate() {
+                let cr = cross[j * m + r];
+                let xs = &xr[c0..c0 + L];
+                for (acc, v) in s.iter_mut().zip(xs) {
+                    *acc += cr * v;
+                }
+            }
+            for (l, s) in s.iter().enumerate().take(r + 1 - c0) {
+                let c = c0 + l;
+                dense[r * m + c] -= s;
+                if c != r {
+                    dense[c * m + r] -= s;
+                }
+            }
+        }
+    }
+}
+
+/// Entries of [`subtract_schur`] summed side by side.
+const SCHUR_LANES: usize = 8;
+
 impl Problem<'_> {
     /// Solves for each right-hand side (each `n` long). `None` when the
     /// system is singular (no pulse covers the template, say).
@@ -393,15 +434,7 @@ impl Problem<'_> {
                 x[j * m + c] = *v;
             }
         }
-        for r in 0..m {
-            for c in 0..=r {
-                let s: f64 = (0..nb).map(|j| cross[j * m + r] * x[j * m + c]).sum();
-                dense[r * m + c] -= s;
-                if c != r {
-                    dense[c * m + r] -= s;
-                }
-            }
-        }
+        subtract_schur(&mut dense, &cross, &x, m, nb);
         let mut rdp: Vec<Vec<f64>> = (0..nr)
             .map(|r| {
                 (0..m)
@@ -439,6 +472,32 @@ impl Problem<'_> {
 mod tests {
     use super::super::template::pulse_model;
     use super::*;
+
+    /// The lock-step Schur update equals the plain loop bit for bit, for
+    /// sizes below, at and past whole groups of lanes.
+    #[test]
+    fn schur_update_equals_the_plain_loop_bitwise() {
+        for (m, nb) in [(1, 5), (7, 40), (8, 33), (13, 90), (17, 301)] {
+            let val = |i: usize, a: usize| ((i * a % 97) as f64 - 48.0) / 7.0 + 1e-3 * i as f64;
+            let cross: Vec<f64> = (0..nb * m).map(|i| val(i, 31)).collect();
+            let x: Vec<f64> = (0..nb * m).map(|i| val(i, 17)).collect();
+            let d0: Vec<f64> = (0..m * m).map(|i| val(i, 5)).collect();
+            let mut want = d0.clone();
+            for r in 0..m {
+                for c in 0..=r {
+                    let s: f64 = (0..nb).map(|j| cross[j * m + r] * x[j * m + c]).sum();
+                    want[r * m + c] -= s;
+                    if c != r {
+                        want[c * m + r] -= s;
+                    }
+                }
+            }
+            let mut got = d0;
+            subtract_schur(&mut got, &cross, &x, m, nb);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&want), "m {m} nb {nb}");
+        }
+    }
 
     fn gauss(sigma: f64) -> impl Fn(f64) -> f64 {
         move |u: f64| (-0.5 * (u / sigma).powi(2)).exp()

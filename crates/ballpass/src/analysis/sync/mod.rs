@@ -239,7 +239,9 @@ pub fn encoder_keys(position_mm: &[f64], fs_hz: f64, pitch_mm: f64) -> Vec<f64> 
 /// Linear interpolation of `x` (sampled at `fs`) at `t` seconds.
 fn interp(x: &[f64], fs: f64, t: f64) -> f64 {
     let u = (t * fs).clamp(0.0, (x.len() - 1) as f64);
-    let i = (u.floor() as usize).min(x.len().saturating_sub(2));
+    // `u >= 0` (or NaN): the cast truncates to the floor, without the
+    // library call `floor` is on the x86_64 baseline.
+    let i = (u as usize).min(x.len().saturating_sub(2));
     let f = u - i as f64;
     x[i] + f * (x[i + 1] - x[i])
 }
@@ -322,7 +324,8 @@ pub(crate) fn coefficient(m: &[f64], k: usize) -> (f64, f64) {
 pub(crate) fn at_phase(m: &[f64], phi: f64) -> f64 {
     let b = m.len();
     let u = phi.rem_euclid(1.0) * b as f64;
-    let i = (u.floor() as usize).min(b - 1);
+    // `u >= 0` (or NaN): the cast is the floor (see `interp`).
+    let i = (u as usize).min(b - 1);
     let f = u - i as f64;
     m[i] + f * (m[(i + 1) % b] - m[i])
 }
