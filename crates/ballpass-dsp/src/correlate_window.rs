@@ -218,6 +218,9 @@ impl WindowCorrelation {
                 found: self.seen + m,
             });
         }
+        if m == 0 {
+            return Ok(());
+        }
         for ((h, p), e) in self.hist.iter_mut().zip(pieces).zip(&mut self.energies) {
             check_finite("signal", p)?;
             h.extend_from_slice(p);

@@ -100,6 +100,9 @@ impl<'f> ZeroPhaseStream<'f> {
     /// # Errors
     /// [`DspError::NonFinite`] for a non-finite sample.
     pub fn push(&mut self, x: &[f64], out: &mut Vec<f64>) -> Result<()> {
+        if x.is_empty() {
+            return Ok(());
+        }
         check_finite("x", x)?;
         if self.started {
             self.forward(x, out);

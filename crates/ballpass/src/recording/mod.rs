@@ -14,6 +14,7 @@ pub mod inspect;
 pub mod io;
 pub mod profile;
 pub mod segment;
+pub mod stream;
 
 pub use io::{
     load, load_all, write_csv, write_mat, ChannelSource, Format, GapPolicy, LoadOptions,
