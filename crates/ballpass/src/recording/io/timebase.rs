@@ -217,7 +217,11 @@ pub fn uniform(
     // Increasing: the largest magnitude is at an end.
     let r = resolution.max(0.0) + 4.0 * f64::EPSILON * first.abs().max(last.abs());
     let span = last - first;
-    if n < 2 || !(dmin > 0.0) || dmax - dmin > step_tolerance * dmin + (2.0 * r).min(0.5 * dmin) {
+    if n < 2
+        || dmin.is_nan()
+        || dmin <= 0.0
+        || dmax - dmin > step_tolerance * dmin + (2.0 * r).min(0.5 * dmin)
+    {
         return None;
     }
     let steps_n = (n - 1) as f64;
