@@ -232,36 +232,8 @@ pub(crate) fn run_staged_above(
             n as f64 / fs
         ));
     }
-    let duration = n as f64 / fs;
-    let periods = duration / pred.tau_c_s;
-    if periods < 2.0 {
-        return Err(Error::InvalidRecording {
-            source_name: first.source_name(),
-            reason: format!(
-                "{duration:.3} s analysed spans {periods:.2} ball-pass periods at {} mm/s \
-                 (tau_c = {:.4} s); at least 2 are needed",
-                pred.velocity_mm_s, pred.tau_c_s
-            ),
-        });
-    }
-    let max_lag = settings.max_lag.samples(n, fs, pred.tau_c_s);
-    if max_lag + 1 < n && (max_lag as f64 / fs) < 2.0 * pred.tau_c_s {
-        return Err(Error::setting(
-            "max-lag",
-            format!(
-                "a lag window of {:.3} s holds fewer than 2 ball-pass periods (tau_c = {:.4} s); \
-                 the period and the phases need at least 2",
-                max_lag as f64 / fs,
-                pred.tau_c_s
-            ),
-        ));
-    }
-    if periods < 4.0 {
-        warnings.push(format!(
-            "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
-             coarse spectrum"
-        ));
-    }
+    let (duration, periods, max_lag) =
+        span_checks(&first.source_name(), n, fs, pred, settings, &mut warnings)?;
     // Signals: those every record has.
     let mut signals = Vec::new();
     let mut absent = Vec::new();
@@ -670,6 +642,50 @@ pub(crate) fn common_notes(
          The correlation-peak lag weighs every shared frequency and is reported beside it"
             .into(),
     );
+}
+
+/// The checks of the analysed span of `n` samples at `fs`: at least two
+/// predicted periods, and a lag window holding two; the duration, the
+/// periods and the lag window `L` in samples.
+pub(crate) fn span_checks(
+    name: &str,
+    n: usize,
+    fs: f64,
+    pred: &Prediction,
+    settings: &AnalyzeSettings,
+    warnings: &mut Vec<String>,
+) -> Result<(f64, f64, usize)> {
+    let duration = n as f64 / fs;
+    let periods = duration / pred.tau_c_s;
+    if periods < 2.0 {
+        return Err(Error::InvalidRecording {
+            source_name: name.to_string(),
+            reason: format!(
+                "{duration:.3} s analysed spans {periods:.2} ball-pass periods at {} mm/s \
+                 (tau_c = {:.4} s); at least 2 are needed",
+                pred.velocity_mm_s, pred.tau_c_s
+            ),
+        });
+    }
+    let max_lag = settings.max_lag.samples(n, fs, pred.tau_c_s);
+    if max_lag + 1 < n && (max_lag as f64 / fs) < 2.0 * pred.tau_c_s {
+        return Err(Error::setting(
+            "max-lag",
+            format!(
+                "a lag window of {:.3} s holds fewer than 2 ball-pass periods (tau_c = {:.4} s); \
+                 the period and the phases need at least 2",
+                max_lag as f64 / fs,
+                pred.tau_c_s
+            ),
+        ));
+    }
+    if periods < 4.0 {
+        warnings.push(format!(
+            "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
+             coarse spectrum"
+        ));
+    }
+    Ok((duration, periods, max_lag))
 }
 
 /// Longest record whose independent stages run side by side (2^20

@@ -67,7 +67,7 @@ use super::{
 };
 use crate::bearing::{check_velocity, Prediction};
 use crate::error::{Error, Result};
-use crate::recording::stream::RecordSource;
+use crate::recording::stream::{Block, RecordSource};
 
 /// How a streamed analysis ran (`analysis.json`'s `stream`; absent when
 /// the record was analysed in memory).
@@ -91,6 +91,64 @@ const NOT_COMPUTED: [&str; 4] = [
     "stage identification (its response fit reads the whole record)",
     "position-domain spectra (resampled onto the travel of each run)",
 ];
+
+/// What every pass of the chain over the record shares.
+struct PassKit<'a> {
+    signals: &'a [Signal],
+    fs: f64,
+    velocity: f64,
+    trim_n: (usize, usize),
+    len: usize,
+    restore: Option<(f64, f64)>,
+    filter: Option<&'a ballpass_dsp::ZeroPhaseFilter>,
+    filter_block: usize,
+    name: &'a str,
+}
+
+impl PassKit<'_> {
+    /// Reads the record through a new chain: `on_block` sees each block
+    /// as read, `eat` what the chain gives for it (`true` at the end);
+    /// checks that the whole analysed span came through.
+    fn run(
+        &self,
+        src: &mut dyn RecordSource,
+        what: String,
+        progress: &mut dyn FnMut(&str),
+        on_block: &mut dyn FnMut(Block<'_>),
+        eat: &mut dyn FnMut(&mut Output, bool) -> Result<()>,
+    ) -> Result<()> {
+        let mut chain = Chain::new(
+            self.signals,
+            self.fs,
+            self.velocity,
+            self.trim_n,
+            self.restore,
+            self.filter,
+            self.filter_block,
+        );
+        let mut out = Output::new();
+        let mut prog = Progress {
+            f: progress,
+            what,
+            total: self.len,
+            done: 0,
+            shown: 0,
+        };
+        src.pass(&mut |b| {
+            on_block(b);
+            chain.push(b, &mut out)?;
+            eat(&mut out, false)?;
+            out.advance();
+            prog.add(b.len());
+            Ok(())
+        })?;
+        chain.finish(&mut out)?;
+        eat(&mut out, true)?;
+        out.advance();
+        check_count(self.name, out.raw_at, self.trim_n.1)?;
+        check_count(self.name, out.filtered_at, self.trim_n.1)
+    }
+}
 
 /// The sums of the velocity error's statistics (as `prepare_raw` takes
 /// them, in the same order).
@@ -168,38 +226,10 @@ pub(crate) fn analyze_stream_blocks(
         });
     }
     let n = len - trim;
-    let duration = n as f64 / fs;
-    let periods = duration / pred.tau_c_s;
-    if periods < 2.0 {
-        return Err(Error::InvalidRecording {
-            source_name: name,
-            reason: format!(
-                "{duration:.3} s analysed spans {periods:.2} ball-pass periods at {} mm/s \
-                 (tau_c = {:.4} s); at least 2 are needed",
-                pred.velocity_mm_s, pred.tau_c_s
-            ),
-        });
-    }
-    let max_lag = settings.max_lag.samples(n, fs, pred.tau_c_s);
-    if max_lag + 1 < n && (max_lag as f64 / fs) < 2.0 * pred.tau_c_s {
-        return Err(Error::setting(
-            "max-lag",
-            format!(
-                "a lag window of {:.3} s holds fewer than 2 ball-pass periods (tau_c = {:.4} s); \
-                 the period and the phases need at least 2",
-                max_lag as f64 / fs,
-                pred.tau_c_s
-            ),
-        ));
-    }
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
-    if periods < 4.0 {
-        warnings.push(format!(
-            "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
-             coarse spectrum"
-        ));
-    }
+    let (duration, periods, max_lag) =
+        super::repeats::span_checks(&name, n, fs, pred, settings, &mut warnings)?;
     let channels = src.channels();
     let mut signals = Vec::new();
     let mut absent = Vec::new();
@@ -233,6 +263,18 @@ pub(crate) fn analyze_stream_blocks(
         s
     };
 
+    let kit = |restore| PassKit {
+        signals: &signals,
+        fs,
+        velocity: pred.velocity_mm_s,
+        trim_n: (trim, n),
+        len,
+        restore,
+        filter: filter.as_ref(),
+        filter_block,
+        name: &name,
+    };
+
     // Pass 1: the load cell.
     let (restore, mut dc, friction_mean) = if has_friction {
         let what = next_pass("load cell", progress);
@@ -264,17 +306,7 @@ pub(crate) fn analyze_stream_blocks(
     let mut friction_dev = -0.0;
     {
         let what = next_pass("low-pass and trend", progress);
-        let mut chain = Chain::new(
-            &signals,
-            fs,
-            pred.velocity_mm_s,
-            (trim, n),
-            restore,
-            filter.as_ref(),
-            filter_block,
-        );
-        let mut out = Output::new();
-        let mut eat = |out: &mut Output| -> Result<()> {
+        let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
             if !out.raw.is_empty() && !out.raw[0].is_empty() {
                 let xs: Vec<&[f64]> = out.raw.iter().map(Vec::as_slice).collect();
                 unfiltered
@@ -298,30 +330,16 @@ pub(crate) fn analyze_stream_blocks(
                     }
                 }
             }
-            out.advance();
             Ok(())
         };
-        let mut prog = Progress {
-            f: progress,
-            what,
-            total: len,
-            done: 0,
-            shown: 0,
-        };
-        src.pass(&mut |b| {
+        let mut on_block = |b: Block<'_>| {
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
                     friction_dev += (y - m) * (y - m);
                 }
             }
-            chain.push(b, &mut out)?;
-            eat(&mut out)?;
-            prog.add(b.len());
-            Ok(())
-        })?;
-        chain.finish(&mut out)?;
-        eat(&mut out)?;
-        check_count(&name, out.raw_at, n)?;
+        };
+        kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
     }
     if let (Some(dc), Some(mean)) = (dc.as_mut(), friction_mean) {
         // The mean over the standard deviation (ddof 1) of the recorded
@@ -356,22 +374,12 @@ pub(crate) fn analyze_stream_blocks(
     let dec_filter = plan.decimator.as_ref().and_then(|d| d.zero_phase_filter());
     {
         let what = next_pass("correlations and spectra", progress);
-        let mut chain = Chain::new(
-            &signals,
-            fs,
-            pred.velocity_mm_s,
-            (trim, n),
-            restore,
-            filter.as_ref(),
-            filter_block,
-        );
         let mut dec: Vec<Option<ZeroPhaseStream<'_>>> = (0..k)
             .map(|_| dec_filter.map(|f| ZeroPhaseStream::new(f, filter_block)))
             .collect();
         let mut dec_held: Vec<Vec<f64>> = vec![Vec::new(); k];
         let mut dec_at = 0usize;
         let q = plan.q.max(1);
-        let mut out = Output::new();
         let mut detrended: Vec<Vec<f64>> = vec![Vec::new(); k];
         let mut eat = |out: &mut Output, last: bool| -> Result<()> {
             if let Some(v) = vi {
@@ -435,25 +443,9 @@ pub(crate) fn analyze_stream_blocks(
                     .push(&ps)
                     .map_err(|e| Error::dsp(format!("{name}: high-resolution spectra"), e))?;
             }
-            out.advance();
             Ok(())
         };
-        let mut prog = Progress {
-            f: progress,
-            what,
-            total: len,
-            done: 0,
-            shown: 0,
-        };
-        src.pass(&mut |b| {
-            chain.push(b, &mut out)?;
-            eat(&mut out, false)?;
-            prog.add(b.len());
-            Ok(())
-        })?;
-        chain.finish(&mut out)?;
-        eat(&mut out, true)?;
-        check_count(&name, out.filtered_at, n)?;
+        kit(restore).run(src, what, progress, &mut |_| {}, &mut eat)?;
     }
     let correlations = {
         let mut out = corr.finish().map_err(|e| Error::dsp("correlations", e))?;
@@ -533,17 +525,7 @@ pub(crate) fn analyze_stream_blocks(
     let mut line = LineStream::new(&signals, fs, n, findings.f_used);
     {
         let what = next_pass("phases", progress);
-        let mut chain = Chain::new(
-            &signals,
-            fs,
-            pred.velocity_mm_s,
-            (trim, n),
-            restore,
-            filter.as_ref(),
-            filter_block,
-        );
-        let mut out = Output::new();
-        let mut eat = |out: &mut Output| {
+        let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
             let d: Vec<Vec<f64>> = out
                 .filtered
                 .iter()
@@ -559,24 +541,9 @@ pub(crate) fn analyze_stream_blocks(
             if xs.first().is_some_and(|x| !x.is_empty()) {
                 line.push(&xs);
             }
-            out.advance();
-        };
-        let mut prog = Progress {
-            f: progress,
-            what,
-            total: len,
-            done: 0,
-            shown: 0,
-        };
-        src.pass(&mut |b| {
-            chain.push(b, &mut out)?;
-            eat(&mut out);
-            prog.add(b.len());
             Ok(())
-        })?;
-        chain.finish(&mut out)?;
-        eat(&mut out);
-        check_count(&name, out.filtered_at, n)?;
+        };
+        kit(restore).run(src, what, progress, &mut |_| {}, &mut eat)?;
     }
     fill_line_phases(
         &mut findings.phases,
