@@ -2,12 +2,14 @@
 //! the SciPy script doing the same steps (`tools/bench_scipy_long.py`).
 //!
 //! ```text
-//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report]
+//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off]
 //! ```
 //!
 //! For each duration (default 2 h) it simulates a record at 1 kHz
 //! (`ballpass simulate`, good bearing, 9 mm/s) into a temporary folder,
-//! runs `ballpass analyze --no-report` (with `--report`: the report too)
+//! runs `ballpass analyze --no-report` (with `--report`: the report too;
+//! `--stream-on`/`--stream-off` force the streamed or in-memory analysis,
+//! else a file of 1 GiB or more, 4.5 hours and longer, is streamed)
 //! and the SciPy script under `/usr/bin/time -v`, and prints the wall time
 //! and peak resident memory of each. Every generated file is removed at the
 //! end (a 24-hour CSV is 5.3 GB). Needs `/usr/bin/time` (GNU time) and,
@@ -124,15 +126,21 @@ fn main() {
     let mut hours: Vec<f64> = Vec::new();
     let mut scipy = true;
     let mut report = false;
+    let mut stream = None;
     for a in std::env::args().skip(1) {
         match a.as_str() {
             "--no-scipy" => scipy = false,
             "--report" => report = true,
+            "--stream-on" => stream = Some("on"),
+            "--stream-off" => stream = Some("off"),
             "--bench" => {}
             _ => match a.parse::<f64>() {
                 Ok(h) if h > 0.0 => hours.push(h),
                 _ => {
-                    eprintln!("long_record: unknown argument '{a}' (hours, --no-scipy, --report)");
+                    eprintln!(
+                        "long_record: unknown argument '{a}' (hours, --no-scipy, --report, \
+                         --stream-on, --stream-off)"
+                    );
                     std::process::exit(2);
                 }
             },
@@ -145,7 +153,7 @@ fn main() {
     let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools");
     let dir = std::env::temp_dir().join(format!("ballpass-long-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temporary folder");
-    let result = run_all(&bin, &tools, &dir, &hours, scipy, report);
+    let result = run_all(&bin, &tools, &dir, &hours, (scipy, report, stream));
     let _ = std::fs::remove_dir_all(&dir);
     if let Err(e) = result {
         eprintln!("long_record: {e}");
@@ -158,8 +166,7 @@ fn run_all(
     tools: &Path,
     dir: &Path,
     hours: &[f64],
-    scipy: bool,
-    report: bool,
+    (scipy, report, stream): (bool, bool, Option<&str>),
 ) -> Result<(), String> {
     println!(
         "| record | ballpass analyze: wall (CPU) | peak RSS | SciPy script: wall (CPU) | peak RSS | speed-up (wall) |"
@@ -184,6 +191,9 @@ fn run_all(
             .arg(dir.join("bp"));
         if !report {
             ours.arg("--no-report");
+        }
+        if let Some(s) = stream {
+            ours.args(["--stream", s]);
         }
         let ours = measured(ours)?;
         let theirs = if scipy {

@@ -179,3 +179,80 @@ fn a_missing_channel_is_a_warning_on_stderr() {
     assert!(head.starts_with("lag_s,r_friction,r_velocity_error,r_friction__velocity_error\n"));
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// `--stream on` reads the record block by block: the same correlations
+/// and spectra as in memory (to 1e-12 of each column's peak, the library's
+/// tested tolerance), says so in analysis.json, and needs the velocity.
+#[test]
+fn a_streamed_record_gives_the_in_memory_tables() {
+    let rec = fixture();
+    let mut tables = Vec::new();
+    for mode in ["on", "off"] {
+        let out = scratch(&format!("stream-{mode}"));
+        let (ok, _, stderr) = run(&[
+            "analyze",
+            rec.to_str().unwrap(),
+            "--velocity",
+            "18",
+            "--no-report",
+            "--stream",
+            mode,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{stderr}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("analysis.json")).unwrap())
+                .unwrap();
+        assert_eq!(json.get("stream").is_some(), mode == "on", "{mode}");
+        if mode == "on" {
+            assert!(stderr.contains("was streamed"), "{stderr}");
+            assert_eq!(json["stream"]["passes"], 4);
+        }
+        let read = |f: &str| -> (Vec<String>, Vec<Vec<f64>>) {
+            let text = std::fs::read_to_string(out.join(f)).unwrap();
+            let mut lines = text.lines();
+            let head = lines.next().unwrap().split(',').map(String::from).collect();
+            let rows = lines
+                .map(|l| {
+                    l.split(',')
+                        .map(|c| c.parse().unwrap_or(f64::NAN))
+                        .collect()
+                })
+                .collect();
+            (head, rows)
+        };
+        tables.push((read("correlations.csv"), read("spectra_hires.csv")));
+    }
+    for (x, y) in [(&tables[0].0, &tables[1].0), (&tables[0].1, &tables[1].1)] {
+        let ((head, a), (_, b)) = (x, y);
+        assert_eq!(a.len(), b.len());
+        for col in 0..a[0].len() {
+            // Coherence is a ratio of powers, ill-conditioned where both
+            // are small: 1e-9 absolute (it is at most 1).
+            let peak = if head[col].starts_with("coh_") {
+                1e3
+            } else {
+                b.iter().fold(0.0_f64, |m, r| m.max(r[col].abs()))
+            };
+            for (x, y) in a.iter().zip(b) {
+                assert!(
+                    (x[col] - y[col]).abs() <= 1e-12 * peak,
+                    "column {col}: {} {} {peak}",
+                    x[col],
+                    y[col]
+                );
+            }
+        }
+    }
+    let out = scratch("stream-no-velocity");
+    let (ok, _, stderr) = run(&[
+        "analyze",
+        rec.to_str().unwrap(),
+        "--stream",
+        "on",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("--velocity"), "{stderr}");
+}

@@ -80,6 +80,18 @@ impl Decimator {
         self.filter.sos()
     }
 
+    /// The planned zero-phase anti-alias filter (what [`Decimator::apply`]
+    /// runs when zero-phase), for filtering a signal in pieces
+    /// ([`crate::ZeroPhaseStream`]).
+    pub fn zero_phase_filter(&self) -> Option<&ZeroPhaseFilter> {
+        self.zero_phase.then_some(&self.filter)
+    }
+
+    /// The decimation factor `q`.
+    pub fn q(&self) -> usize {
+        self.q
+    }
+
     /// Filters and downsamples `x`.
     ///
     /// # Errors

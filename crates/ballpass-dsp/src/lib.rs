@@ -7,6 +7,7 @@ pub mod decimate;
 pub mod detrend;
 pub mod error;
 mod fftplan;
+pub mod filtfilt_stream;
 pub mod fir;
 pub mod gradient;
 pub mod iir;
@@ -19,16 +20,18 @@ mod simd;
 mod sincos;
 pub mod sos;
 pub mod spectral;
+pub mod welch_stream;
 pub mod window;
 pub mod zoom;
 
 pub use correlate::{
     correlate, correlation_lags, CorrelateSettings, Correlation, Correlator, Normalization,
 };
-pub use correlate_window::correlate_pairs_window;
+pub use correlate_window::{correlate_pairs_window, WindowCorrelation};
 pub use decimate::{decimate, DecimateSettings, Decimator};
 pub use detrend::{detrend, detrend_in_place, DetrendType};
 pub use error::{check_finite, invalid, DspError, Result};
+pub use filtfilt_stream::ZeroPhaseStream;
 pub use fir::correlate_valid;
 pub use gradient::{gradient, gradient_with_edge_order, EdgeOrder, Spacing};
 pub use iir::{
@@ -57,5 +60,6 @@ pub use spectral::{
     coherence, csd, periodogram, welch, Average, Coherence, Csd, PeriodogramSettings, Psd, Scaling,
     SpectralSet, Welch, WelchSettings,
 };
+pub use welch_stream::WelchStream;
 pub use window::Window;
 pub use zoom::{polyphase_average_csd, polyphase_average_psd};

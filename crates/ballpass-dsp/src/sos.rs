@@ -306,10 +306,10 @@ pub struct FiltFiltSettings {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ZeroPhaseFilter {
     sos: Sos,
-    cascade: Cascade,
+    pub(crate) cascade: Cascade,
     zi: Vec<[f64; 2]>,
-    pad_type: PadType,
-    pad_len: usize,
+    pub(crate) pad_type: PadType,
+    pub(crate) pad_len: usize,
 }
 
 impl ZeroPhaseFilter {
@@ -467,7 +467,7 @@ impl ZeroPhaseFilter {
 
     /// `sosfilt_zi` scaled to the level `v`: the steady state for a
     /// constant input `v`.
-    fn steady(&self, v: f64) -> Vec<[f64; 2]> {
+    pub(crate) fn steady(&self, v: f64) -> Vec<[f64; 2]> {
         self.zi.iter().map(|r| [r[0] * v, r[1] * v]).collect()
     }
 

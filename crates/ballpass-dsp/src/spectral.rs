@@ -160,16 +160,16 @@ pub struct Coherence {
 
 /// The segment geometry and FFT plan for one segment length.
 #[derive(Clone)]
-struct Engine {
-    nperseg: usize,
-    noverlap: usize,
-    nfft: usize,
+pub(crate) struct Engine {
+    pub(crate) nperseg: usize,
+    pub(crate) noverlap: usize,
+    pub(crate) nfft: usize,
     window: Vec<f64>,
     win_sum: f64,
     win_sq_sum: f64,
     fft: Arc<dyn RealToComplex<f64>>,
     buf: Vec<f64>,
-    spec_x: Vec<Complex64>,
+    pub(crate) spec_x: Vec<Complex64>,
     spec_y: Vec<Complex64>,
     scratch: Vec<Complex64>,
     /// Complex FFT of two real segments at once, planned on first use
@@ -207,7 +207,12 @@ impl PairFft {
 }
 
 impl Engine {
-    fn new(window: &Window, nperseg: usize, noverlap: usize, nfft: usize) -> Result<Engine> {
+    pub(crate) fn new(
+        window: &Window,
+        nperseg: usize,
+        noverlap: usize,
+        nfft: usize,
+    ) -> Result<Engine> {
         let window = window.values(nperseg)?;
         let fft = crate::fftplan::forward(nfft);
         Ok(Engine {
@@ -226,7 +231,7 @@ impl Engine {
         })
     }
 
-    fn n_bins(&self) -> usize {
+    pub(crate) fn n_bins(&self) -> usize {
         self.nfft / 2 + 1
     }
 
@@ -235,7 +240,13 @@ impl Engine {
     }
 
     /// Detrended, windowed, zero-padded FFT of the segment at `start`.
-    fn segment_fft(&mut self, x: &[f64], start: usize, detrend: DetrendType, into_y: bool) {
+    pub(crate) fn segment_fft(
+        &mut self,
+        x: &[f64],
+        start: usize,
+        detrend: DetrendType,
+        into_y: bool,
+    ) {
         let seg = &x[start..start + self.nperseg];
         // One pass: (x - trend) * w, as SciPy's detrend-then-window.
         let t = Trend::fit(seg, detrend);
@@ -345,7 +356,7 @@ impl Engine {
     }
 
     /// Per-bin factor: scaling times one-sided doubling.
-    fn bin_factors(&self, fs_hz: f64, scaling: Scaling, onesided: bool) -> Vec<f64> {
+    pub(crate) fn bin_factors(&self, fs_hz: f64, scaling: Scaling, onesided: bool) -> Vec<f64> {
         let scale = match scaling {
             Scaling::Density => 1.0 / (fs_hz * self.win_sq_sum),
             Scaling::Spectrum => 1.0 / (self.win_sum * self.win_sum),
@@ -359,7 +370,7 @@ impl Engine {
         f
     }
 
-    fn freqs(&self, fs_hz: f64, onesided: bool) -> Vec<f64> {
+    pub(crate) fn freqs(&self, fs_hz: f64, onesided: bool) -> Vec<f64> {
         // numpy: val = 1 / (n * d) with d = 1 / fs; then k * val.
         let val = 1.0 / (self.nfft as f64 * (1.0 / fs_hz));
         if onesided {
@@ -519,7 +530,7 @@ impl Engine {
 
 /// Two-sided spectrum of length `nfft` in `fftfreq` order from the
 /// non-negative bins `p` (`nfft / 2 + 1` of them): `P[nfft - k] = conj(P[k])`.
-fn mirror<T: Copy>(p: &[T], nfft: usize, conj: impl Fn(T) -> T) -> Vec<T> {
+pub(crate) fn mirror<T: Copy>(p: &[T], nfft: usize, conj: impl Fn(T) -> T) -> Vec<T> {
     let mut out = Vec::with_capacity(nfft);
     out.extend_from_slice(p);
     out.truncate(nfft);
@@ -562,7 +573,7 @@ fn check_fs(fs_hz: f64) -> Result<()> {
 }
 
 /// Checks the segment settings that do not depend on the signal.
-fn check_settings(s: &WelchSettings) -> Result<()> {
+pub(crate) fn check_settings(s: &WelchSettings) -> Result<()> {
     if s.nperseg == 0 {
         return Err(invalid(
             "nperseg",
@@ -593,7 +604,7 @@ fn check_settings(s: &WelchSettings) -> Result<()> {
 
 /// The segment geometry `(nperseg, noverlap, nfft)` for a signal of `n`
 /// samples, shortening `nperseg` to `n` as SciPy does for named windows.
-fn geometry(s: &WelchSettings, n: usize) -> Result<(usize, usize, usize)> {
+pub(crate) fn geometry(s: &WelchSettings, n: usize) -> Result<(usize, usize, usize)> {
     let mut nperseg = s.nperseg;
     if n < nperseg {
         if let Window::Custom(w) = &s.window {

@@ -11,6 +11,7 @@ use ballpass::analysis::MaxLag;
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
 };
+use ballpass::recording::io::csv::blocks::CsvSource;
 use ballpass::recording::segment::Window;
 use ballpass::recording::Recording;
 use clap::{Args, ValueEnum};
@@ -132,7 +133,25 @@ pub struct AnalyzeArgs {
     check: CheckArgs,
     #[command(flatten)]
     segment: SegmentArgs,
+    /// Read a long CSV/TSV record block by block in bounded memory
+    /// (`auto`, the default: files of 1 GiB and more, about 4.5 hours at
+    /// 1 kHz), or always (`on`), or never (`off`: the whole record in
+    /// memory, with every output). A streamed record gives no passages,
+    /// synchronous average, stage identification or position spectra.
+    #[arg(long, value_enum, default_value = "auto", value_name = "WHEN")]
+    stream: StreamArg,
 }
+
+/// When to stream a record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum StreamArg {
+    Auto,
+    On,
+    Off,
+}
+
+/// Files at least this long are streamed under `--stream auto`.
+const STREAM_ABOVE_BYTES: u64 = 1 << 30;
 
 impl AnalyzeArgs {
     /// Settings: defaults, then the profile's `[analysis]` keys that name
@@ -236,6 +255,9 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     let geometry = opts.geometry.expect("options() resolves the bearing");
     let out = output::open_dir(&a.out, "analyze")?;
     let steps = output::steps("reading the records");
+    if let Some(src) = streamable(a, &opts)? {
+        return run_streamed(a, &settings, &opts, src, out, steps, &bearing_name);
+    }
     let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
     let window = a.load.window.parsed()?;
     let ctx = Ctx {
@@ -420,6 +442,135 @@ impl Ctx<'_> {
         }
         Ok((analysis, checked.velocity_source))
     }
+}
+
+/// The record to stream, if `--stream` and the file say so; on `auto`, a
+/// long file that cannot be streamed is read whole with a warning.
+fn streamable(
+    a: &AnalyzeArgs,
+    opts: &ballpass::recording::LoadOptions,
+) -> Result<Option<CsvSource>> {
+    if a.stream == StreamArg::Off {
+        return Ok(None);
+    }
+    let [path] = a.recs.as_slice() else {
+        if a.stream == StreamArg::On {
+            bail!("--stream on takes one record file ({} given)", a.recs.len());
+        }
+        return Ok(None);
+    };
+    let size = std::fs::metadata(path)
+        .with_context(|| format!("cannot read {}", text::path(path)))?
+        .len();
+    if a.stream == StreamArg::Auto && size < STREAM_ABOVE_BYTES {
+        return Ok(None);
+    }
+    let gb = size as f64 / 1e9;
+    let why = if a.segment.segment {
+        Some("--segment needs the record in memory".to_string())
+    } else if a.load.window.window.is_some() {
+        Some("a --window part is read whole (it is shorter)".to_string())
+    } else {
+        None
+    };
+    let src = match why {
+        Some(_) => None,
+        None => ballpass::recording::io::csv::blocks::open(path, opts)?,
+    };
+    match src {
+        Some(s) => Ok(Some(s)),
+        None => {
+            let why = why.unwrap_or_else(|| {
+                "only a plain CSV/TSV file (a uniform time column, no missing values, no given \
+                 rate) is streamed; MATLAB, TDMS and MF4 files are read whole"
+                    .into()
+            });
+            if a.stream == StreamArg::On {
+                bail!("{} cannot be streamed: {why}", text::path(path));
+            }
+            eprintln!(
+                "warning: {} is {gb:.1} GB and is read whole ({why}): it needs memory in \
+                 proportion (about 60 bytes per sample of three channels)",
+                text::path(path)
+            );
+            Ok(None)
+        }
+    }
+}
+
+/// `ballpass analyze` of one record streamed from its file.
+fn run_streamed(
+    a: &AnalyzeArgs,
+    settings: &AnalyzeSettings,
+    opts: &ballpass::recording::LoadOptions,
+    mut src: CsvSource,
+    out: ballpass::outdir::OutputDir,
+    steps: Option<indicatif::ProgressBar>,
+    bearing_name: &str,
+) -> Result<()> {
+    use ballpass::recording::stream::RecordSource;
+    let geometry = opts.geometry.expect("options() resolves the bearing");
+    let Some(v) = a.load.velocity.or(src.meta().velocity_mm_s) else {
+        bail!(
+            "{} is streamed (too long to hold in memory): give --velocity (measuring it from \
+             the encoder needs the record in memory), or --stream off to read it whole",
+            text::path(src.path())
+        );
+    };
+    let prediction = geometry.predict(v, settings.harmonics)?;
+    let mut progress = |m: &str| {
+        if let Some(s) = &steps {
+            s.set_message(m.to_string());
+        }
+    };
+    let mut analysis =
+        analysis::stream::analyze_stream(&mut src, &prediction, settings, &mut progress)?;
+    analysis
+        .method_notes
+        .push(format!("velocity {v:.4} mm/s, stated"));
+    let print = || -> std::io::Result<()> {
+        let mut err = std::io::stderr().lock();
+        for w in &analysis.warnings {
+            writeln!(err, "warning: {}", text::line(w))?;
+        }
+        Ok(())
+    };
+    match &steps {
+        Some(s) => s.suspend(print)?,
+        None => print()?,
+    }
+    progress("writing the tables");
+    analysis::write_outputs(&analysis, out.path())?;
+    if !a.report.no_report {
+        progress("drawing the report");
+        let links = ballpass::report::analysis::AnalysisLinks {
+            tables_dir: String::new(),
+            recording: Some(
+                std::path::absolute(src.path())
+                    .unwrap_or_else(|_| src.path().to_path_buf())
+                    .display()
+                    .to_string(),
+            ),
+            id_prefix: String::new(),
+        };
+        let report = ballpass::report::analysis::report(&analysis, None, &links)?
+            .with_command(command_line());
+        a.report.write(&report, out.path())?;
+    }
+    if let Some(s) = steps {
+        s.finish_and_clear();
+    }
+    let dir = output::commit(out)?;
+    let mut w = output::stdout();
+    if a.json {
+        serde_json::to_writer_pretty(&mut w, &analysis)?;
+        writeln!(w)?;
+    } else {
+        summary(&mut w, &analysis, bearing_name, VelocitySource::Stated)?;
+        writeln!(w, "wrote {}", text::path(&dir))?;
+    }
+    w.flush()?;
+    Ok(())
 }
 
 /// `--max-lag`: seconds, `auto` or `full`.

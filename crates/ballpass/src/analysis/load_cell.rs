@@ -147,14 +147,39 @@ impl DcRestoration {
 /// period (the averaging window of the long-τ test). `None` for records too
 /// short to fit (fewer than 40 averaged points).
 pub fn fit_discharge(y: &[f64], fs_hz: f64, period_s: f64) -> Option<DischargeFit> {
-    let n = y.len();
-    let duration = n as f64 / fs_hz;
-    // Block means of at least 20 ms (and at most 20 000 blocks): noise out,
-    // any decay of the grid's range still resolved.
-    let w = ((0.02 * fs_hz).round() as usize)
+    let w = block_width(y.len(), fs_hz);
+    fit_discharge_blocks(Blocks::new(y, fs_hz, w), y.len(), fs_hz, period_s)
+}
+
+/// Samples per block mean of [`fit_discharge`] for a record of `n`
+/// samples: at least 20 ms, and at most 20 000 blocks.
+pub(crate) fn block_width(n: usize, fs_hz: f64) -> usize {
+    ((0.02 * fs_hz).round() as usize)
         .max(n.div_ceil(20_000))
-        .max(1);
-    let blocks = Blocks::new(y, fs_hz, w);
+        .max(1)
+}
+
+/// [`fit_discharge`] from the record's block means (`block_width` samples
+/// each, the trailing partial block dropped), for a record of `n`
+/// samples: what a streamed record gives.
+pub(crate) fn fit_discharge_means(
+    means: Vec<f64>,
+    n: usize,
+    fs_hz: f64,
+    period_s: f64,
+) -> Option<DischargeFit> {
+    let w = block_width(n, fs_hz);
+    fit_discharge_blocks(Blocks::of_means(means, fs_hz, w), n, fs_hz, period_s)
+}
+
+fn fit_discharge_blocks(
+    blocks: Blocks,
+    n: usize,
+    fs_hz: f64,
+    period_s: f64,
+) -> Option<DischargeFit> {
+    let duration = n as f64 / fs_hz;
+    let w = blocks.w;
     if blocks.s.len() < 40 {
         return None;
     }
@@ -276,6 +301,10 @@ impl Blocks {
             .chunks_exact(w)
             .map(|c| c.iter().sum::<f64>() / w as f64)
             .collect::<Vec<f64>>();
+        Self::of_means(s, fs, w)
+    }
+
+    fn of_means(s: Vec<f64>, fs: f64, w: usize) -> Self {
         Self {
             s_mean: s.iter().sum::<f64>() / s.len() as f64,
             s,
@@ -504,6 +533,38 @@ pub fn restore_friction<'a>(
             }
         })
     };
+    let decision = match correction {
+        LoadCellCorrection::Off => Decision::Off,
+        LoadCellCorrection::TimeConstant(tau) => Decision::Given {
+            tau,
+            // The amplifier offset: the level a decay of this τ tends to.
+            offset: offset_for(y, fs_hz, tau),
+        },
+        LoadCellCorrection::Auto => Decision::Auto(fit_discharge(y, fs_hz, period_s)),
+    };
+    let (undo, d) = decide(decision, level_over_spread);
+    Ok(match undo {
+        Some((tau, offset)) => (Cow::Owned(restore(y, fs_hz, tau, offset)), d),
+        None => (Cow::Borrowed(y), d),
+    })
+}
+
+/// What [`restore_friction`] found out before restoring.
+pub(crate) enum Decision {
+    /// Restoration off.
+    Off,
+    /// τ given; `offset` the amplifier offset for it.
+    Given { tau: f64, offset: f64 },
+    /// τ estimated (`None`: too short to fit).
+    Auto(Option<DischargeFit>),
+}
+
+/// The `(τ, offset)` to undo (if any) and what was done, from a
+/// [`Decision`] and the recording's mean over its standard deviation.
+pub(crate) fn decide(
+    decision: Decision,
+    level_over_spread: f64,
+) -> (Option<(f64, f64)>, DcRestoration) {
     let unchanged = |fit: Option<DischargeFit>, note: String, auto: bool| DcRestoration {
         applied: false,
         tau_s: None,
@@ -513,34 +574,29 @@ pub fn restore_friction<'a>(
         unknown_high_pass: auto && level_over_spread.abs() < 3.0,
         note,
     };
-    match correction {
-        LoadCellCorrection::Off => Ok((
-            Cow::Borrowed(y),
+    match decision {
+        Decision::Off => (
+            None,
             unchanged(
                 None,
                 "load-cell DC restoration off: friction analysed as recorded".into(),
                 false,
             ),
-        )),
-        LoadCellCorrection::TimeConstant(tau) => {
-            // The amplifier offset: the level a decay of this τ tends to.
-            let offset = offset_for(y, fs_hz, tau);
-            Ok((
-                Cow::Owned(restore(y, fs_hz, tau, offset)),
-                DcRestoration {
-                    applied: true,
-                    tau_s: Some(tau),
-                    source: "given".into(),
-                    fit: None,
-                    level_over_spread,
-                    unknown_high_pass: false,
-                    note: format!("load-cell discharge undone with the given τ = {tau:.3} s"),
-                },
-            ))
-        }
-        LoadCellCorrection::Auto => match fit_discharge(y, fs_hz, period_s) {
+        ),
+        Decision::Given { tau, offset } => (
+            Some((tau, offset)),
+            DcRestoration {
+                applied: true,
+                tau_s: Some(tau),
+                source: "given".into(),
+                fit: None,
+                level_over_spread,
+                unknown_high_pass: false,
+                note: format!("load-cell discharge undone with the given τ = {tau:.3} s"),
+            },
+        ),
+        Decision::Auto(fit) => match fit {
             Some(f) if f.identified => {
-                let restored = restore(y, fs_hz, f.tau_s, f.offset_n);
                 let note = format!(
                     "load-cell discharge undone: τ = {:.3} s (95 % interval {:.3}–{:.3} s), estimated from the record's decay of {:+.3} N",
                     f.tau_s,
@@ -548,8 +604,8 @@ pub fn restore_friction<'a>(
                     f.tau_high_s.unwrap_or(f.tau_s),
                     f.amplitude_n
                 );
-                Ok((
-                    Cow::Owned(restored),
+                (
+                    Some((f.tau_s, f.offset_n)),
                     DcRestoration {
                         applied: true,
                         tau_s: Some(f.tau_s),
@@ -559,11 +615,11 @@ pub fn restore_friction<'a>(
                         unknown_high_pass: false,
                         note,
                     },
-                ))
+                )
             }
             other => {
                 let note = "no load-cell decay identified in the record (a DC-coupled sensor, a discharge over before the record, or one too slow to tell from a trend): friction analysed as recorded; give the load cell's τ if it discharges".to_string();
-                Ok((Cow::Borrowed(y), unchanged(other, note, true)))
+                (None, unchanged(other, note, true))
             }
         },
     }

@@ -53,6 +53,7 @@ pub mod preflight;
 pub mod preprocess;
 pub mod repeats;
 pub mod spectra;
+pub mod stream;
 pub mod sync;
 mod train_fit;
 
@@ -610,6 +611,10 @@ pub struct Analysis {
     /// direction is long enough; see the warnings). Its table is
     /// `spectra_position.csv`.
     pub position: Option<position::PositionSpectra>,
+    /// How the record was streamed (absent: analysed in memory, see
+    /// [`stream`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stream: Option<stream::StreamInfo>,
 }
 
 /// Runs the whole analysis on one record or several repeats at the same

@@ -188,57 +188,22 @@ impl LineSpectra {
     /// fewer than six), so that the window's image of `−f` falls near a zero
     /// of the Hann spectrum.
     pub(crate) fn of(p: &Prepared, f_hz: f64) -> LineSpectra {
-        let fs = p.fs_hz;
-        let n = p.n;
-        let per = fs / f_hz;
-        let m = (n as f64 / (2.0 * per)).floor().clamp(1.0, 3.0);
-        let len = ((m * per).round() as usize).min(n).max(4);
-        let step = (len / 2).max(1);
-        let w: Vec<f64> = (0..len)
-            .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / len as f64).cos())
-            .collect();
+        let g = LineGeometry::new(p.fs_hz, p.n, f_hz);
         let starts: Vec<usize> = (0..)
-            .map(|k| k * step)
-            .take_while(|s| s + len <= n)
+            .map(|k| k * g.step)
+            .take_while(|s| s + g.len <= p.n)
             .collect();
-        let (c, s) = {
-            let a = std::f64::consts::TAU * f_hz / fs;
-            (a.cos(), a.sin())
-        };
         let dft = p
             .signals
             .iter()
             .map(|(sig, x)| {
-                let v = starts
-                    .iter()
-                    .map(|&st| {
-                        let seg = &x[st..st + len];
-                        let mean = seg.iter().sum::<f64>() / len as f64;
-                        // e^{-i a n} by rotation, renormalised every 1024 steps.
-                        let (mut re, mut im) = (0.0, 0.0);
-                        let (mut er, mut ei) = (1.0, 0.0);
-                        for (i, (v, wi)) in seg.iter().zip(&w).enumerate() {
-                            let u = (v - mean) * wi;
-                            re += u * er;
-                            im += u * ei;
-                            let nr = er * c + ei * s;
-                            ei = ei * c - er * s;
-                            er = nr;
-                            if i % 1024 == 1023 {
-                                let m = (er * er + ei * ei).sqrt();
-                                er /= m;
-                                ei /= m;
-                            }
-                        }
-                        (re, im)
-                    })
-                    .collect();
+                let v = starts.iter().map(|&st| g.dft(&x[st..st + g.len])).collect();
                 (*sig, v)
             })
             .collect();
         LineSpectra {
             dft,
-            nu: welch_dof(&w, step, starts.len()),
+            nu: welch_dof(&g.w, g.step, starts.len()),
         }
     }
 
@@ -277,6 +242,110 @@ impl LineSpectra {
             0.0
         };
         Some(((pr / m, pi / m), g2, self.nu / 2.0))
+    }
+}
+
+/// The segments of [`LineSpectra::of`]: `len` samples (three periods,
+/// fewer when the record holds fewer than six), hop `step`, Hann window,
+/// and the rotation by one sample at the frequency.
+#[derive(Debug, Clone)]
+struct LineGeometry {
+    len: usize,
+    step: usize,
+    w: Vec<f64>,
+    c: f64,
+    s: f64,
+}
+
+impl LineGeometry {
+    fn new(fs: f64, n: usize, f_hz: f64) -> LineGeometry {
+        let per = fs / f_hz;
+        let m = (n as f64 / (2.0 * per)).floor().clamp(1.0, 3.0);
+        let len = ((m * per).round() as usize).min(n).max(4);
+        let step = (len / 2).max(1);
+        let w: Vec<f64> = (0..len)
+            .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / len as f64).cos())
+            .collect();
+        let a = std::f64::consts::TAU * f_hz / fs;
+        LineGeometry {
+            len,
+            step,
+            w,
+            c: a.cos(),
+            s: a.sin(),
+        }
+    }
+
+    /// The windowed DFT of one segment (its mean removed) at the frequency.
+    fn dft(&self, seg: &[f64]) -> (f64, f64) {
+        let (c, s) = (self.c, self.s);
+        let mean = seg.iter().sum::<f64>() / self.len as f64;
+        // e^{-i a n} by rotation, renormalised every 1024 steps.
+        let (mut re, mut im) = (0.0, 0.0);
+        let (mut er, mut ei) = (1.0, 0.0);
+        for (i, (v, wi)) in seg.iter().zip(&self.w).enumerate() {
+            let u = (v - mean) * wi;
+            re += u * er;
+            im += u * ei;
+            let nr = er * c + ei * s;
+            ei = ei * c - er * s;
+            er = nr;
+            if i % 1024 == 1023 {
+                let m = (er * er + ei * ei).sqrt();
+                er /= m;
+                ei /= m;
+            }
+        }
+        (re, im)
+    }
+}
+
+/// [`LineSpectra::of`] of signals given in pieces: the same segments and
+/// the same values to the bit, holding one segment per signal.
+#[derive(Debug, Clone)]
+pub(crate) struct LineStream {
+    g: LineGeometry,
+    signals: Vec<Signal>,
+    bufs: Vec<Vec<f64>>,
+    dft: Vec<SegmentDfts>,
+}
+
+impl LineStream {
+    /// Segments of `n`-sample signals at `fs` for `f_hz`.
+    pub(crate) fn new(signals: &[Signal], fs: f64, n: usize, f_hz: f64) -> LineStream {
+        LineStream {
+            g: LineGeometry::new(fs, n, f_hz),
+            signals: signals.to_vec(),
+            bufs: vec![Vec::new(); signals.len()],
+            dft: vec![Vec::new(); signals.len()],
+        }
+    }
+
+    /// The next samples of every signal (equal lengths, in `signals` order).
+    pub(crate) fn push(&mut self, pieces: &[&[f64]]) {
+        let m = pieces.first().map_or(0, |p| p.len());
+        let mut at = 0;
+        while at < m {
+            let to = (at + self.g.len - self.bufs[0].len()).min(m);
+            for (b, p) in self.bufs.iter_mut().zip(pieces) {
+                b.extend_from_slice(&p[at..to]);
+            }
+            at = to;
+            if self.bufs[0].len() == self.g.len {
+                for (b, d) in self.bufs.iter_mut().zip(&mut self.dft) {
+                    d.push(self.g.dft(b));
+                    b.drain(..self.g.step);
+                }
+            }
+        }
+    }
+
+    pub(crate) fn finish(self) -> LineSpectra {
+        let segments = self.dft.first().map_or(0, Vec::len);
+        LineSpectra {
+            nu: welch_dof(&self.g.w, self.g.step, segments),
+            dft: self.signals.into_iter().zip(self.dft).collect(),
+        }
     }
 }
 

@@ -31,6 +31,9 @@ mod evaluate;
 use evaluate::{
     average_correlations, average_spectra, evaluate, fill_phases, scalars, spreads, verdict,
 };
+pub(crate) use evaluate::{
+    evaluate as evaluate_findings, fill_phases as fill_line_phases, verdict as verdict_of,
+};
 pub use evaluate::{RecordScalars, Repeats, Spread};
 
 /// The stage, identified from every record's friction → velocity-error
@@ -230,36 +233,8 @@ pub(crate) fn run_staged_above(
             n as f64 / fs
         ));
     }
-    let duration = n as f64 / fs;
-    let periods = duration / pred.tau_c_s;
-    if periods < 2.0 {
-        return Err(Error::InvalidRecording {
-            source_name: first.source_name(),
-            reason: format!(
-                "{duration:.3} s analysed spans {periods:.2} ball-pass periods at {} mm/s \
-                 (tau_c = {:.4} s); at least 2 are needed",
-                pred.velocity_mm_s, pred.tau_c_s
-            ),
-        });
-    }
-    let max_lag = settings.max_lag.samples(n, fs, pred.tau_c_s);
-    if max_lag + 1 < n && (max_lag as f64 / fs) < 2.0 * pred.tau_c_s {
-        return Err(Error::setting(
-            "max-lag",
-            format!(
-                "a lag window of {:.3} s holds fewer than 2 ball-pass periods (tau_c = {:.4} s); \
-                 the period and the phases need at least 2",
-                max_lag as f64 / fs,
-                pred.tau_c_s
-            ),
-        ));
-    }
-    if periods < 4.0 {
-        warnings.push(format!(
-            "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
-             coarse spectrum"
-        ));
-    }
+    let (duration, periods, max_lag) =
+        span_checks(&first.source_name(), n, fs, pred, settings, &mut warnings)?;
     // Signals: those every record has.
     let mut signals = Vec::new();
     let mut absent = Vec::new();
@@ -481,42 +456,8 @@ pub(crate) fn run_staged_above(
     // (The prepared signals stay: the synchronous average below reads them
     // with the passages.)
     let passages = early_passages.unwrap_or_else(detect);
-    notes.push(format!(
-        "high-resolution spectrum: {} with q = {}, fs = {} Hz, {}-sample segments, {} overlap, \
-         resolution {:.5} Hz",
-        hr.info.method, plan.q, plan.fs_hz, plan.nperseg, plan.noverlap, hr.info.resolution_hz
-    ));
-    notes.push(
-        "harmonic test: floor = polynomial fit of ln PSD against ln f around k·f_c (harmonic bins \
-         excluded), mean-corrected for chi2; p-value of the largest tested bin with the floor's own \
-         uncertainty; nu the Welch equivalent dof (Percival & Walden 292b) times the records; a \
-         signal shows f_c when a harmonic is significant after Holm's correction over k = 1..K"
-            .into(),
-    );
-    notes.push(
-        "measured period: autocorrelation maxima within ±period_window·T of k·T (T re-fitted after \
-         each peak, starting at tau_c predicted), k·T up to half the record, least squares through \
-         the origin"
-            .into(),
-    );
+    common_notes(&mut notes, &hr, &plan, &corr, settings, pred, n, fs);
     let correlation_window = super::CorrelationWindow::of(&corr, settings.max_lag, pred.tau_c_s);
-    if !correlation_window.full_range {
-        notes.push(format!(
-            "correlations within ±{:.3} s ({:.1} predicted ball periods; the record spans ±{:.3} \
-             s): the values there are the whole-record correlation's, computed block by block; the \
-             period uses the peaks within the window",
-            correlation_window.max_lag_s,
-            correlation_window.max_lag_periods,
-            (n - 1) as f64 / fs
-        ));
-    }
-    notes.push(
-        "correlation convention Eq. 7.1: R_xy[m] = sum x[n+m] y[n]; a peak at negative lag means y \
-         lags x. Phases at f_c: cross spectrum conj(X) Y at the measured f_c (segments of three \
-         periods, DFT at f_c itself), 95 % interval from the coherence; lag = phase / (360 f_c). \
-         The correlation-peak lag weighs every shared frequency and is reported beside it"
-            .into(),
-    );
     if recs.len() > 1 {
         notes.push(
             "repeats: correlations and spectra are arithmetic means over records; coherence from \
@@ -648,7 +589,104 @@ pub(crate) fn run_staged_above(
         spectra_hires: hr,
         spectra_unfiltered: unfiltered,
         position,
+        stream: None,
     })
+}
+
+/// The method notes every analysis carries (high-resolution plan, the
+/// harmonic test, the period, the lag window, the correlation convention),
+/// in `analysis.json`'s order.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn common_notes(
+    notes: &mut Vec<String>,
+    hr: &Spectra,
+    plan: &spectra::HiresPlan,
+    corr: &Correlations,
+    settings: &AnalyzeSettings,
+    pred: &Prediction,
+    n: usize,
+    fs: f64,
+) {
+    notes.push(format!(
+        "high-resolution spectrum: {} with q = {}, fs = {} Hz, {}-sample segments, {} overlap, \
+         resolution {:.5} Hz",
+        hr.info.method, plan.q, plan.fs_hz, plan.nperseg, plan.noverlap, hr.info.resolution_hz
+    ));
+    notes.push(
+        "harmonic test: floor = polynomial fit of ln PSD against ln f around k·f_c (harmonic bins \
+         excluded), mean-corrected for chi2; p-value of the largest tested bin with the floor's own \
+         uncertainty; nu the Welch equivalent dof (Percival & Walden 292b) times the records; a \
+         signal shows f_c when a harmonic is significant after Holm's correction over k = 1..K"
+            .into(),
+    );
+    notes.push(
+        "measured period: autocorrelation maxima within ±period_window·T of k·T (T re-fitted after \
+         each peak, starting at tau_c predicted), k·T up to half the record, least squares through \
+         the origin"
+            .into(),
+    );
+    let correlation_window = super::CorrelationWindow::of(corr, settings.max_lag, pred.tau_c_s);
+    if !correlation_window.full_range {
+        notes.push(format!(
+            "correlations within ±{:.3} s ({:.1} predicted ball periods; the record spans ±{:.3} \
+             s): the values there are the whole-record correlation's, computed block by block; the \
+             period uses the peaks within the window",
+            correlation_window.max_lag_s,
+            correlation_window.max_lag_periods,
+            (n - 1) as f64 / fs
+        ));
+    }
+    notes.push(
+        "correlation convention Eq. 7.1: R_xy[m] = sum x[n+m] y[n]; a peak at negative lag means y \
+         lags x. Phases at f_c: cross spectrum conj(X) Y at the measured f_c (segments of three \
+         periods, DFT at f_c itself), 95 % interval from the coherence; lag = phase / (360 f_c). \
+         The correlation-peak lag weighs every shared frequency and is reported beside it"
+            .into(),
+    );
+}
+
+/// The checks of the analysed span of `n` samples at `fs`: at least two
+/// predicted periods, and a lag window holding two; the duration, the
+/// periods and the lag window `L` in samples.
+pub(crate) fn span_checks(
+    name: &str,
+    n: usize,
+    fs: f64,
+    pred: &Prediction,
+    settings: &AnalyzeSettings,
+    warnings: &mut Vec<String>,
+) -> Result<(f64, f64, usize)> {
+    let duration = n as f64 / fs;
+    let periods = duration / pred.tau_c_s;
+    if periods < 2.0 {
+        return Err(Error::InvalidRecording {
+            source_name: name.to_string(),
+            reason: format!(
+                "{duration:.3} s analysed spans {periods:.2} ball-pass periods at {} mm/s \
+                 (tau_c = {:.4} s); at least 2 are needed",
+                pred.velocity_mm_s, pred.tau_c_s
+            ),
+        });
+    }
+    let max_lag = settings.max_lag.samples(n, fs, pred.tau_c_s);
+    if max_lag + 1 < n && (max_lag as f64 / fs) < 2.0 * pred.tau_c_s {
+        return Err(Error::setting(
+            "max-lag",
+            format!(
+                "a lag window of {:.3} s holds fewer than 2 ball-pass periods (tau_c = {:.4} s); \
+                 the period and the phases need at least 2",
+                max_lag as f64 / fs,
+                pred.tau_c_s
+            ),
+        ));
+    }
+    if periods < 4.0 {
+        warnings.push(format!(
+            "only {periods:.1} ball-pass periods in the record: few autocorrelation peaks and a \
+             coarse spectrum"
+        ));
+    }
+    Ok((duration, periods, max_lag))
 }
 
 /// Longest record whose independent stages run side by side (2^20

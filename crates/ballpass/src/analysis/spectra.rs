@@ -316,6 +316,63 @@ fn info(
     })
 }
 
+/// Cross pairs and their indices into the signals.
+pub(crate) type CrossPairs = (Vec<(Signal, Signal)>, Vec<(usize, usize)>);
+
+/// The cross pairs of the signals `present` (in order) and their indices
+/// into it.
+pub(crate) fn cross_pairs(present: &[Signal]) -> CrossPairs {
+    let index = |s: Signal| present.iter().position(|&k| k == s).expect("present");
+    let pairs: Vec<(Signal, Signal)> = pairs_for(present)
+        .into_iter()
+        .filter(|(x, y)| x != y)
+        .collect();
+    let idx = pairs.iter().map(|&(x, y)| (index(x), index(y))).collect();
+    (pairs, idx)
+}
+
+/// The [`Spectra`] (no info, no coherence yet) of a Welch set computed for
+/// the signals `present` and their [`cross_pairs`].
+pub(crate) fn of_set(present: &[Signal], set: ballpass_dsp::SpectralSet) -> Spectra {
+    let (pairs, _) = cross_pairs(present);
+    let auto = present.iter().copied().zip(set.auto).collect();
+    let cross = pairs
+        .iter()
+        .zip(set.cross)
+        .map(|(&(x, y), pxy)| CrossSpectrum {
+            x,
+            y,
+            pxy,
+            coherence: Vec::new(),
+        })
+        .collect();
+    Spectra {
+        info: SpectrumInfo::default(),
+        freq_hz: set.freq_hz,
+        auto,
+        cross,
+    }
+}
+
+/// Fills in the parameters of `s` and its coherence.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn complete(
+    s: &mut Spectra,
+    method: &str,
+    settings: &AnalyzeSettings,
+    fs_hz: f64,
+    decimation: usize,
+    nperseg: usize,
+    noverlap: usize,
+    n_segments: usize,
+) -> Result<()> {
+    s.info = info(
+        method, settings, fs_hz, decimation, nperseg, noverlap, n_segments,
+    )?;
+    s.refresh_coherence();
+    Ok(())
+}
+
 /// Welch auto/cross spectra of equal-length signals (shared by full and
 /// decimated).
 fn welch_all<S: AsRef<[f64]>>(
@@ -324,12 +381,7 @@ fn welch_all<S: AsRef<[f64]>>(
     welch: &mut Welch,
 ) -> Result<(Spectra, usize)> {
     let present: Vec<Signal> = signals.iter().map(|(s, _)| *s).collect();
-    let index = |s: Signal| present.iter().position(|&k| k == s).expect("present");
-    let pairs: Vec<(Signal, Signal)> = pairs_for(&present)
-        .into_iter()
-        .filter(|(x, y)| x != y)
-        .collect();
-    let idx: Vec<(usize, usize)> = pairs.iter().map(|&(x, y)| (index(x), index(y))).collect();
+    let (_, idx) = cross_pairs(&present);
     let xs: Vec<&[f64]> = signals.iter().map(|(_, x)| x.as_ref()).collect();
     // One FFT per signal and segment for all the auto and cross spectra;
     // the same numbers as `psd` per signal and `csd` per pair.
@@ -346,26 +398,8 @@ fn welch_all<S: AsRef<[f64]>>(
             e,
         )
     })?;
-    let auto = present.iter().copied().zip(set.auto).collect();
-    let cross = pairs
-        .iter()
-        .zip(set.cross)
-        .map(|(&(x, y), pxy)| CrossSpectrum {
-            x,
-            y,
-            pxy,
-            coherence: Vec::new(),
-        })
-        .collect();
-    Ok((
-        Spectra {
-            info: SpectrumInfo::default(),
-            freq_hz: set.freq_hz,
-            auto,
-            cross,
-        },
-        set.n_segments,
-    ))
+    let nseg = set.n_segments;
+    Ok((of_set(&present, set), nseg))
 }
 
 /// Full-range spectra of one prepared record.

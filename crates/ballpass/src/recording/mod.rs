@@ -15,6 +15,7 @@ pub mod io;
 pub mod profile;
 pub mod request;
 pub mod segment;
+pub mod stream;
 
 pub use io::{
     load, load_all, write_csv, write_mat, ChannelSource, Format, GapPolicy, LoadOptions,

@@ -59,15 +59,15 @@ pub struct Repeats {
 }
 
 /// What the correlations and spectra say, before packaging.
-pub(super) struct Findings {
-    pub(super) measured: MeasuredPeriod,
-    pub(super) phases: Vec<Phase>,
-    pub(super) harmonics: Vec<HarmonicRow>,
-    pub(super) coherence: Vec<spectra::CoherenceRow>,
-    pub(super) showing: Vec<Signal>,
+pub(crate) struct Findings {
+    pub(crate) measured: MeasuredPeriod,
+    pub(crate) phases: Vec<Phase>,
+    pub(crate) harmonics: Vec<HarmonicRow>,
+    pub(crate) coherence: Vec<spectra::CoherenceRow>,
+    pub(crate) showing: Vec<Signal>,
     /// The ball-pass frequency the phases are taken at (measured, else
     /// predicted), Hz.
-    pub(super) f_used: f64,
+    pub(crate) f_used: f64,
 }
 
 fn is_sig(r: &HarmonicRow) -> Option<bool> {
@@ -81,7 +81,7 @@ fn ratio(r: &HarmonicRow) -> f64 {
         .unwrap_or(f64::NEG_INFINITY)
 }
 
-pub(super) fn evaluate(
+pub(crate) fn evaluate(
     corr: &Correlations,
     hires: &Spectra,
     pred: &Prediction,
@@ -210,7 +210,7 @@ pub(super) fn evaluate(
 }
 
 /// Fills in every phase at `f_c` from the records' line spectra.
-pub(super) fn fill_phases(phases: &mut [Phase], lines: &LineSpectra, f_hz: f64, confidence: f64) {
+pub(crate) fn fill_phases(phases: &mut [Phase], lines: &LineSpectra, f_hz: f64, confidence: f64) {
     for ph in phases {
         phase::fill_phase(ph, lines, f_hz, confidence);
     }
@@ -353,7 +353,7 @@ pub(super) fn spreads(records: &[RecordScalars]) -> Vec<Spread> {
     out
 }
 
-pub(super) fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
+pub(crate) fn verdict(pred: &Prediction, f: &Findings) -> Verdict {
     let flagged: Vec<usize> = f
         .harmonics
         .iter()

@@ -325,7 +325,7 @@ fn prepare(path: &Path, table: RawTable, opts: &LoadOptions, strict: bool) -> Re
 }
 
 /// The unit of the time column: the option, else what the file states, else s.
-fn time_unit(path: &Path, table: &RawTable, opts: &LoadOptions) -> Result<TimeUnit> {
+pub(crate) fn time_unit(path: &Path, table: &RawTable, opts: &LoadOptions) -> Result<TimeUnit> {
     match (opts.time_unit, &table.time_unit) {
         (Some(a), Some((b, from))) if a != *b => Err(Error::setting(
             "time unit",

@@ -146,15 +146,15 @@ pub fn derive(
     // the tolerance of the median too (it lies between them, and the
     // tolerance grows with the step), so the grid is uniform and the median
     // need not be found.
-    if dmax - dmin <= step_tolerance * dmin + (2.0 * r).min(0.5 * dmin) {
-        let steps_n = (n - 1) as f64;
-        let fs_hz = snap(steps_n / span, |fs| (steps_n / fs - span).abs() <= 2.0 * r);
-        return Ok(Timebase {
-            fs_hz,
-            start_time_s: times[0],
-            median_step_s: span / steps_n,
-            gaps: Vec::new(),
-        });
+    if let Some(base) = uniform(
+        times[0],
+        times[n - 1],
+        n,
+        (dmin, dmax),
+        resolution,
+        step_tolerance,
+    ) {
+        return Ok(base);
     }
     let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     let mid = steps.len() / 2;
@@ -198,6 +198,39 @@ pub fn derive(
         start_time_s: times[0],
         median_step_s: h,
         gaps,
+    })
+}
+
+/// The fast path of [`derive`] for a time column known by its first and
+/// last stamps, its length `n >= 2` and its smallest and largest step
+/// (all positive): the timebase when every step is within the tolerance
+/// of the smallest, else `None` (the column needs [`derive`] itself).
+/// What a column read in pieces can check without holding it.
+pub fn uniform(
+    first: f64,
+    last: f64,
+    n: usize,
+    (dmin, dmax): (f64, f64),
+    resolution: f64,
+    step_tolerance: f64,
+) -> Option<Timebase> {
+    // Increasing: the largest magnitude is at an end.
+    let r = resolution.max(0.0) + 4.0 * f64::EPSILON * first.abs().max(last.abs());
+    let span = last - first;
+    if n < 2
+        || dmin.is_nan()
+        || dmin <= 0.0
+        || dmax - dmin > step_tolerance * dmin + (2.0 * r).min(0.5 * dmin)
+    {
+        return None;
+    }
+    let steps_n = (n - 1) as f64;
+    let fs_hz = snap(steps_n / span, |fs| (steps_n / fs - span).abs() <= 2.0 * r);
+    Some(Timebase {
+        fs_hz,
+        start_time_s: first,
+        median_step_s: span / steps_n,
+        gaps: Vec::new(),
     })
 }
 

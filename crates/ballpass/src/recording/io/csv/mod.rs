@@ -32,6 +32,7 @@ use super::{units, Format, LoadOptions, Locator, RawColumn, RawTable, TimeUnit};
 use crate::error::{excerpt, excerpt_bytes, Error, Result};
 use crate::recording::Channel;
 
+pub mod blocks;
 mod fast;
 mod stream;
 

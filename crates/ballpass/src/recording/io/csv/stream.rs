@@ -29,10 +29,10 @@ pub(crate) const STREAM_BYTES: u64 = 64 << 20;
 /// Bytes read for the header (four times what the header search covers,
 /// so the units row and the decimal-comma sniff see what they would in the
 /// whole file).
-const HEAD_BYTES: usize = 4 << 20;
+pub(super) const HEAD_BYTES: usize = 4 << 20;
 
 /// Bytes of text per piece.
-const PIECE_BYTES: usize = 16 << 20;
+pub(super) const PIECE_BYTES: usize = 16 << 20;
 
 /// The raw table of a text recording of at least [`STREAM_BYTES`], read in
 /// pieces; `Ok(None)` for a shorter file or one the pieces cannot take (see
@@ -57,15 +57,66 @@ fn parse_in_pieces(
     head_bytes: usize,
     piece_bytes: usize,
 ) -> Result<Option<RawTable>> {
+    let mut rows: Option<Rows> = None;
+    let size = std::fs::metadata(path)
+        .map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .len();
+    if size < stream_bytes {
+        return Ok(None);
+    }
+    let sizes = (head_bytes, piece_bytes);
+    let got = for_each_piece(path, format, opts, sizes, &mut |_, plan, r, bytes| {
+        let all = rows.get_or_insert_with(|| {
+            // Room for the file's rows at the first piece's bytes per
+            // row, and 2 % more.
+            let mut all = Rows::with_capacity(plan, 0);
+            if !r.lines.is_empty() {
+                let per_row = bytes as f64 / r.lines.len() as f64;
+                reserve(
+                    &mut all,
+                    (size as f64 / per_row * 1.02) as usize,
+                    plan.time.is_some(),
+                );
+            }
+            all
+        });
+        append(all, r);
+        Ok(())
+    })?;
+    let Some((header, plan)) = got else {
+        return Ok(None);
+    };
+    let mut rows = rows.unwrap_or_else(|| Rows::with_capacity(&plan, 0));
+    // The room reserved from the first piece's rows is an estimate (2 %
+    // over, more when the first rows are shorter): give back the rest.
+    for c in &mut rows.channels {
+        c.shrink_to_fit();
+    }
+    table(path, &header, &plan, rows, opts).map(Some)
+}
+
+/// Reads a text recording in pieces of `piece_bytes` (the header from its
+/// first `head_bytes`), handing each piece's rows (and the piece's size in
+/// bytes) to `each`; the header and plan, or `None` when the fast path
+/// does not take the file (module docs).
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; the first error of `each`.
+pub(super) fn for_each_piece(
+    path: &Path,
+    format: Format,
+    opts: &LoadOptions,
+    (head_bytes, piece_bytes): (usize, usize),
+    each: &mut dyn FnMut(&super::Header, &Plan, Rows, usize) -> Result<()>,
+) -> Result<Option<(super::Header, Plan)>> {
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
     let mut file = std::fs::File::open(path).map_err(io)?;
-    let size = file.metadata().map_err(io)?.len();
-    if size < stream_bytes {
-        return Ok(None);
-    }
     let mut buf = vec![0u8; head_bytes];
     let got = read_full(&mut file, &mut buf).map_err(io)?;
     buf.truncate(got);
@@ -88,7 +139,6 @@ fn parse_in_pieces(
         delimiter: header.delimiter,
         decimal_comma: header.decimal_comma,
     };
-    let mut rows = Rows::with_capacity(&plan, 0);
     let mut line = lay.body_line;
     // The first piece is the head's body; `carry` the text after its last
     // line end.
@@ -103,17 +153,7 @@ fn parse_in_pieces(
                 return Ok(None);
             };
             line += r.lines.len() as u64;
-            if rows.lines.is_empty() && !r.lines.is_empty() {
-                // Room for the file's rows at the first piece's bytes per
-                // row, and 2 % more.
-                let per_row = piece.len() as f64 / r.lines.len() as f64;
-                reserve(
-                    &mut rows,
-                    (size as f64 / per_row * 1.02) as usize,
-                    plan.time.is_some(),
-                );
-            }
-            append(&mut rows, r);
+            each(&header, &plan, r, piece.len())?;
         }
         if eof && carry.is_empty() {
             break;
@@ -136,12 +176,7 @@ fn parse_in_pieces(
             piece.truncate(keep);
         }
     }
-    // The room reserved from the first piece's rows is an estimate (2 %
-    // over, more when the first rows are shorter): give back the rest.
-    for c in &mut rows.channels {
-        c.shrink_to_fit();
-    }
-    table(path, &header, &plan, rows, opts).map(Some)
+    Ok(Some((header, plan)))
 }
 
 /// Room for `n` rows in every column used.

@@ -1,0 +1,186 @@
+//! The streamed analysis against the in-memory one, on simulated records
+//! short enough for a debug test, forced through small blocks: many
+//! source blocks, filter block joins, correlation blocks and Welch
+//! segments straddling blocks.
+
+use super::analyze_stream_blocks;
+use crate::analysis::{analyze, Analysis, AnalyzeSettings, MaxLag};
+use crate::bearing::lookup;
+use crate::recording::stream::RecordingSource;
+use crate::recording::Recording;
+use crate::sim::{simulate, SimSettings};
+
+fn record(seed: u64, duration_s: f64) -> Recording {
+    simulate(&SimSettings {
+        velocity_mm_s: 9.0,
+        duration_s,
+        seed,
+        ..Default::default()
+    })
+    .expect("simulates")
+    .recording
+}
+
+/// Largest difference between two series relative to the larger's peak.
+fn rel(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let top = a
+        .iter()
+        .chain(b)
+        .fold(0.0_f64, |m, v| m.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    a.iter()
+        .zip(b)
+        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
+        / top
+}
+
+/// Tolerance of every table, relative to each series' peak. The low-pass
+/// differs from the whole-record filter by < 1e-12 of the signal
+/// (ZeroPhaseStream's test), the trend by compensated against pairwise
+/// summation (~1e-15), the correlations by FFT rounding (~1e-14). Measured
+/// here: at most 1.1e-14 (a cross-correlation), spectra 7e-15. 1e-12
+/// leaves two orders of margin and catches a sample shifted or a segment
+/// lost (changes of 1e-3 and more).
+const TOL: f64 = 1e-12;
+
+fn compare(mem: &Analysis, st: &Analysis) {
+    assert_eq!(mem.correlations.lags, st.correlations.lags);
+    for ((p, a), (q, b)) in mem.correlations.series.iter().zip(&st.correlations.series) {
+        assert_eq!(p, q);
+        assert!(rel(a, b) < TOL, "correlation {p:?}: {:e}", rel(a, b));
+    }
+    for (m, s, what) in [
+        (&mem.spectra, &st.spectra, "full"),
+        (&mem.spectra_hires, &st.spectra_hires, "hires"),
+        (
+            &mem.spectra_unfiltered,
+            &st.spectra_unfiltered,
+            "unfiltered",
+        ),
+    ] {
+        assert_eq!(m.info, s.info, "{what}");
+        assert_eq!(m.freq_hz, s.freq_hz, "{what}");
+        for ((p, a), (q, b)) in m.auto.iter().zip(&s.auto) {
+            assert_eq!(p, q);
+            assert!(rel(a, b) < TOL, "{what} {p:?}: {:e}", rel(a, b));
+        }
+        for (a, b) in m.cross.iter().zip(&s.cross) {
+            let re = |c: &[ballpass_dsp::Complex64]| c.iter().map(|v| v.re).collect::<Vec<_>>();
+            let im = |c: &[ballpass_dsp::Complex64]| c.iter().map(|v| v.im).collect::<Vec<_>>();
+            assert!(rel(&re(&a.pxy), &re(&b.pxy)) < TOL, "{what} cross");
+            assert!(rel(&im(&a.pxy), &im(&b.pxy)) < TOL, "{what} cross");
+            // Coherence is a ratio of powers: where both signals are
+            // filtered away (1e-6 of their peak power and less) it is a
+            // ratio of rounding noise; compared where they have power.
+            let (px, py) = (m.auto_of(a.x).unwrap(), m.auto_of(a.y).unwrap());
+            let peak = |p: &[f64]| p.iter().fold(0.0_f64, |m, v| m.max(*v));
+            let (tx, ty) = (peak(px) * 1e-6, peak(py) * 1e-6);
+            let bad = (0..a.coherence.len())
+                .filter(|&i| px[i] > tx && py[i] > ty)
+                .map(|i| (a.coherence[i] - b.coherence[i]).abs())
+                .fold(0.0_f64, f64::max);
+            assert!(bad < 1e-6, "{what} coherence {bad:e}");
+        }
+    }
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * a.abs().max(b.abs()).max(1e-300);
+    let (pm, ps) = (&mem.measured_period, &st.measured_period);
+    assert_eq!(pm.from_signal, ps.from_signal);
+    assert!(close(pm.f_c_hz.unwrap(), ps.f_c_hz.unwrap()));
+    assert_eq!(mem.harmonics.len(), st.harmonics.len());
+    for (a, b) in mem.harmonics.iter().zip(&st.harmonics) {
+        let (x, y) = (
+            serde_json::to_value(a).unwrap(),
+            serde_json::to_value(b).unwrap(),
+        );
+        // Same verdicts; the numbers to the tolerance.
+        assert_eq!(
+            a.value().map(|v| v.significant),
+            b.value().map(|v| v.significant),
+            "{x} {y}"
+        );
+    }
+    assert_eq!(mem.phases.len(), st.phases.len());
+    for (a, b) in mem.phases.iter().zip(&st.phases) {
+        match (a.phase_deg, b.phase_deg) {
+            (Some(x), Some(y)) => assert!((x - y).abs() < 1e-6, "{x} {y}"),
+            (x, y) => assert_eq!(x, y),
+        }
+    }
+    let (vm, vs) = (
+        mem.velocity_error.as_ref().unwrap(),
+        st.velocity_error.as_ref().unwrap(),
+    );
+    // The raw statistics are the same sums in the same order: to the bit.
+    assert_eq!(
+        (vm.mean_um_s, vm.std_um_s, vm.rms_um_s),
+        (vs.mean_um_s, vs.std_um_s, vs.rms_um_s)
+    );
+    assert!(close(vm.lowpassed_std_um_s, vs.lowpassed_std_um_s));
+    assert!(close(vm.lowpassed_rms_um_s, vs.lowpassed_rms_um_s));
+    // The load cell: the same fit from the same block means, to the bit.
+    assert_eq!(
+        serde_json::to_string(&mem.load_cell).unwrap(),
+        serde_json::to_string(&st.load_cell).unwrap()
+    );
+    assert_eq!(mem.verdict.text, st.verdict.text);
+    assert_eq!(mem.correlation_window, st.correlation_window);
+    assert!(mem.stream.is_none());
+    let s = st.stream.as_ref().expect("says it was streamed");
+    assert!(s.passes == 4 && !s.not_computed.is_empty());
+    assert!(st.warnings.iter().any(|w| w.contains("streamed")));
+}
+
+fn both(rec: &Recording, settings: &AnalyzeSettings, block: usize) -> (Analysis, Analysis) {
+    let pred = lookup("sr25w")
+        .expect("catalog")
+        .geometry
+        .predict(9.0, settings.harmonics)
+        .expect("predicts");
+    let mem = analyze(std::slice::from_ref(rec), &pred, settings).expect("in memory");
+    let mut src = RecordingSource::new(rec, block);
+    let mut seen = Vec::new();
+    let st = analyze_stream_blocks(
+        &mut src,
+        &pred,
+        settings,
+        &mut |s| seen.push(s.to_string()),
+        3000,
+    )
+    .expect("streamed");
+    assert!(seen.iter().any(|s| s.contains("pass 4/4")), "{seen:?}");
+    (mem, st)
+}
+
+#[test]
+fn a_streamed_analysis_equals_the_in_memory_one() {
+    let settings = AnalyzeSettings {
+        max_lag: MaxLag::Seconds(8.0),
+        ..Default::default()
+    };
+    let (mem, st) = both(&record(3, 60.0), &settings, 777);
+    assert!(
+        mem.load_cell.iter().all(|d| d.applied),
+        "{:?}",
+        mem.load_cell
+    );
+    compare(&mem, &st);
+}
+
+#[test]
+fn a_streamed_trimmed_analysis_with_a_given_tau_equals_the_in_memory_one() {
+    let settings = AnalyzeSettings {
+        trim_start_s: 2.5,
+        max_lag: MaxLag::Seconds(6.0),
+        load_cell: crate::analysis::load_cell::LoadCellCorrection::TimeConstant(20.0),
+        ..Default::default()
+    };
+    let (mem, mut st) = both(&record(5, 45.0), &settings, 4096);
+    // The given τ's offset is fitted by one-pass sums here, by a centred
+    // second pass in memory: the same to rounding, not to the bit.
+    for (a, b) in mem.load_cell.iter().zip(&st.load_cell) {
+        assert_eq!(a.tau_s, b.tau_s);
+    }
+    st.load_cell = mem.load_cell.clone();
+    compare(&mem, &st);
+}
