@@ -24,6 +24,11 @@
 //! re-zeroing), and the record-frame check (`RECORD_OFFSET_LIMIT`) is
 //! scored with the lock rule.
 //!
+//! With `--diagnose`, takes each bench apart (session 8): the stage used
+//! against the simulated one, the table built on the simulated gains, the
+//! table built from the bench recorded by a DC-coupled force sensor, and
+//! the friction level the replay used.
+//!
 //! With `--rounds`, compensates each bench in three rounds, each table
 //! built from the run with the previous one applied
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
@@ -38,6 +43,10 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--variants") {
         variants();
+        return;
+    }
+    if std::env::args().any(|a| a == "--diagnose") {
+        diagnose();
         return;
     }
     if std::env::args().any(|a| a == "--rounds") {
@@ -246,6 +255,50 @@ fn variants() {
                     p.std_predicted_um_s,
                     c.sync_table_um_s.0,
                     c.sync_table_um_s.1,
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+}
+
+/// The `--diagnose` measurement: each bench's stage, periods, and the
+/// table built on the simulated stage's gains beside the product's.
+fn diagnose() {
+    let (n, seed) = n_and_seed(7_600_000);
+    println!(
+        "v_mm_s,condition,std_over_v,stage,f_n_used,zeta_used,f_n_true,zeta_true,periods,fc_before,fc_after,fc_pred,std_before,std_after,std_pred,fc_after_true_gains,fc_pred_true_gains,std_after_true_gains,std_pred_true_gains,fc_after_dc,fc_pred_dc,level,level_dc"
+    );
+    for i in 0..n {
+        let s = bench(seed, i);
+        match ballpass::validate::compensation::diagnose(&s) {
+            Ok(d) => {
+                let p = &d.product;
+                println!(
+                    "{:.3},{},{:.3},{:?},{:.3},{:.3},{:.3},{:.3},{},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.2},{:.2}",
+                    p.velocity_mm_s,
+                    p.condition.name(),
+                    p.std_before_um_s * 1e-3 / p.velocity_mm_s,
+                    p.stage_source,
+                    d.used_f_n_zeta.0,
+                    d.used_f_n_zeta.1,
+                    d.true_f_n_zeta.0,
+                    d.true_f_n_zeta.1,
+                    d.periods,
+                    p.f_c_before_um_s,
+                    p.f_c_after_um_s,
+                    p.f_c_predicted_um_s,
+                    p.std_before_um_s,
+                    p.std_after_um_s,
+                    p.std_predicted_um_s,
+                    d.true_gains_f_c_um_s.0,
+                    d.true_gains_f_c_um_s.1,
+                    d.true_gains_std_um_s.0,
+                    d.true_gains_std_um_s.1,
+                    d.dc_sensor_f_c_um_s.0,
+                    d.dc_sensor_f_c_um_s.1,
+                    d.friction_level_n.0,
+                    d.friction_level_n.1,
                 );
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),

@@ -323,3 +323,69 @@ pub fn check_variants(s: &SimSettings) -> Result<VariantCheck> {
         sync_table_um_s: closed_loop(s, sync, &pred)?,
     })
 }
+
+/// One bench taken apart (session 8's near-stall diagnosis): the product's
+/// check, the stage it used against the simulated one, and the same bench
+/// with the table built on the simulated stage's gains.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnosis {
+    /// The product's check.
+    pub product: CompensationCheck,
+    /// Natural frequency and damping ratio of the stage the product used.
+    pub used_f_n_zeta: (f64, f64),
+    /// The same of the simulated stage.
+    pub true_f_n_zeta: (f64, f64),
+    /// Periods in the synchronous average.
+    pub periods: usize,
+    /// f_c component after, simulated and predicted, with the table built on
+    /// the simulated stage's gains, µm/s.
+    pub true_gains_f_c_um_s: (f64, f64),
+    /// Std after, simulated and predicted, same table, µm/s.
+    pub true_gains_std_um_s: (f64, f64),
+    /// f_c component after, simulated and predicted, with the table built
+    /// from the same bench recorded by a DC-coupled force sensor, µm/s.
+    pub dc_sensor_f_c_um_s: (f64, f64),
+    /// Friction level the replay used, from the record and from the
+    /// DC-coupled record, N.
+    pub friction_level_n: (f64, f64),
+}
+
+/// [`check`] and the same bench with the table built on the simulated
+/// stage (the identification ignored).
+///
+/// # Errors
+/// As [`check`].
+pub fn diagnose(s: &SimSettings) -> Result<Diagnosis> {
+    let sim = simulate(s)?;
+    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
+    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let recs = std::slice::from_ref(&sim.recording);
+    let a = analyze(recs, &pred, &AnalyzeSettings::default())?;
+    let comp = crate::model::compensate::from_analysis(&a, recs, Some(gains))?;
+    let product = check_table(s, &comp, &pred)?;
+    let mut a2 = a.clone();
+    if let Some(st) = a2.stage.as_mut() {
+        st.identified = false;
+    }
+    let comp2 = crate::model::compensate::from_analysis(&a2, recs, Some(gains))?;
+    let (fc2, sd2) = closed_loop(s, comp2.feedforward(), &pred)?;
+    let mut s3 = s.clone();
+    s3.load_cell.time_constant_s = None;
+    let sim3 = simulate(&s3)?;
+    let recs3 = std::slice::from_ref(&sim3.recording);
+    let a3 = analyze(recs3, &pred, &AnalyzeSettings::default())?;
+    let comp3 = crate::model::compensate::from_analysis(&a3, recs3, Some(gains))?;
+    let (fc3, _) = closed_loop(s, comp3.feedforward(), &pred)?;
+    let level = |c: &Compensation| c.friction_levels.first().map_or(f64::NAN, |l| l.replayed_n);
+    let fz = |g: &PdLoop| (g.omega_n_rad_s() / std::f64::consts::TAU, g.damping_ratio());
+    Ok(Diagnosis {
+        product,
+        used_f_n_zeta: fz(&comp.stage),
+        true_f_n_zeta: fz(&gains),
+        periods: comp.periods_used,
+        true_gains_f_c_um_s: (fc2, comp2.prediction.f_c_after_um_s),
+        true_gains_std_um_s: (sd2, comp2.prediction.std_after_um_s),
+        dc_sensor_f_c_um_s: (fc3, comp3.prediction.f_c_after_um_s),
+        friction_level_n: (level(&comp), level(&comp3)),
+    })
+}

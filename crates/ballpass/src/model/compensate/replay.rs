@@ -32,6 +32,8 @@ pub(crate) struct Design {
     pub table: Vec<f64>,
     /// The replay with it.
     pub after: Replayed,
+    /// Each record's friction level ([`fit_levels`]).
+    pub levels: Vec<LevelFit>,
 }
 
 /// The table of `bins` bins the compensated stage meets: starting from the
@@ -44,12 +46,28 @@ pub(crate) fn design(
     stage: &PdLoop,
     a: &crate::analysis::Analysis,
     bins: usize,
+    fit_level: bool,
 ) -> Result<Design, String> {
     let pitch = 2.0 * a.prediction.d_avg_mm;
     let (sum, count) = super::travel::travel_bins(keys, |k| &k.friction_n, pitch, bins);
     let mut table = super::travel::travel_table(&sum, &count)
         .ok_or("no period between two passages to average the friction over")?;
     let v = a.prediction.velocity_mm_s;
+    let mut keys = keys.to_vec();
+    let levels = if fit_level {
+        fit_levels(&mut keys, stage, pitch, v, &a.settings)?
+    } else {
+        keys.iter()
+            .map(|k| {
+                let m = k.friction_n.iter().sum::<f64>() / k.friction_n.len().max(1) as f64;
+                LevelFit {
+                    restored_n: m,
+                    fitted_n: m,
+                }
+            })
+            .collect()
+    };
+    let keys = &keys[..];
     for _ in 0..ROUNDS {
         let r = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
         table = r
@@ -57,7 +75,87 @@ pub(crate) fn design(
             .ok_or("the replay did not reach the passages")?;
     }
     let after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
-    Ok(Design { table, after })
+    Ok(Design {
+        table,
+        after,
+        levels,
+    })
+}
+
+/// Candidate friction levels above the lowest one, in stds of the
+/// record's friction ([`fit_levels`]).
+const LEVEL_STEPS: [f64; 5] = [0.0, 0.5, 1.0, 2.0, 4.0];
+
+/// Quantile of the friction put at zero by the lowest candidate level.
+const LEVEL_QUANTILE: f64 = 0.005;
+
+/// The friction level of one record as the replay takes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LevelFit {
+    /// Mean of the friction as restored from the record, N.
+    pub restored_n: f64,
+    /// Mean of the friction replayed, N.
+    pub fitted_n: f64,
+}
+
+/// Sets each record's friction level (its mean) to the one whose replay
+/// without a table gives the record's own velocity-error std.
+///
+/// The level is the one thing about the friction the load cell does not
+/// give (its discharge is undone from an assumed start, and a record cut
+/// mid-run, or one whose decay was mis-fitted, reads a level far from the
+/// true one), and near stall it matters: a friction that reads negative is
+/// held at zero, and where the stage stops the level decides how long.
+/// Above the level at which the friction stays positive, the replay hardly
+/// depends on it. So each record is replayed alone at levels `L_0 + k·σ`,
+/// `L_0` the level that puts the record's 0.5 % quantile at zero, `σ` the
+/// friction's std and `k` in [`LEVEL_STEPS`], and the level whose replayed
+/// std is nearest the record's is kept.
+pub(crate) fn fit_levels(
+    keys: &mut [RecordKeys],
+    stage: &PdLoop,
+    pitch_mm: f64,
+    velocity_mm_s: f64,
+    settings: &AnalyzeSettings,
+) -> Result<Vec<LevelFit>, String> {
+    let mut out = Vec::with_capacity(keys.len());
+    for k in keys.iter_mut() {
+        let n = k.friction_n.len();
+        if n < 2 {
+            return Err("a record with fewer than 2 friction samples".into());
+        }
+        let restored = k.friction_n.iter().sum::<f64>() / n as f64;
+        let shape: Vec<f64> = k.friction_n.iter().map(|f| f - restored).collect();
+        let mut sorted = shape.clone();
+        sorted.sort_by(f64::total_cmp);
+        let low = sorted[((LEVEL_QUANTILE * (n - 1) as f64).round() as usize).min(n - 1)];
+        let sigma = (shape.iter().map(|f| f * f).sum::<f64>() / n as f64).sqrt();
+        let mut best: Option<(f64, f64)> = None;
+        for step in LEVEL_STEPS {
+            let level = -low + step * sigma;
+            let mut one = k.clone();
+            one.friction_n = shape.iter().map(|f| f + level).collect();
+            let r = replay(
+                std::slice::from_ref(&one),
+                stage,
+                None,
+                pitch_mm,
+                velocity_mm_s,
+                settings,
+            )?;
+            let miss = (r.std_um_s - k.velocity_error_std_um_s).abs();
+            if best.is_none_or(|(m, _)| miss < m) {
+                best = Some((miss, level));
+            }
+        }
+        let level = best.map_or(restored, |b| b.1);
+        k.friction_n = shape.iter().map(|f| f + level).collect();
+        out.push(LevelFit {
+            restored_n: restored,
+            fitted_n: level,
+        });
+    }
+    Ok(out)
 }
 
 /// Internal steps per sample.

@@ -30,6 +30,7 @@ fn record(v: f64, pitch: f64, a: f64, seconds: f64) -> RecordKeys {
     RecordKeys {
         fs_hz: fs,
         friction_n: f,
+        velocity_error_std_um_s: 0.0,
         position_mm: x,
         passages,
         passage_mm,
@@ -82,6 +83,7 @@ fn two_records(shift: f64) -> Vec<RecordKeys> {
     let rec = |xs: &[f64]| RecordKeys {
         fs_hz: 1000.0,
         friction_n: vec![0.0; 2],
+        velocity_error_std_um_s: 0.0,
         position_mm: vec![xs[0], xs[xs.len() - 1]],
         passages: vec![0.0; xs.len()],
         passage_mm: xs.to_vec(),
@@ -110,4 +112,82 @@ fn records_in_one_frame_agree_and_a_re_zeroed_record_sits_apart() {
     // One record: nothing to compare.
     let single = rail_grid(&two_records(0.0)[..1], 8.1).unwrap();
     assert_eq!(single.offset_spread, 0.0);
+}
+
+/// A record cut from the middle of a run reads its friction about zero
+/// mean (the load-cell discharge is not undone): replayed at that level,
+/// a friction with stalling spikes is held at zero where it reads negative,
+/// and the replay misses the record's velocity error. The fitted level
+/// gives it back.
+#[test]
+fn the_friction_level_is_fitted_to_the_records_velocity_error() {
+    let (v, pitch, fs) = (2.0, 8.0, 1000.0);
+    let n = (40.0 * fs) as usize;
+    let x: Vec<f64> = (0..n).map(|i| v * i as f64 / fs).collect();
+    // 4 N with roughness-like ripple, and a 20 N spike (FWHM 0.4 mm) per
+    // pitch: the default stage stalls on it at 2 mm/s.
+    let f: Vec<f64> = x
+        .iter()
+        .map(|&x| {
+            let ph = (x / pitch).fract() - 0.5;
+            4.0 + 0.5 * (std::f64::consts::TAU * x / 1.3).sin()
+                + 20.0 * (-0.5 * (ph * pitch / 0.17).powi(2)).exp()
+        })
+        .collect();
+    let passages: Vec<f64> = (0..)
+        .map(|k| k as f64 * pitch / v * fs)
+        .take_while(|&u| u < (n - 1) as f64)
+        .collect();
+    let passage_mm = passages.iter().map(|&u| at_index(&x, u)).collect();
+    let mut k = RecordKeys {
+        fs_hz: fs,
+        friction_n: f.clone(),
+        velocity_error_std_um_s: 0.0,
+        position_mm: x,
+        passages,
+        passage_mm,
+    };
+    let settings = AnalyzeSettings::default();
+    let truth = replay(
+        std::slice::from_ref(&k),
+        &stage(),
+        None,
+        pitch,
+        v,
+        &settings,
+    )
+    .unwrap();
+    // Near stall: the std is a large part of the velocity.
+    assert!(truth.std_um_s > 0.15e3 * v, "{}", truth.std_um_s);
+    k.velocity_error_std_um_s = truth.std_um_s;
+    let mean = f.iter().sum::<f64>() / n as f64;
+    k.friction_n = f.iter().map(|y| y - mean).collect();
+    let cut = replay(
+        std::slice::from_ref(&k),
+        &stage(),
+        None,
+        pitch,
+        v,
+        &settings,
+    )
+    .unwrap();
+    assert!(
+        (cut.std_um_s - truth.std_um_s).abs() > 0.03 * truth.std_um_s,
+        "the level should matter: {} vs {}",
+        cut.std_um_s,
+        truth.std_um_s
+    );
+    let mut keys = vec![k];
+    let fit = super::replay::fit_levels(&mut keys, &stage(), pitch, v, &settings).unwrap();
+    assert!(fit[0].restored_n.abs() < 1e-9);
+    let again = replay(&keys, &stage(), None, pitch, v, &settings).unwrap();
+    // The candidate levels are 0.5 std apart; on the plateau above the
+    // true level the replay moves by well under 1 %.
+    assert!(
+        (again.std_um_s - truth.std_um_s).abs() < 0.01 * truth.std_um_s,
+        "fitted level {}: std {} vs {}",
+        fit[0].fitted_n,
+        again.std_um_s,
+        truth.std_um_s
+    );
 }

@@ -37,8 +37,12 @@ use crate::recording::{Channel, Recording};
 pub(crate) struct RecordKeys {
     /// Sampling rate, Hz.
     pub fs_hz: f64,
-    /// Friction, N (discharge undone, low-passed).
+    /// Friction, N (discharge undone, low-passed, linear trend removed;
+    /// its level is set by [`super::replay::fit_levels`]).
     pub friction_n: Vec<f64>,
+    /// Std of the record's low-passed velocity error, µm/s (what the
+    /// replay without a table is held to when its level is fitted).
+    pub velocity_error_std_um_s: f64,
     /// Encoder position, mm.
     pub position_mm: Vec<f64>,
     /// Optical passages, fractional sample index, increasing.
@@ -65,7 +69,17 @@ pub(crate) fn at_index(x: &[f64], u: f64) -> f64 {
 }
 
 /// Each record's friction, position and optical passages, or why not.
-pub(crate) fn record_keys(recs: &[Recording], a: &Analysis) -> Result<Vec<RecordKeys>, String> {
+///
+/// With `refined` (below [`super::SEVERE_STALL_FRACTION`]), the friction's
+/// linear trend is removed and each passage is put at its optical pulse's
+/// centre in travel; without, the friction is as restored and the passage
+/// at the encoder position of its time (measured better above it,
+/// docs/methods.md §14).
+pub(crate) fn record_keys(
+    recs: &[Recording],
+    a: &Analysis,
+    refined: bool,
+) -> Result<Vec<RecordKeys>, String> {
     let settings = crate::analysis::PassageSettings {
         velocity_mm_s: Some(a.prediction.velocity_mm_s),
         fit_pulses: 0,
@@ -91,14 +105,38 @@ pub(crate) fn record_keys(recs: &[Recording], a: &Analysis) -> Result<Vec<Record
             a.settings.load_cell,
         )
         .map_err(|e| format!("{name}: {e}"))?;
-        let friction_n = match crate::analysis::preprocess::lowpass_filter(&a.settings, fs)
-            .map_err(|e| e.to_string())?
-        {
+        let lowpass = crate::analysis::preprocess::lowpass_filter(&a.settings, fs)
+            .map_err(|e| e.to_string())?;
+        let friction = match &lowpass {
             Some(lp) => lp
                 .apply(&restored)
                 .map_err(|e| format!("{name}: low-pass of the friction: {e}"))?,
             None => restored.into_owned(),
         };
+        // A periodic friction has no trend; a trend is the discharge undone
+        // with the wrong time constant or start (its level is fitted later).
+        let level = friction.iter().sum::<f64>() / friction.len() as f64;
+        let friction_n: Vec<f64> = if refined {
+            ballpass_dsp::detrend(&friction, ballpass_dsp::DetrendType::Linear)
+                .map_err(|e| format!("{name}: detrend of the friction: {e}"))?
+                .iter()
+                .map(|f| f + level)
+                .collect()
+        } else {
+            friction
+        };
+        // The velocity error as the analysis takes it (numpy.gradient of the
+        // encoder, low-passed), along the motion.
+        let speed = ballpass_dsp::gradient(x, ballpass_dsp::Spacing::Uniform(1.0 / fs))
+            .map_err(|e| format!("{name}: velocity from the encoder: {e}"))?;
+        let speed = match &lowpass {
+            Some(lp) if speed.len() > 64 => lp
+                .apply(&speed)
+                .map_err(|e| format!("{name}: low-pass of the velocity: {e}"))?,
+            _ => speed,
+        };
+        let velocity_error_std_um_s =
+            1e3 * crate::stats::MeanStd::of(&speed).map_or(0.0, |m| m.std);
         let p = crate::analysis::detect_passages(r, &settings)
             .map_err(|_| format!("passages not found in {name}"))?;
         let passages: Vec<f64> = p
@@ -106,16 +144,133 @@ pub(crate) fn record_keys(recs: &[Recording], a: &Analysis) -> Result<Vec<Record
             .iter()
             .map(|q| ((q.time_s - r.meta.start_time_s) * fs).clamp(0.0, (x.len() - 1) as f64))
             .collect();
-        let passage_mm = passages.iter().map(|&u| at_index(x, u)).collect();
+        let at_time: Vec<f64> = passages.iter().map(|&u| at_index(x, u)).collect();
+        // The passage's position is the pulse's centre in travel: its time
+        // centre, read on the encoder, moves with the stage's speed within
+        // the pulse (near stall by tenths of a millimetre).
+        let dir = match (x.first(), x.last()) {
+            (Some(a), Some(b)) if b < a => -1.0,
+            _ => 1.0,
+        };
+        let passage_mm = match r.channel(Channel::Optical).filter(|_| refined) {
+            Some(o) => pulse_centres_in_travel(
+                x,
+                o,
+                &passages,
+                &at_time,
+                PULSE_WINDOW * 2.0 * a.prediction.d_avg_mm,
+                dir,
+            ),
+            None => at_time,
+        };
+        let passages = first_reach(x, &passages, &passage_mm, dir);
         out.push(RecordKeys {
             fs_hz: fs,
             friction_n,
+            velocity_error_std_um_s,
             position_mm: x.to_vec(),
             passages,
             passage_mm,
         });
     }
     Ok(out)
+}
+
+/// Half-width of the window around a passage in which its pulse's centre
+/// in travel is taken, ball pitches (the pulse's FWHM is about 0.155).
+const PULSE_WINDOW: f64 = 0.15;
+
+/// The fractional sample index at which the encoder first reaches each
+/// position `p` (searched from the index `u` the position came from, back
+/// and forth), travel along `dir`.
+fn first_reach(x: &[f64], passages: &[f64], passage_mm: &[f64], dir: f64) -> Vec<f64> {
+    let n = x.len();
+    passages
+        .iter()
+        .zip(passage_mm)
+        .map(|(&u, &p)| {
+            let mut i = (u.floor() as usize).min(n.saturating_sub(2));
+            while i > 0 && dir * (x[i] - p) >= 0.0 {
+                i -= 1;
+            }
+            while i + 2 < n && dir * (x[i + 1] - p) < 0.0 {
+                i += 1;
+            }
+            let (a, b) = (dir * (x[i] - p), dir * (x[i + 1] - p));
+            if a < 0.0 && b >= 0.0 && b > a {
+                i as f64 + (-a / (b - a))
+            } else {
+                u
+            }
+        })
+        .collect()
+}
+
+/// The centre of each optical pulse in position: around each passage
+/// position `p_k` (travel along the motion), the part of the optical
+/// signal above half its height within `±half` of travel, integrated over
+/// travel (not time: where the stage stops, a sample adds no travel), its
+/// centroid. Returns `p_k` unchanged where the window holds no pulse.
+/// `dir` is the direction of travel.
+pub(crate) fn pulse_centres_in_travel(
+    position_mm: &[f64],
+    optical: &[f64],
+    passages: &[f64],
+    passage_mm: &[f64],
+    half: f64,
+    dir: f64,
+) -> Vec<f64> {
+    let n = position_mm.len().min(optical.len());
+    passages
+        .iter()
+        .zip(passage_mm)
+        .map(|(&u, &p)| {
+            let i0 = (u.round() as usize).min(n.saturating_sub(1));
+            // Samples within ±half of travel around the passage.
+            let mut lo = i0;
+            while lo > 0 && dir * (p - position_mm[lo - 1]) <= half {
+                lo -= 1;
+            }
+            let mut hi = i0;
+            while hi + 1 < n && dir * (position_mm[hi + 1] - p) <= half {
+                hi += 1;
+            }
+            if hi <= lo + 2 {
+                return p;
+            }
+            let w = &optical[lo..=hi];
+            let (mn, mx) = w
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let mut sorted = w.to_vec();
+            sorted.sort_by(f64::total_cmp);
+            let median = sorted[sorted.len() / 2];
+            // The pulse stands out from the window's median: up or down.
+            let up = optical[i0] >= median;
+            let mid = 0.5 * (mn + mx);
+            let (mut sw, mut swx) = (0.0, 0.0);
+            for i in lo..hi {
+                let dx = dir * (position_mm[i + 1] - position_mm[i]);
+                if dx <= 0.0 {
+                    continue;
+                }
+                let a = 0.5 * (optical[i] + optical[i + 1]);
+                let h = if up { a - mid } else { mid - a };
+                if h > 0.0 {
+                    let xm = 0.5 * (position_mm[i] + position_mm[i + 1]);
+                    sw += h * dx;
+                    swx += h * dx * xm;
+                }
+            }
+            if sw > 0.0 {
+                swx / sw
+            } else {
+                p
+            }
+        })
+        .collect()
 }
 
 /// Sum and count per bin of `y` against the travel since each passage
@@ -242,6 +397,7 @@ mod tests {
         let keys = vec![RecordKeys {
             fs_hz: fs,
             friction_n: f,
+            velocity_error_std_um_s: 0.0,
             position_mm: xs,
             passages,
             passage_mm,
@@ -254,6 +410,42 @@ mod tests {
             let want = shape(j as f64 * pitch / 32.0);
             assert!((v - want).abs() < 1e-3, "bin {j}: {v} vs {want}");
         }
+    }
+
+    /// The stage stops for a second just before the pulse's centre: the
+    /// pulse's centre in time, read on the encoder, moves towards the stop;
+    /// its centre in travel does not.
+    #[test]
+    fn the_pulse_centre_in_travel_ignores_where_the_stage_dwells() {
+        let fs = 1000.0;
+        let (mut x, mut xs) = (0.0, Vec::new());
+        let mut stopped = 0;
+        while x < 10.0 {
+            xs.push(x);
+            if x >= 4.7 && stopped < 1000 {
+                stopped += 1;
+            } else {
+                x += 1.0 / fs;
+            }
+        }
+        // Gaussian pulse in position at 5 mm, σ 0.5 mm, on a 1 V level.
+        let o: Vec<f64> = xs
+            .iter()
+            .map(|&x| 1.0 + 0.5 * (-0.5 * ((x - 5.0) / 0.5f64).powi(2)).exp())
+            .collect();
+        // Its centre in time (weights above the level).
+        let (sw, swt) = o.iter().enumerate().fold((0.0, 0.0), |(a, b), (i, &v)| {
+            (a + (v - 1.0), b + (v - 1.0) * i as f64)
+        });
+        let u = swt / sw;
+        let p = at_index(&xs, u);
+        assert!((p - 5.0).abs() > 0.1, "time centre at {p}");
+        let c = pulse_centres_in_travel(&xs, &o, &[u], &[p], 1.5, 1.0);
+        // Trapezoid integration at 1 µm steps over a symmetric window
+        // clipped at half height: within 2 µm.
+        assert!((c[0] - 5.0).abs() < 2e-3, "travel centre at {}", c[0]);
+        let back = first_reach(&xs, &[u], &c, 1.0);
+        assert!((at_index(&xs, back[0]) - c[0]).abs() < 1e-9);
     }
 
     #[test]
