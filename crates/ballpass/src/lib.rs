@@ -20,6 +20,12 @@ pub mod sim;
 pub mod stats;
 pub mod validate;
 
+/// Self-removing scratch folders for the unit tests (the same file serves
+/// the integration and end-to-end tests).
+#[cfg(test)]
+#[path = "../tests/common/scratch.rs"]
+pub(crate) mod test_scratch;
+
 pub use error::{Error, Result};
 
 /// Version of ballpass, recorded in every output.

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use ballpass::recording::io::csv::check_fast_path_agrees;
 use ballpass::recording::{load, load_all, Channel, GapPolicy, LoadOptions, TimeUnit};
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-dialects-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "common/scratch.rs"]
+mod scratch_dir;
+
+fn scratch(name: &str) -> scratch_dir::Scratch {
+    scratch_dir::scratch_in("dialects", name)
 }
 
 fn write(dir: &Path, name: &str, text: &[u8]) -> PathBuf {

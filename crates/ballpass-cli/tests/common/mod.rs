@@ -56,23 +56,20 @@ pub fn run_ok(cmd: &mut Command) -> String {
     r.stdout
 }
 
+#[path = "../../../ballpass/tests/common/scratch.rs"]
+mod scratch_dir;
+pub use scratch_dir::Scratch;
+
 /// `<temp>/ballpass-<test binary>-<name>-<pid>`, removed if it exists but
-/// not created (for commands that must create their output folder).
-pub fn scratch_path(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "ballpass-{}-{name}-{}",
-        env!("CARGO_CRATE_NAME"),
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// not created (for commands that must create their output folder);
+/// removed again when the returned guard drops.
+pub fn scratch_path(name: &str) -> Scratch {
+    scratch_dir::scratch_path_in(env!("CARGO_CRATE_NAME"), name)
 }
 
 /// An empty scratch folder [`scratch_path`]`(name)`, created.
-pub fn scratch(name: &str) -> PathBuf {
-    let d = scratch_path(name);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+pub fn scratch(name: &str) -> Scratch {
+    scratch_dir::scratch_in(env!("CARGO_CRATE_NAME"), name)
 }
 
 /// A file under the library's `crates/ballpass/tests/` (fixtures, data).

@@ -489,12 +489,8 @@ pub fn from_directory(
 mod tests {
     use super::*;
 
-    fn tmpdir(tag: &str) -> PathBuf {
-        let d =
-            std::env::temp_dir().join(format!("ballpass-manifest-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    fn tmpdir(tag: &str) -> crate::test_scratch::Scratch {
+        crate::test_scratch::scratch_in("manifest", tag)
     }
 
     #[test]

@@ -5,12 +5,10 @@ use std::path::{Path, PathBuf};
 use super::*;
 use crate::recording::{Channels, Metadata};
 
-/// A fresh empty folder under the system temp dir, unique per test.
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ballpass-io-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh empty folder under the system temp dir, unique per test,
+/// removed when the test ends.
+fn scratch(name: &str) -> crate::test_scratch::Scratch {
+    crate::test_scratch::scratch_in("io", name)
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
