@@ -19,7 +19,8 @@
 //!   longer than [`MAX_MESSAGE`] characters, or shows a third party's words
 //!   (`panicked`, `unwrap`, `binrw`);
 //! - **disagreement**: the CSV fast path read a file differently from the
-//!   general reader.
+//!   general reader, or the streamed reader (`analyze --stream`, the file
+//!   read in 1 kB pieces) differently from the whole-file reader.
 //!
 //! An abort (stack overflow, refused allocation above
 //! [`crate::alloc::HARD_CAP`]) ends the process: the run's exit status
@@ -35,6 +36,7 @@ use std::time::{Duration, Instant};
 
 use ballpass::campaign::manifest::parse_manifest;
 use ballpass::recording::inspect::{inspect_bytes, InspectSettings};
+use ballpass::recording::io::csv::blocks::check_stream_agrees;
 use ballpass::recording::io::csv::check_fast_path_agrees;
 use ballpass::recording::io::{contents_of_bytes, load_all_bytes};
 use ballpass::recording::{GapPolicy, LoadOptions, Profile, TimeUnit};
@@ -277,6 +279,15 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
         std::thread::spawn(move || watchdog(&watch, begin, &dir, seed))
     };
     let settings = InspectSettings::default();
+    // The streamed CSV reader reads from disk: each CSV input is written
+    // here first (removed at the end of the run).
+    let stream_dir = std::env::temp_dir().join(format!(
+        "ballpass-fuzz-stream-{}-{}",
+        std::process::id(),
+        config.seed
+    ));
+    let stream_file = stream_dir.join("fuzz.csv");
+    let have_stream_dir = std::fs::create_dir_all(&stream_dir).is_ok();
     // Seeds by kind, each kind drawn with its weight (so that the many MAT
     // stress files do not crowd out the other formats).
     let weights = [
@@ -440,6 +451,14 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
                         Ok(()) => Ok(()),
                         Err(d) => panic!("CSV readers disagree: {d}"),
                     });
+                    // The streamed reader reads a file from disk: the input
+                    // is written to the run's scratch file first.
+                    if have_stream_dir && std::fs::write(&stream_file, &input).is_ok() {
+                        call("stream", &|| match check_stream_agrees(&stream_file) {
+                            Ok(()) => Ok(()),
+                            Err(d) => panic!("streamed and whole-file readers disagree: {d}"),
+                        });
+                    }
                 }
             }
             Kind::Profile => call("parse", &|| {
@@ -457,6 +476,7 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
     }
     watch.done.store(true, Relaxed);
     let _ = dog.join();
+    let _ = std::fs::remove_dir_all(&stream_dir);
     report.elapsed = begin.elapsed();
     report
 }

@@ -236,6 +236,68 @@ impl RecordSource for CsvSource {
     }
 }
 
+/// Fuzzing's check that a text file read in pieces ([`open`], with pieces
+/// of 1 kB so that a fuzzed input is cut several times, after a head of
+/// 4 kB, the whole-file reader's window for telling binary files) gives
+/// what the whole-file reader gives: the same rate, length, channels and
+/// samples to the bit, or an error from both. `Err` describes a
+/// disagreement. A file [`open`] declines is the whole-file reader's alone
+/// and agrees by definition.
+pub fn check_stream_agrees(path: &Path) -> std::result::Result<(), String> {
+    let opts = LoadOptions::default();
+    let whole = crate::recording::io::load(path, &opts);
+    let mut src = match open_sized(path, &opts, (4096, 1024)) {
+        Ok(Some(src)) => src,
+        Ok(None) => return Ok(()),
+        Err(e) => {
+            return match whole {
+                Ok(_) => Err(format!(
+                    "the scan refused what the whole-file reader read: {e}"
+                )),
+                Err(_) => Ok(()),
+            }
+        }
+    };
+    let mut got: Vec<Vec<f64>> = vec![Vec::new(); Channel::ALL.len()];
+    let read = src.pass(&mut |b| {
+        for (g, c) in got.iter_mut().zip(Channel::ALL) {
+            g.extend_from_slice(b.channel(c).unwrap_or(&[]));
+        }
+        Ok(())
+    });
+    let whole = match (read, whole) {
+        (Err(_), Err(_)) => return Ok(()),
+        (Ok(()), Err(e)) => {
+            return Err(format!("streamed, but the whole-file reader refused: {e}"))
+        }
+        (Err(e), Ok(_)) => {
+            return Err(format!(
+                "the whole-file reader read what a pass refused: {e}"
+            ))
+        }
+        (Ok(()), Ok(w)) => w,
+    };
+    if src.fs_hz().to_bits() != whole.fs_hz().to_bits() || src.len() != whole.len() {
+        return Err(format!(
+            "rate or length differ: {} Hz, {} samples streamed; {} Hz, {} whole",
+            src.fs_hz(),
+            src.len(),
+            whole.fs_hz(),
+            whole.len()
+        ));
+    }
+    if src.channels() != whole.channels() {
+        return Err("channels differ".into());
+    }
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (g, c) in got.iter().zip(Channel::ALL) {
+        if bits(g) != bits(whole.channel(c).unwrap_or(&[])) {
+            return Err(format!("{} samples differ", c.column_name()));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -291,6 +353,32 @@ mod tests {
                 assert_eq!(g.as_slice(), whole.channel(c).unwrap(), "{c:?}");
             }
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Pieces of a few rows each (fewer than a recording's minimum; in
+    /// real files the last piece can be that short) join their
+    /// neighbours: the file still streams, equal to the whole-file read.
+    #[test]
+    fn pieces_shorter_than_a_recording_join_their_neighbours() {
+        let dir = scratch("short");
+        let p = dir.join("rec.csv");
+        write_csv(&record(), &p).unwrap();
+        let opts = LoadOptions::default();
+        let whole = load(&p, &opts).unwrap();
+        let mut src = open_sized(&p, &opts, (3000, 100))
+            .unwrap()
+            .expect("streams");
+        let mut got = Vec::new();
+        src.pass(&mut |b| {
+            assert!(b.channel(Channel::Friction).unwrap().len() >= Recording::MIN_SAMPLES);
+            got.extend_from_slice(b.channel(Channel::Friction).unwrap());
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(got.as_slice(), whole.channel(Channel::Friction).unwrap());
+        // The fuzz harness's check on the same file.
+        assert_eq!(check_stream_agrees(&p), Ok(()));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -22,6 +22,7 @@ use super::fast::plain_rows;
 use super::{layout, table, Dialect, Plan, Rows};
 use crate::error::{Error, Result};
 use crate::recording::io::{Format, LoadOptions, RawTable};
+use crate::recording::Recording;
 
 /// Files at least this long are read in pieces.
 pub(crate) const STREAM_BYTES: u64 = 64 << 20;
@@ -147,13 +148,31 @@ pub(super) fn for_each_piece(
     let mut carry: Vec<u8> = buf[last_nl + 1..].to_vec();
     drop(buf);
     let mut eof = got < head_bytes;
+    // The rows read but not yet handed on (one piece behind), so that a
+    // piece of fewer than `Recording::MIN_SAMPLES` rows (the file's last,
+    // or any when lines are long) joins its neighbour: every piece handed
+    // on can be finished as a recording unless the whole body is shorter.
+    let mut pending: Option<(Rows, usize)> = None;
     loop {
         if !piece.is_empty() {
             let Some(r) = plain_rows(&piece, line, ncols, &plan, d, 0) else {
                 return Ok(None);
             };
             line += r.lines.len() as u64;
-            each(&header, &plan, r, piece.len())?;
+            pending = match pending.take() {
+                None => Some((r, piece.len())),
+                Some((mut p, bytes)) => {
+                    if p.lines.len() < Recording::MIN_SAMPLES
+                        || r.lines.len() < Recording::MIN_SAMPLES
+                    {
+                        append(&mut p, r);
+                        Some((p, bytes + piece.len()))
+                    } else {
+                        each(&header, &plan, p, bytes)?;
+                        Some((r, piece.len()))
+                    }
+                }
+            };
         }
         if eof && carry.is_empty() {
             break;
@@ -175,6 +194,9 @@ pub(super) fn for_each_piece(
             let keep = piece.len() - carry.len();
             piece.truncate(keep);
         }
+    }
+    if let Some((p, bytes)) = pending {
+        each(&header, &plan, p, bytes)?;
     }
     Ok(Some((header, plan)))
 }
