@@ -367,18 +367,7 @@ fn fft_failed(e: &impl std::fmt::Display) -> DspError {
 mod tests {
     use super::*;
     use crate::correlate::correlate;
-
-    /// Seeded uniform noise (xorshift), no dependency.
-    fn noise(n: usize, mut s: u64) -> Vec<f64> {
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect()
-    }
+    use crate::test_noise::noise;
 
     /// Every lag of the window against the whole-record FFT correlation and,
     /// on short inputs, the direct sum, for lengths that make one block,

@@ -20,6 +20,8 @@ mod simd;
 mod sincos;
 pub mod sos;
 pub mod spectral;
+#[cfg(test)]
+mod test_noise;
 pub mod welch_stream;
 pub mod window;
 pub mod zoom;

@@ -201,18 +201,8 @@ impl WelchStream {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_noise::noise;
     use crate::Welch;
-
-    fn noise(n: usize, mut s: u64) -> Vec<f64> {
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect()
-    }
 
     #[test]
     fn pieces_give_the_whole_signal_spectra_to_the_bit() {
