@@ -26,6 +26,11 @@
 //! 4. **Phases**: the same chain into the segment DFTs at the measured
 //!    `f_c` (one pair of numbers per segment of three periods).
 //!
+//! The report's signals figures are gathered on the way
+//! ([`SignalGatherer`]): the envelopes in pass 2, the detail (a few ball
+//! periods at the measured period) in pass 4; the same samples the
+//! in-memory report takes from the record.
+//!
 //! Memory: the blocks of the source, about `2 B + 4 L` samples per signal
 //! for the correlations (`L` the lag window), one Welch segment per
 //! signal and spectrum, `2^16` samples plus the filter overlap per signal
@@ -68,6 +73,7 @@ use super::{
 use crate::bearing::{check_velocity, Prediction};
 use crate::error::{Error, Result};
 use crate::recording::stream::{Block, RecordSource};
+use crate::report::envelope::{SignalGatherer, SignalSamples};
 
 /// How a streamed analysis ran (`analysis.json`'s `stream`; absent when
 /// the record was analysed in memory).
@@ -82,6 +88,10 @@ pub struct StreamInfo {
     pub decimation_overlap_samples: Option<usize>,
     /// What a streamed record does not give, and why.
     pub not_computed: Vec<String>,
+    /// The samples of the report's signals figures (its envelopes and
+    /// detail), gathered while streaming; not written to `analysis.json`.
+    #[serde(skip)]
+    pub signals: Option<SignalSamples>,
 }
 
 /// Why the parts [`analyze_stream`] leaves out are left out.
@@ -304,6 +314,7 @@ pub(crate) fn analyze_stream_blocks(
     let mut lines: Vec<TrendSums> = vec![TrendSums::new(n); k];
     let (mut raw_v, mut low_v) = (Moments::new(), Moments::new());
     let mut friction_dev = -0.0;
+    let mut gather = SignalGatherer::new(name.clone(), len, fs, src.meta().start_time_s, &channels);
     {
         let what = next_pass("low-pass and trend", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -333,6 +344,7 @@ pub(crate) fn analyze_stream_blocks(
             Ok(())
         };
         let mut on_block = |b: Block<'_>| {
+            gather.push(b);
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
                     friction_dev += (y - m) * (y - m);
@@ -523,6 +535,8 @@ pub(crate) fn analyze_stream_blocks(
 
     // Pass 4: the phases at the measured f_c.
     let mut line = LineStream::new(&signals, fs, n, findings.f_used);
+    // The report's detail figure: ball periods at the period it marks.
+    gather.detail_at(findings.measured.period_s.unwrap_or(pred.tau_c_s));
     {
         let what = next_pass("phases", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -543,7 +557,8 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
-        kit(restore).run(src, what, progress, &mut |_| {}, &mut eat)?;
+        let mut on_block = |b: Block<'_>| gather.push_detail(b);
+        kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
     }
     fill_line_phases(
         &mut findings.phases,
@@ -572,6 +587,7 @@ pub(crate) fn analyze_stream_blocks(
         lowpass_overlap_samples: filter.as_ref().map(ZeroPhaseStream::overlap_for),
         decimation_overlap_samples: dec_filter.map(ZeroPhaseStream::overlap_for),
         not_computed: NOT_COMPUTED.iter().map(|s| s.to_string()).collect(),
+        signals: Some(gather.finish()),
     };
     notes.push(format!(
         "record streamed: read {passes} times block by block in bounded memory; low-pass and \

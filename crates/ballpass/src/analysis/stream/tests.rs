@@ -8,6 +8,7 @@ use crate::analysis::{analyze, Analysis, AnalyzeSettings, MaxLag};
 use crate::bearing::lookup;
 use crate::recording::stream::RecordingSource;
 use crate::recording::Recording;
+use crate::report::envelope::SignalSamples;
 use crate::sim::{simulate, SimSettings};
 
 fn record(seed: u64, duration_s: f64) -> Recording {
@@ -149,6 +150,14 @@ fn both(rec: &Recording, settings: &AnalyzeSettings, block: usize) -> (Analysis,
     )
     .expect("streamed");
     assert!(seen.iter().any(|s| s.contains("pass 4/4")), "{seen:?}");
+    // The report's signals figures: the samples the in-memory report
+    // takes from the record, to the bit (the same samples are kept; the
+    // envelope of long records is tested in `report::envelope`).
+    let tau = mem.measured_period.period_s.unwrap_or(pred.tau_c_s);
+    assert_eq!(
+        st.stream.as_ref().and_then(|s| s.signals.as_ref()),
+        Some(&SignalSamples::of(rec, tau))
+    );
     (mem, st)
 }
 
