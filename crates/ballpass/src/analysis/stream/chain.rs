@@ -175,6 +175,9 @@ pub(crate) struct Chain<'f> {
     settled: Vec<Vec<f64>>,
     /// Raw (trimmed) samples not yet handed out, per signal.
     raw: Vec<Vec<f64>>,
+    /// Untrimmed samples not yet handed out, per signal (`None`: not
+    /// wanted, see [`Chain::with_untrimmed`]).
+    untrimmed: Option<Vec<Vec<f64>>>,
 }
 
 /// What one block of input gave: the next raw (trimmed, unfiltered)
@@ -185,6 +188,11 @@ pub(crate) struct Output {
     pub raw: Vec<Vec<f64>>,
     pub filtered_at: usize,
     pub filtered: Vec<Vec<f64>>,
+    /// The next samples of every signal before the trim (restored
+    /// friction, velocity error, optical), from the record's sample
+    /// `untrimmed_at`; only from a chain [`Chain::with_untrimmed`].
+    pub untrimmed_at: usize,
+    pub untrimmed: Vec<Vec<f64>>,
 }
 
 impl<'f> Chain<'f> {
@@ -218,7 +226,15 @@ impl<'f> Chain<'f> {
                 .collect(),
             settled: vec![Vec::new(); signals.len()],
             raw: vec![Vec::new(); signals.len()],
+            untrimmed: None,
         }
+    }
+
+    /// The chain also hands out every signal before the trim
+    /// ([`Output::untrimmed`]) when `on`.
+    pub(crate) fn with_untrimmed(mut self, on: bool) -> Self {
+        self.untrimmed = on.then(|| vec![Vec::new(); self.signals.len()]);
+        self
     }
 
     /// Feeds one block; `out` gets what is ready.
@@ -279,6 +295,9 @@ impl<'f> Chain<'f> {
         }
         Self::hand_out(&mut self.raw, &mut out.raw);
         Self::hand_out(&mut self.settled, &mut out.filtered);
+        if let Some(u) = &mut self.untrimmed {
+            Self::hand_out(u, &mut out.untrimmed);
+        }
         Ok(())
     }
 
@@ -288,6 +307,9 @@ impl<'f> Chain<'f> {
         self.keep(fresh)?;
         Self::hand_out(&mut self.raw, &mut out.raw);
         Self::hand_out(&mut self.settled, &mut out.filtered);
+        if let Some(u) = &mut self.untrimmed {
+            Self::hand_out(u, &mut out.untrimmed);
+        }
         Ok(())
     }
 
@@ -295,6 +317,9 @@ impl<'f> Chain<'f> {
     /// the raw and filtered queues.
     fn keep(&mut self, fresh: Vec<Vec<f64>>) -> Result<()> {
         for (k, v) in fresh.into_iter().enumerate() {
+            if let Some(u) = &mut self.untrimmed {
+                u[k].extend_from_slice(&v);
+            }
             let start = self.seen[k];
             self.seen[k] += v.len();
             let lo = self.trim.saturating_sub(start).min(v.len());
@@ -331,6 +356,8 @@ impl Output {
             raw: Vec::new(),
             filtered_at: 0,
             filtered: Vec::new(),
+            untrimmed_at: 0,
+            untrimmed: Vec::new(),
         }
     }
 
@@ -338,5 +365,6 @@ impl Output {
     pub(crate) fn advance(&mut self) {
         self.raw_at += self.raw.first().map_or(0, Vec::len);
         self.filtered_at += self.filtered.first().map_or(0, Vec::len);
+        self.untrimmed_at += self.untrimmed.first().map_or(0, Vec::len);
     }
 }

@@ -15,14 +15,16 @@
 //! 2. **Low-pass and trend**: restoration, velocity error, trim and
 //!    low-pass ([`chain`]); the Welch spectra of the unfiltered signals;
 //!    the sums of each low-passed signal's least-squares line; the
-//!    velocity error's sums.
+//!    velocity error's sums; the lines of the untrimmed restored friction
+//!    and velocity error for the stage identification ([`stage`]).
 //! 3. **Correlations and spectra**: the same chain, each low-passed signal
 //!    detrended with its line, into the lag-window correlations
 //!    ([`ballpass_dsp::WindowCorrelation`]), the full-range Welch spectra
 //!    ([`ballpass_dsp::WelchStream`]), and the decimation (a
 //!    [`ballpass_dsp::ZeroPhaseStream`] of the anti-alias filter, every
-//!    `q`-th sample kept) into the high-resolution Welch spectra. Then the
-//!    period, harmonics and coherence, exactly as in memory.
+//!    `q`-th sample kept) into the high-resolution Welch spectra; the
+//!    stage identification's spectra. Then the period, harmonics and
+//!    coherence, and the stage fit, exactly as in memory.
 //! 4. **Phases**: the same chain into the segment DFTs at the measured
 //!    `f_c` (one pair of numbers per segment of three periods).
 //!
@@ -48,12 +50,13 @@
 //!
 //! Not computed on a streamed record (each needs the record in memory;
 //! the outputs say so): the ball passages and the synchronous average,
-//! the stage identification, and the position-domain spectra. Only one
+//! and the position-domain spectra. Only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
 
 mod chain;
+mod stage;
 mod support;
 
 use ballpass_dsp::{WelchStream, WindowCorrelation, ZeroPhaseStream};
@@ -95,10 +98,9 @@ pub struct StreamInfo {
 }
 
 /// Why the parts [`analyze_stream`] leaves out are left out.
-const NOT_COMPUTED: [&str; 4] = [
+const NOT_COMPUTED: [&str; 3] = [
     "ball passages (passage detection reads the whole optical signal)",
     "synchronous average (needs the passages)",
-    "stage identification (its response fit reads the whole record)",
     "position-domain spectra (resampled onto the travel of each run)",
 ];
 
@@ -113,6 +115,8 @@ struct PassKit<'a> {
     filter: Option<&'a ballpass_dsp::ZeroPhaseFilter>,
     filter_block: usize,
     name: &'a str,
+    /// The chain hands out the untrimmed signals too (the stage's).
+    untrimmed: bool,
 }
 
 impl PassKit<'_> {
@@ -135,7 +139,8 @@ impl PassKit<'_> {
             self.restore,
             self.filter,
             self.filter_block,
-        );
+        )
+        .with_untrimmed(self.untrimmed);
         let mut out = Output::new();
         let mut prog = Progress {
             f: progress,
@@ -273,6 +278,8 @@ pub(crate) fn analyze_stream_blocks(
         s
     };
 
+    let mut stage = stage::StageStream::new(&signals, len, fs)?;
+    let wants_stage = stage.is_some();
     let kit = |restore| PassKit {
         signals: &signals,
         fs,
@@ -283,6 +290,7 @@ pub(crate) fn analyze_stream_blocks(
         filter: filter.as_ref(),
         filter_block,
         name: &name,
+        untrimmed: wants_stage,
     };
 
     // Pass 1: the load cell.
@@ -332,6 +340,9 @@ pub(crate) fn analyze_stream_blocks(
             }
             for (t, y) in lines.iter_mut().zip(&out.filtered) {
                 t.add(out.filtered_at, y);
+            }
+            if let Some(st) = stage.as_mut() {
+                st.add_lines(out);
             }
             if let Some(v) = vi {
                 if let Some(y) = out.filtered.get(v) {
@@ -409,6 +420,9 @@ pub(crate) fn analyze_stream_blocks(
                         .enumerate()
                         .map(|(i, v)| v - t.at(out.filtered_at + i)),
                 );
+            }
+            if let Some(st) = stage.as_mut() {
+                st.push(out)?;
             }
             let xs: Vec<&[f64]> = detrended.iter().map(Vec::as_slice).collect();
             if xs.first().is_some_and(|x| !x.is_empty()) {
@@ -516,6 +530,13 @@ pub(crate) fn analyze_stream_blocks(
     for s in [&mut unfiltered, &mut full, &mut hr] {
         super::confidence::finish(s, settings.band_confidence, settings.confidence);
     }
+    let (stage, stage_spectra) = match (stage, &dc) {
+        (Some(st), Some(dc)) => {
+            let (id, sp) = st.finish(fs, dc)?;
+            (Some(id), Some(sp))
+        }
+        _ => (None, None),
+    };
     let load_cell: Vec<_> = dc.into_iter().collect();
     if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
         warnings.push(w);
@@ -558,7 +579,11 @@ pub(crate) fn analyze_stream_blocks(
             Ok(())
         };
         let mut on_block = |b: Block<'_>| gather.push_detail(b);
-        kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
+        let kit = PassKit {
+            untrimmed: false,
+            ..kit(restore)
+        };
+        kit.run(src, what, progress, &mut on_block, &mut eat)?;
     }
     fill_line_phases(
         &mut findings.phases,
@@ -640,8 +665,8 @@ pub(crate) fn analyze_stream_blocks(
         coherence: findings.coherence,
         velocity_error,
         load_cell,
-        stage: None,
-        stage_spectra: None,
+        stage,
+        stage_spectra,
         repeats: None,
         verdict,
         passages: vec![PassageSummary {
