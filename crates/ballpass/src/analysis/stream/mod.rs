@@ -101,7 +101,8 @@ pub struct StreamInfo {
 const NOT_COMPUTED: [&str; 3] = [
     "ball passages (passage detection reads the whole optical signal)",
     "synchronous average (needs the passages)",
-    "position-domain spectra (resampled onto the travel of each run)",
+    "position-domain spectra (their stop threshold is the median speed of the whole record, \
+     their segment length follows the longest run, and the line search re-reads every segment)",
 ];
 
 /// What every pass of the chain over the record shares.
