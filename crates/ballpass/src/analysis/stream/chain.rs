@@ -175,9 +175,10 @@ pub(crate) struct Chain<'f> {
     settled: Vec<Vec<f64>>,
     /// Raw (trimmed) samples not yet handed out, per signal.
     raw: Vec<Vec<f64>>,
-    /// Untrimmed samples not yet handed out, per signal (`None`: not
-    /// wanted, see [`Chain::with_untrimmed`]).
-    untrimmed: Option<Vec<Vec<f64>>>,
+    /// Which signals are handed out untrimmed ([`Chain::with_untrimmed`]),
+    /// and their samples not yet handed out.
+    untrimmed_of: Vec<usize>,
+    untrimmed: Vec<Vec<f64>>,
 }
 
 /// What one block of input gave: the next raw (trimmed, unfiltered)
@@ -188,9 +189,9 @@ pub(crate) struct Output {
     pub raw: Vec<Vec<f64>>,
     pub filtered_at: usize,
     pub filtered: Vec<Vec<f64>>,
-    /// The next samples of every signal before the trim (restored
-    /// friction, velocity error, optical), from the record's sample
-    /// `untrimmed_at`; only from a chain [`Chain::with_untrimmed`].
+    /// The next samples before the trim of the signals a chain was asked
+    /// for ([`Chain::with_untrimmed`]), in that order, from the record's
+    /// sample `untrimmed_at`.
     pub untrimmed_at: usize,
     pub untrimmed: Vec<Vec<f64>>,
 }
@@ -226,14 +227,16 @@ impl<'f> Chain<'f> {
                 .collect(),
             settled: vec![Vec::new(); signals.len()],
             raw: vec![Vec::new(); signals.len()],
-            untrimmed: None,
+            untrimmed_of: Vec::new(),
+            untrimmed: Vec::new(),
         }
     }
 
-    /// The chain also hands out every signal before the trim
-    /// ([`Output::untrimmed`]) when `on`.
-    pub(crate) fn with_untrimmed(mut self, on: bool) -> Self {
-        self.untrimmed = on.then(|| vec![Vec::new(); self.signals.len()]);
+    /// The chain also hands out the signals at indices `of` before the
+    /// trim ([`Output::untrimmed`]).
+    pub(crate) fn with_untrimmed(mut self, of: &[usize]) -> Self {
+        self.untrimmed_of = of.to_vec();
+        self.untrimmed = vec![Vec::new(); of.len()];
         self
     }
 
@@ -295,8 +298,8 @@ impl<'f> Chain<'f> {
         }
         Self::hand_out(&mut self.raw, &mut out.raw);
         Self::hand_out(&mut self.settled, &mut out.filtered);
-        if let Some(u) = &mut self.untrimmed {
-            Self::hand_out(u, &mut out.untrimmed);
+        if !self.untrimmed_of.is_empty() {
+            Self::hand_out(&mut self.untrimmed, &mut out.untrimmed);
         }
         Ok(())
     }
@@ -307,8 +310,8 @@ impl<'f> Chain<'f> {
         self.keep(fresh)?;
         Self::hand_out(&mut self.raw, &mut out.raw);
         Self::hand_out(&mut self.settled, &mut out.filtered);
-        if let Some(u) = &mut self.untrimmed {
-            Self::hand_out(u, &mut out.untrimmed);
+        if !self.untrimmed_of.is_empty() {
+            Self::hand_out(&mut self.untrimmed, &mut out.untrimmed);
         }
         Ok(())
     }
@@ -317,8 +320,8 @@ impl<'f> Chain<'f> {
     /// the raw and filtered queues.
     fn keep(&mut self, fresh: Vec<Vec<f64>>) -> Result<()> {
         for (k, v) in fresh.into_iter().enumerate() {
-            if let Some(u) = &mut self.untrimmed {
-                u[k].extend_from_slice(&v);
+            if let Some(j) = self.untrimmed_of.iter().position(|&i| i == k) {
+                self.untrimmed[j].extend_from_slice(&v);
             }
             let start = self.seen[k];
             self.seen[k] += v.len();

@@ -116,8 +116,8 @@ struct PassKit<'a> {
     filter: Option<&'a ballpass_dsp::ZeroPhaseFilter>,
     filter_block: usize,
     name: &'a str,
-    /// The chain hands out the untrimmed signals too (the stage's).
-    untrimmed: bool,
+    /// Signals the chain hands out untrimmed too (the stage's).
+    untrimmed: &'a [usize],
 }
 
 impl PassKit<'_> {
@@ -280,7 +280,7 @@ pub(crate) fn analyze_stream_blocks(
     };
 
     let mut stage = stage::StageStream::new(&signals, len, fs)?;
-    let wants_stage = stage.is_some();
+    let stage_of = stage.as_ref().map_or(Vec::new(), |s| s.of.to_vec());
     let kit = |restore| PassKit {
         signals: &signals,
         fs,
@@ -291,7 +291,7 @@ pub(crate) fn analyze_stream_blocks(
         filter: filter.as_ref(),
         filter_block,
         name: &name,
-        untrimmed: wants_stage,
+        untrimmed: &stage_of,
     };
 
     // Pass 1: the load cell.
@@ -581,7 +581,7 @@ pub(crate) fn analyze_stream_blocks(
         };
         let mut on_block = |b: Block<'_>| gather.push_detail(b);
         let kit = PassKit {
-            untrimmed: false,
+            untrimmed: &[],
             ..kit(restore)
         };
         kit.run(src, what, progress, &mut on_block, &mut eat)?;

@@ -19,14 +19,23 @@ use crate::analysis::{Detrend, Signal};
 use crate::error::{Error, Result};
 use crate::model::identify::{identify, nperseg_for, StageIdentification, StageSpectra};
 
+/// Samples detrended and fed to the Welch estimate at a time.
+const CHUNK: usize = 1 << 14;
+
+/// Friction and velocity error, a chunk of each.
+type Pair = [Vec<f64>; 2];
+
 /// The friction → velocity-error spectra of a record, gathered block by block.
 pub(super) struct StageStream {
-    /// Indices of the friction and the velocity error among the signals.
-    of: [usize; 2],
+    /// Indices of the friction and the velocity error among the signals
+    /// (the chain hands them out untrimmed in this order).
+    pub(super) of: [usize; 2],
     nperseg: usize,
     lines: [TrendSums; 2],
     trends: Option<[Trend; 2]>,
     welch: WelchStream,
+    /// Scratch: a chunk of each signal, scaled or detrended.
+    buf: Pair,
 }
 
 impl StageStream {
@@ -46,28 +55,41 @@ impl StageStream {
             lines: [TrendSums::new(len); 2],
             trends: None,
             welch,
+            buf: [Vec::new(), Vec::new()],
         }))
     }
 
-    /// The friction (N) and velocity error (m/s, as
-    /// [`StageSpectra::of`] scales it) of what `out` holds untrimmed.
-    fn signals(&self, out: &Output) -> [Vec<f64>; 2] {
-        let [f, v] = self.of;
-        [
-            out.untrimmed.get(f).cloned().unwrap_or_default(),
-            out.untrimmed
-                .get(v)
-                .map(|x| x.iter().map(|x| x * 1e-3).collect())
-                .unwrap_or_default(),
-        ]
+    /// Calls `f(at, [friction N, velocity error m/s])` on chunks of what
+    /// `out` holds untrimmed (the velocity error scaled as
+    /// [`StageSpectra::of`] scales it).
+    fn chunks(
+        out: &Output,
+        buf: &mut Pair,
+        f: &mut dyn FnMut(usize, &mut Pair) -> Result<()>,
+    ) -> Result<()> {
+        let (Some(fr), Some(ve)) = (out.untrimmed.first(), out.untrimmed.get(1)) else {
+            return Ok(());
+        };
+        for (k, (a, b)) in fr.chunks(CHUNK).zip(ve.chunks(CHUNK)).enumerate() {
+            buf[0].clear();
+            buf[0].extend_from_slice(a);
+            buf[1].clear();
+            buf[1].extend(b.iter().map(|x| x * 1e-3));
+            f(out.untrimmed_at + k * CHUNK, buf)?;
+        }
+        Ok(())
     }
 
     /// Pass 2: the lines.
     pub(super) fn add_lines(&mut self, out: &Output) {
-        let xs = self.signals(out);
-        for (t, x) in self.lines.iter_mut().zip(&xs) {
-            t.add(out.untrimmed_at, x);
-        }
+        let lines = &mut self.lines;
+        // Adding to sums cannot fail.
+        let _ = Self::chunks(out, &mut self.buf, &mut |at, xs| {
+            for (t, x) in lines.iter_mut().zip(xs.iter()) {
+                t.add(at, x);
+            }
+            Ok(())
+        });
     }
 
     /// Pass 3: the spectra of the detrended signals.
@@ -78,18 +100,17 @@ impl StageStream {
         let trends = *self
             .trends
             .get_or_insert_with(|| self.lines.map(|t| t.trend(Detrend::Linear)));
-        let mut xs = self.signals(out);
-        if xs[0].is_empty() {
-            return Ok(());
-        }
-        for (x, t) in xs.iter_mut().zip(&trends) {
-            for (i, y) in x.iter_mut().enumerate() {
-                *y -= t.at(out.untrimmed_at + i);
+        let welch = &mut self.welch;
+        Self::chunks(out, &mut self.buf, &mut |at, xs| {
+            for (x, t) in xs.iter_mut().zip(&trends) {
+                for (i, y) in x.iter_mut().enumerate() {
+                    *y -= t.at(at + i);
+                }
             }
-        }
-        self.welch
-            .push(&[&xs[0], &xs[1]])
-            .map_err(|e| Error::dsp("stage identification spectra", e))
+            welch
+                .push(&[&xs[0], &xs[1]])
+                .map_err(|e| Error::dsp("stage identification spectra", e))
+        })
     }
 
     /// The spectra and the stage fitted to them; `dc` the load cell's
