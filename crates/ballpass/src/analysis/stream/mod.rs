@@ -279,8 +279,8 @@ pub(crate) fn analyze_stream_blocks(
         s
     };
 
-    let mut stage = stage::StageStream::new(&signals, len, fs)?;
-    let stage_of = stage.as_ref().map_or(Vec::new(), |s| s.of.to_vec());
+    let mut stage = stage::StageStream::new(&signals, len, fs, trim)?;
+    let stage_of = stage.as_ref().map_or(Vec::new(), |s| s.untrimmed());
     let kit = |restore| PassKit {
         signals: &signals,
         fs,

@@ -27,9 +27,12 @@ type Pair = [Vec<f64>; 2];
 
 /// The friction → velocity-error spectra of a record, gathered block by block.
 pub(super) struct StageStream {
-    /// Indices of the friction and the velocity error among the signals
-    /// (the chain hands them out untrimmed in this order).
-    pub(super) of: [usize; 2],
+    /// Indices of the friction and the velocity error among the signals.
+    of: [usize; 2],
+    /// Whether the record is trimmed: the chain then hands these two out
+    /// untrimmed too ([`StageStream::untrimmed`]); else its raw output is
+    /// the whole record already.
+    trimmed: bool,
     nperseg: usize,
     lines: [TrendSums; 2],
     trends: Option<[Trend; 2]>,
@@ -39,9 +42,15 @@ pub(super) struct StageStream {
 }
 
 impl StageStream {
-    /// For a record of `len` samples at `fs` with `signals`; `None` without
-    /// both friction and velocity error (as in memory).
-    pub(super) fn new(signals: &[Signal], len: usize, fs: f64) -> Result<Option<Self>> {
+    /// For a record of `len` samples at `fs` with `signals`, analysed from
+    /// sample `trim`; `None` without both friction and velocity error (as
+    /// in memory).
+    pub(super) fn new(
+        signals: &[Signal],
+        len: usize,
+        fs: f64,
+        trim: usize,
+    ) -> Result<Option<Self>> {
         let at = |s: Signal| signals.iter().position(|&x| x == s);
         let (Some(f), Some(v)) = (at(Signal::Friction), at(Signal::VelocityError)) else {
             return Ok(None);
@@ -51,6 +60,7 @@ impl StageStream {
             .map_err(|e| Error::dsp("stage identification Welch", e))?;
         Ok(Some(StageStream {
             of: [f, v],
+            trimmed: trim > 0,
             nperseg,
             lines: [TrendSums::new(len); 2],
             trends: None,
@@ -59,32 +69,41 @@ impl StageStream {
         }))
     }
 
-    /// Calls `f(at, [friction N, velocity error m/s])` on chunks of what
-    /// `out` holds untrimmed (the velocity error scaled as
-    /// [`StageSpectra::of`] scales it).
-    fn chunks(
-        out: &Output,
-        buf: &mut Pair,
-        f: &mut dyn FnMut(usize, &mut Pair) -> Result<()>,
-    ) -> Result<()> {
-        let (Some(fr), Some(ve)) = (out.untrimmed.first(), out.untrimmed.get(1)) else {
-            return Ok(());
-        };
-        for (k, (a, b)) in fr.chunks(CHUNK).zip(ve.chunks(CHUNK)).enumerate() {
-            buf[0].clear();
-            buf[0].extend_from_slice(a);
-            buf[1].clear();
-            buf[1].extend(b.iter().map(|x| x * 1e-3));
-            f(out.untrimmed_at + k * CHUNK, buf)?;
+    /// The signals a chain must hand out untrimmed (as
+    /// [`super::chain::Chain::with_untrimmed`] takes them).
+    pub(super) fn untrimmed(&self) -> Vec<usize> {
+        if self.trimmed {
+            self.of.to_vec()
+        } else {
+            Vec::new()
         }
-        Ok(())
+    }
+
+    /// Where the record's friction and velocity error are in `out`, and
+    /// the index of their first sample.
+    fn source<'o>(&self, out: &'o Output) -> Source<'o> {
+        let (at, fr, ve) = if self.trimmed {
+            (
+                out.untrimmed_at,
+                out.untrimmed.first(),
+                out.untrimmed.get(1),
+            )
+        } else {
+            (out.raw_at, out.raw.get(self.of[0]), out.raw.get(self.of[1]))
+        };
+        (
+            at,
+            fr.map_or(&[][..], Vec::as_slice),
+            ve.map_or(&[][..], Vec::as_slice),
+        )
     }
 
     /// Pass 2: the lines.
     pub(super) fn add_lines(&mut self, out: &Output) {
+        let src = self.source(out);
         let lines = &mut self.lines;
         // Adding to sums cannot fail.
-        let _ = Self::chunks(out, &mut self.buf, &mut |at, xs| {
+        let _ = for_chunks(src, &mut self.buf, &mut |at, xs| {
             for (t, x) in lines.iter_mut().zip(xs.iter()) {
                 t.add(at, x);
             }
@@ -100,8 +119,9 @@ impl StageStream {
         let trends = *self
             .trends
             .get_or_insert_with(|| self.lines.map(|t| t.trend(Detrend::Linear)));
+        let src = self.source(out);
         let welch = &mut self.welch;
-        Self::chunks(out, &mut self.buf, &mut |at, xs| {
+        for_chunks(src, &mut self.buf, &mut |at, xs| {
             for (x, t) in xs.iter_mut().zip(&trends) {
                 for (i, y) in x.iter_mut().enumerate() {
                     *y -= t.at(at + i);
@@ -130,4 +150,24 @@ impl StageStream {
         let sp = StageSpectra::of_set(set, fs, self.nperseg).restored_with(dc);
         Ok((identify(&sp), sp))
     }
+}
+
+/// The index of the first sample, the friction and the velocity error.
+type Source<'o> = (usize, &'o [f64], &'o [f64]);
+
+/// Calls `f(at, [friction N, velocity error m/s])` on chunks of `src`
+/// (the velocity error scaled as [`StageSpectra::of`] scales it).
+fn for_chunks(
+    (at, fr, ve): Source<'_>,
+    buf: &mut Pair,
+    f: &mut dyn FnMut(usize, &mut Pair) -> Result<()>,
+) -> Result<()> {
+    for (k, (a, b)) in fr.chunks(CHUNK).zip(ve.chunks(CHUNK)).enumerate() {
+        buf[0].clear();
+        buf[0].extend_from_slice(a);
+        buf[1].clear();
+        buf[1].extend(b.iter().map(|x| x * 1e-3));
+        f(at + k * CHUNK, buf)?;
+    }
+    Ok(())
 }
