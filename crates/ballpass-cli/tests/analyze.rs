@@ -189,17 +189,22 @@ fn a_streamed_record_gives_the_in_memory_tables() {
     let mut tables = Vec::new();
     for mode in ["on", "off"] {
         let out = scratch(&format!("stream-{mode}"));
-        let (ok, _, stderr) = run(&[
+        // The streamed run draws its report: the signals figure and the
+        // stage come from the stream too.
+        let mut args = vec![
             "analyze",
             rec.to_str().unwrap(),
             "--velocity",
             "18",
-            "--no-report",
             "--stream",
             mode,
             "--out",
             out.to_str().unwrap(),
-        ]);
+        ];
+        if mode == "off" {
+            args.push("--no-report");
+        }
+        let (ok, _, stderr) = run(&args);
         assert!(ok, "{stderr}");
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("analysis.json")).unwrap())
@@ -208,6 +213,9 @@ fn a_streamed_record_gives_the_in_memory_tables() {
         if mode == "on" {
             assert!(stderr.contains("was streamed"), "{stderr}");
             assert_eq!(json["stream"]["passes"], 4);
+            assert!(json["stage"].is_object(), "{}", json["stage"]);
+            let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+            assert!(html.contains("Signals of"), "no signals figure");
         }
         let read = |f: &str| -> (Vec<String>, Vec<Vec<f64>>) {
             let text = std::fs::read_to_string(out.join(f)).unwrap();

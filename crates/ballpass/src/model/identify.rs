@@ -159,20 +159,33 @@ impl StageSpectra {
             ballpass_dsp::detrend_in_place(s, ballpass_dsp::DetrendType::Linear)
                 .map_err(|e| Error::dsp("stage identification detrend", e))?;
         }
-        let mut welch = Welch::new(WelchSettings {
-            nperseg,
-            ..WelchSettings::default()
-        })
-        .map_err(|e| Error::dsp("stage identification Welch", e))?;
+        let mut welch = Welch::new(StageSpectra::welch_settings(nperseg))
+            .map_err(|e| Error::dsp("stage identification Welch", e))?;
         let set = welch
             .spectra(&[&f, &v], &[(0, 1)], fs_hz)
             .map_err(|e| Error::dsp("stage identification spectra", e))?;
+        Ok(StageSpectra::of_set(set, fs_hz, nperseg))
+    }
+
+    /// The Welch estimate of [`StageSpectra::of`]: Hann segments of
+    /// `nperseg`, half overlap.
+    pub(crate) fn welch_settings(nperseg: usize) -> WelchSettings {
+        WelchSettings {
+            nperseg,
+            ..WelchSettings::default()
+        }
+    }
+
+    /// The spectra of one record from the Welch estimate `set` of its
+    /// detrended friction and velocity error (m/s), in that order, with
+    /// their cross spectrum ([`StageSpectra::welch_settings`]).
+    pub(crate) fn of_set(set: ballpass_dsp::SpectralSet, fs_hz: f64, nperseg: usize) -> Self {
         let w: Vec<f64> = (0..nperseg)
             .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / nperseg as f64).cos())
             .collect();
         let nu = crate::stats::welch_dof(&w, nperseg / 2, set.n_segments);
         let mut auto = set.auto.into_iter();
-        Ok(StageSpectra {
+        StageSpectra {
             fs_hz,
             freq_hz: set.freq_hz,
             p_ff: auto.next().unwrap_or_default(),
@@ -181,7 +194,7 @@ impl StageSpectra {
             records: 1,
             n_d: nu / 2.0,
             restored_tau_s: None,
-        })
+        }
     }
 
     /// The spectra of a recording with friction and position channels

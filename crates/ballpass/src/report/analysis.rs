@@ -156,13 +156,18 @@ pub fn sections(
     }
     let mut out = vec![summary];
 
-    // Signals
-    if let Some(rec) = raw {
+    // Signals: of the first record as loaded, or as a streamed analysis
+    // gathered them (the same samples).
+    let gathered = raw.map(|rec| super::envelope::SignalSamples::of(rec, tau));
+    let samples = gathered
+        .as_ref()
+        .or_else(|| a.stream.as_ref().and_then(|s| s.signals.as_ref()));
+    if let Some(rec) = samples {
         let mut fig = super::envelope::signals(
             &id("signals"),
             &format!(
                 "Signals of {}",
-                crate::report::passage::short_name(&rec.source_name())
+                crate::report::passage::short_name(&rec.source_name)
             ),
             rec,
         )
@@ -188,12 +193,11 @@ pub fn sections(
             .with_figure(fig);
         // A long record: a few ball periods from its middle, sample by
         // sample (the measured period, else the predicted one).
-        let tau = a.measured_period.period_s.unwrap_or(a.prediction.tau_c_s);
         let detail_title = format!(
             "{} ball periods from the middle of the record",
             super::envelope::DETAIL_PERIODS
         );
-        if let Some(d) = super::envelope::detail(&id("signals_detail"), &detail_title, rec, tau) {
+        if let Some(d) = super::envelope::detail(&id("signals_detail"), &detail_title, rec) {
             section = section.with(Block::Paragraph(format!(
                 "{{fig:{}}} shows {} ball periods (τc = {} s) from the middle of the record, \
                  sample by sample.",

@@ -175,6 +175,10 @@ pub(crate) struct Chain<'f> {
     settled: Vec<Vec<f64>>,
     /// Raw (trimmed) samples not yet handed out, per signal.
     raw: Vec<Vec<f64>>,
+    /// Which signals are handed out untrimmed ([`Chain::with_untrimmed`]),
+    /// and their samples not yet handed out.
+    untrimmed_of: Vec<usize>,
+    untrimmed: Vec<Vec<f64>>,
 }
 
 /// What one block of input gave: the next raw (trimmed, unfiltered)
@@ -185,6 +189,11 @@ pub(crate) struct Output {
     pub raw: Vec<Vec<f64>>,
     pub filtered_at: usize,
     pub filtered: Vec<Vec<f64>>,
+    /// The next samples before the trim of the signals a chain was asked
+    /// for ([`Chain::with_untrimmed`]), in that order, from the record's
+    /// sample `untrimmed_at`.
+    pub untrimmed_at: usize,
+    pub untrimmed: Vec<Vec<f64>>,
 }
 
 impl<'f> Chain<'f> {
@@ -218,7 +227,17 @@ impl<'f> Chain<'f> {
                 .collect(),
             settled: vec![Vec::new(); signals.len()],
             raw: vec![Vec::new(); signals.len()],
+            untrimmed_of: Vec::new(),
+            untrimmed: Vec::new(),
         }
+    }
+
+    /// The chain also hands out the signals at indices `of` before the
+    /// trim ([`Output::untrimmed`]).
+    pub(crate) fn with_untrimmed(mut self, of: &[usize]) -> Self {
+        self.untrimmed_of = of.to_vec();
+        self.untrimmed = vec![Vec::new(); of.len()];
+        self
     }
 
     /// Feeds one block; `out` gets what is ready.
@@ -279,6 +298,9 @@ impl<'f> Chain<'f> {
         }
         Self::hand_out(&mut self.raw, &mut out.raw);
         Self::hand_out(&mut self.settled, &mut out.filtered);
+        if !self.untrimmed_of.is_empty() {
+            Self::hand_out(&mut self.untrimmed, &mut out.untrimmed);
+        }
         Ok(())
     }
 
@@ -288,6 +310,9 @@ impl<'f> Chain<'f> {
         self.keep(fresh)?;
         Self::hand_out(&mut self.raw, &mut out.raw);
         Self::hand_out(&mut self.settled, &mut out.filtered);
+        if !self.untrimmed_of.is_empty() {
+            Self::hand_out(&mut self.untrimmed, &mut out.untrimmed);
+        }
         Ok(())
     }
 
@@ -295,6 +320,9 @@ impl<'f> Chain<'f> {
     /// the raw and filtered queues.
     fn keep(&mut self, fresh: Vec<Vec<f64>>) -> Result<()> {
         for (k, v) in fresh.into_iter().enumerate() {
+            if let Some(j) = self.untrimmed_of.iter().position(|&i| i == k) {
+                self.untrimmed[j].extend_from_slice(&v);
+            }
             let start = self.seen[k];
             self.seen[k] += v.len();
             let lo = self.trim.saturating_sub(start).min(v.len());
@@ -331,6 +359,8 @@ impl Output {
             raw: Vec::new(),
             filtered_at: 0,
             filtered: Vec::new(),
+            untrimmed_at: 0,
+            untrimmed: Vec::new(),
         }
     }
 
@@ -338,5 +368,6 @@ impl Output {
     pub(crate) fn advance(&mut self) {
         self.raw_at += self.raw.first().map_or(0, Vec::len);
         self.filtered_at += self.filtered.first().map_or(0, Vec::len);
+        self.untrimmed_at += self.untrimmed.first().map_or(0, Vec::len);
     }
 }

@@ -15,16 +15,23 @@
 //! 2. **Low-pass and trend**: restoration, velocity error, trim and
 //!    low-pass ([`chain`]); the Welch spectra of the unfiltered signals;
 //!    the sums of each low-passed signal's least-squares line; the
-//!    velocity error's sums.
+//!    velocity error's sums; the lines of the untrimmed restored friction
+//!    and velocity error for the stage identification ([`stage`]).
 //! 3. **Correlations and spectra**: the same chain, each low-passed signal
 //!    detrended with its line, into the lag-window correlations
 //!    ([`ballpass_dsp::WindowCorrelation`]), the full-range Welch spectra
 //!    ([`ballpass_dsp::WelchStream`]), and the decimation (a
 //!    [`ballpass_dsp::ZeroPhaseStream`] of the anti-alias filter, every
-//!    `q`-th sample kept) into the high-resolution Welch spectra. Then the
-//!    period, harmonics and coherence, exactly as in memory.
+//!    `q`-th sample kept) into the high-resolution Welch spectra; the
+//!    stage identification's spectra. Then the period, harmonics and
+//!    coherence, and the stage fit, exactly as in memory.
 //! 4. **Phases**: the same chain into the segment DFTs at the measured
 //!    `f_c` (one pair of numbers per segment of three periods).
+//!
+//! The report's signals figures are gathered on the way
+//! ([`SignalGatherer`]): the envelopes in pass 2, the detail (a few ball
+//! periods at the measured period) in pass 4; the same samples the
+//! in-memory report takes from the record.
 //!
 //! Memory: the blocks of the source, about `2 B + 4 L` samples per signal
 //! for the correlations (`L` the lag window), one Welch segment per
@@ -32,6 +39,10 @@
 //! and filter, 20 000 block means, and 16 bytes per signal and segment of
 //! three ball periods for the phases: for a 24-hour record at 1 kHz and
 //! 9 mm/s, about 2 MB of per-segment summaries beside a fixed ~100 MB.
+//! The stage identification adds one Welch segment (16 s) per signal, the
+//! signals figures 2000 stretches of up to 4 samples per channel and 5
+//! ball periods of samples (measured peak: 170 MB at 2 hours, 166 MB at
+//! 24 hours).
 //!
 //! Equal to the in-memory analysis: restoration, velocity error, Welch
 //! spectra and segment DFTs to the bit given the same input; the
@@ -39,16 +50,23 @@
 //! summation; the correlations to rounding. Tested on records forced
 //! through small blocks (`tests`): every table within 1e-12 of its
 //! series' peak (measured: 1.1e-14), the period, harmonic verdicts and
-//! phases the same.
+//! phases the same; the stage's spectra within 1e-12, its estimates
+//! within 1e-9 relative (measured 1.7e-13), its intervals within 1e-6
+//! (measured 1.3e-8: central differences of step 1e-6); the signals
+//! figures' samples to the bit.
 //!
 //! Not computed on a streamed record (each needs the record in memory;
-//! the outputs say so): the ball passages and the synchronous average,
-//! the stage identification, and the position-domain spectra. Only one
+//! the outputs say so, `NOT_COMPUTED`): the ball passages and the
+//! synchronous average (the detection's template, coupling and
+//! thresholds come from the whole optical signal), and the
+//! position-domain spectra (a median of the whole record's speed, the
+//! longest run, and every segment re-read). Only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
 
 mod chain;
+mod stage;
 mod support;
 
 use ballpass_dsp::{WelchStream, WindowCorrelation, ZeroPhaseStream};
@@ -68,6 +86,7 @@ use super::{
 use crate::bearing::{check_velocity, Prediction};
 use crate::error::{Error, Result};
 use crate::recording::stream::{Block, RecordSource};
+use crate::report::envelope::{SignalGatherer, SignalSamples};
 
 /// How a streamed analysis ran (`analysis.json`'s `stream`; absent when
 /// the record was analysed in memory).
@@ -82,14 +101,18 @@ pub struct StreamInfo {
     pub decimation_overlap_samples: Option<usize>,
     /// What a streamed record does not give, and why.
     pub not_computed: Vec<String>,
+    /// The samples of the report's signals figures (its envelopes and
+    /// detail), gathered while streaming; not written to `analysis.json`.
+    #[serde(skip)]
+    pub signals: Option<SignalSamples>,
 }
 
 /// Why the parts [`analyze_stream`] leaves out are left out.
-const NOT_COMPUTED: [&str; 4] = [
+const NOT_COMPUTED: [&str; 3] = [
     "ball passages (passage detection reads the whole optical signal)",
     "synchronous average (needs the passages)",
-    "stage identification (its response fit reads the whole record)",
-    "position-domain spectra (resampled onto the travel of each run)",
+    "position-domain spectra (their stop threshold is the median speed of the whole record, \
+     their segment length follows the longest run, and the line search re-reads every segment)",
 ];
 
 /// What every pass of the chain over the record shares.
@@ -103,6 +126,8 @@ struct PassKit<'a> {
     filter: Option<&'a ballpass_dsp::ZeroPhaseFilter>,
     filter_block: usize,
     name: &'a str,
+    /// Signals the chain hands out untrimmed too (the stage's).
+    untrimmed: &'a [usize],
 }
 
 impl PassKit<'_> {
@@ -125,7 +150,8 @@ impl PassKit<'_> {
             self.restore,
             self.filter,
             self.filter_block,
-        );
+        )
+        .with_untrimmed(self.untrimmed);
         let mut out = Output::new();
         let mut prog = Progress {
             f: progress,
@@ -263,6 +289,8 @@ pub(crate) fn analyze_stream_blocks(
         s
     };
 
+    let mut stage = stage::StageStream::new(&signals, len, fs, trim)?;
+    let stage_of = stage.as_ref().map_or(Vec::new(), |s| s.untrimmed());
     let kit = |restore| PassKit {
         signals: &signals,
         fs,
@@ -273,6 +301,7 @@ pub(crate) fn analyze_stream_blocks(
         filter: filter.as_ref(),
         filter_block,
         name: &name,
+        untrimmed: &stage_of,
     };
 
     // Pass 1: the load cell.
@@ -304,6 +333,7 @@ pub(crate) fn analyze_stream_blocks(
     let mut lines: Vec<TrendSums> = vec![TrendSums::new(n); k];
     let (mut raw_v, mut low_v) = (Moments::new(), Moments::new());
     let mut friction_dev = -0.0;
+    let mut gather = SignalGatherer::new(name.clone(), len, fs, src.meta().start_time_s, &channels);
     {
         let what = next_pass("low-pass and trend", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -322,6 +352,9 @@ pub(crate) fn analyze_stream_blocks(
             for (t, y) in lines.iter_mut().zip(&out.filtered) {
                 t.add(out.filtered_at, y);
             }
+            if let Some(st) = stage.as_mut() {
+                st.add_lines(out);
+            }
             if let Some(v) = vi {
                 if let Some(y) = out.filtered.get(v) {
                     for &x in y {
@@ -333,6 +366,7 @@ pub(crate) fn analyze_stream_blocks(
             Ok(())
         };
         let mut on_block = |b: Block<'_>| {
+            gather.push(b);
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
                     friction_dev += (y - m) * (y - m);
@@ -397,6 +431,9 @@ pub(crate) fn analyze_stream_blocks(
                         .enumerate()
                         .map(|(i, v)| v - t.at(out.filtered_at + i)),
                 );
+            }
+            if let Some(st) = stage.as_mut() {
+                st.push(out)?;
             }
             let xs: Vec<&[f64]> = detrended.iter().map(Vec::as_slice).collect();
             if xs.first().is_some_and(|x| !x.is_empty()) {
@@ -504,6 +541,13 @@ pub(crate) fn analyze_stream_blocks(
     for s in [&mut unfiltered, &mut full, &mut hr] {
         super::confidence::finish(s, settings.band_confidence, settings.confidence);
     }
+    let (stage, stage_spectra) = match (stage, &dc) {
+        (Some(st), Some(dc)) => {
+            let (id, sp) = st.finish(fs, dc)?;
+            (Some(id), Some(sp))
+        }
+        _ => (None, None),
+    };
     let load_cell: Vec<_> = dc.into_iter().collect();
     if let Some(w) = load_cell.iter().find_map(|d| d.warning(pred.f_c_hz)) {
         warnings.push(w);
@@ -523,6 +567,8 @@ pub(crate) fn analyze_stream_blocks(
 
     // Pass 4: the phases at the measured f_c.
     let mut line = LineStream::new(&signals, fs, n, findings.f_used);
+    // The report's detail figure: ball periods at the period it marks.
+    gather.detail_at(findings.measured.period_s.unwrap_or(pred.tau_c_s));
     {
         let what = next_pass("phases", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -543,7 +589,12 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
-        kit(restore).run(src, what, progress, &mut |_| {}, &mut eat)?;
+        let mut on_block = |b: Block<'_>| gather.push_detail(b);
+        let kit = PassKit {
+            untrimmed: &[],
+            ..kit(restore)
+        };
+        kit.run(src, what, progress, &mut on_block, &mut eat)?;
     }
     fill_line_phases(
         &mut findings.phases,
@@ -572,6 +623,7 @@ pub(crate) fn analyze_stream_blocks(
         lowpass_overlap_samples: filter.as_ref().map(ZeroPhaseStream::overlap_for),
         decimation_overlap_samples: dec_filter.map(ZeroPhaseStream::overlap_for),
         not_computed: NOT_COMPUTED.iter().map(|s| s.to_string()).collect(),
+        signals: Some(gather.finish()),
     };
     notes.push(format!(
         "record streamed: read {passes} times block by block in bounded memory; low-pass and \
@@ -624,8 +676,8 @@ pub(crate) fn analyze_stream_blocks(
         coherence: findings.coherence,
         velocity_error,
         load_cell,
-        stage: None,
-        stage_spectra: None,
+        stage,
+        stage_spectra,
         repeats: None,
         verdict,
         passages: vec![PassageSummary {
