@@ -465,28 +465,6 @@ pub(crate) fn run_staged_above(
                 .into(),
         );
     }
-    let present: Vec<String> = pairs_for(&signals)
-        .into_iter()
-        .map(|(x, y)| pair_name(x, y))
-        .collect();
-    let mut absent_series: Vec<Absent> = Vec::new();
-    for (s, reason) in &absent {
-        absent_series.push(Absent {
-            name: s.name().into(),
-            reason: reason.clone(),
-        });
-        for (x, y) in super::CROSS_PAIRS {
-            if x == *s || y == *s {
-                let name = pair_name(x, y);
-                if !absent_series.iter().any(|a| a.name == name) {
-                    absent_series.push(Absent {
-                        name,
-                        reason: reason.clone(),
-                    });
-                }
-            }
-        }
-    }
     let (passages, passage_times): (Vec<_>, Vec<_>) = passages.into_iter().unzip();
     let sync = if with_passages {
         let sync_settings = super::sync::SyncSettings::default();
@@ -562,11 +540,7 @@ pub(crate) fn run_staged_above(
         duration_analysed_s: duration,
         periods_in_record: periods,
         prediction: pred.clone(),
-        series: SeriesInfo {
-            signals: signals.clone(),
-            present,
-            absent: absent_series,
-        },
+        series: series_info(&signals, &absent),
         spectrum_full: full.info.clone(),
         spectrum_hires: hr.info.clone(),
         spectrum_unfiltered: unfiltered.info.clone(),
@@ -728,6 +702,38 @@ fn with_correlator<R>(
 /// spectra, two work spectra, the inverse's input, scratch) hold ~28 MB; a
 /// longer record's would stay with the thread for the rest of the run.
 const KEEP_MAX_SAMPLES: usize = 1 << 18;
+
+/// The series present (each signal and pair) and absent (with the reason;
+/// a pair is absent when either of its signals is).
+pub(crate) fn series_info(signals: &[Signal], absent: &[(Signal, String)]) -> SeriesInfo {
+    let present = pairs_for(signals)
+        .into_iter()
+        .map(|(x, y)| pair_name(x, y))
+        .collect();
+    let mut absent_series: Vec<Absent> = Vec::new();
+    for (s, reason) in absent {
+        absent_series.push(Absent {
+            name: s.name().into(),
+            reason: reason.clone(),
+        });
+        for (x, y) in super::CROSS_PAIRS {
+            if x == *s || y == *s {
+                let name = pair_name(x, y);
+                if !absent_series.iter().any(|a| a.name == name) {
+                    absent_series.push(Absent {
+                        name,
+                        reason: reason.clone(),
+                    });
+                }
+            }
+        }
+    }
+    SeriesInfo {
+        signals: signals.to_vec(),
+        present,
+        absent: absent_series,
+    }
+}
 
 #[cfg(test)]
 mod staged_tests;

@@ -73,11 +73,12 @@ use ballpass_dsp::{WelchStream, WindowCorrelation, ZeroPhaseStream};
 use serde::Serialize;
 
 use self::chain::{Chain, Output, TrendSums};
-use self::support::{channel_of, check_count, load_cell_pass, series_info, Progress};
+use self::support::{channel_of, check_count, load_cell_pass, Progress};
 use super::correlation::{pairs_for, Correlations};
 use super::load_cell;
 use super::phase::LineStream;
 use super::preprocess::{self, VelocityErrorStats};
+use super::repeats::series_info;
 use super::repeats::{evaluate_findings, fill_line_phases, verdict_of};
 use super::spectra::{self, Spectra};
 use super::{

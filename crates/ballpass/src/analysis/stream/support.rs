@@ -1,9 +1,8 @@
 //! The load-cell pass of [`super::analyze_stream`] and small helpers.
 
 use super::chain::Sum;
-use crate::analysis::correlation::pairs_for;
 use crate::analysis::load_cell::{self, Decision};
-use crate::analysis::{pair_name, Absent, AnalyzeSettings, SeriesInfo, Signal};
+use crate::analysis::{AnalyzeSettings, Signal};
 use crate::bearing::Prediction;
 use crate::error::{Error, Result};
 use crate::recording::stream::RecordSource;
@@ -34,37 +33,6 @@ pub(super) fn channel_of(s: Signal) -> Channel {
         Signal::Friction => Channel::Friction,
         Signal::VelocityError => Channel::Position,
         Signal::Optical => Channel::Optical,
-    }
-}
-
-/// The series present and absent.
-pub(super) fn series_info(signals: &[Signal], absent: &[(Signal, String)]) -> SeriesInfo {
-    let present = pairs_for(signals)
-        .into_iter()
-        .map(|(x, y)| pair_name(x, y))
-        .collect();
-    let mut absent_series: Vec<Absent> = Vec::new();
-    for (s, reason) in absent {
-        absent_series.push(Absent {
-            name: s.name().into(),
-            reason: reason.clone(),
-        });
-        for (x, y) in crate::analysis::CROSS_PAIRS {
-            if x == *s || y == *s {
-                let name = pair_name(x, y);
-                if !absent_series.iter().any(|a| a.name == name) {
-                    absent_series.push(Absent {
-                        name,
-                        reason: reason.clone(),
-                    });
-                }
-            }
-        }
-    }
-    SeriesInfo {
-        signals: signals.to_vec(),
-        present,
-        absent: absent_series,
     }
 }
 
