@@ -5,6 +5,7 @@ use ballpass::analysis::passage_table::{
     checked_passages, passage_rows, PassageFailure, PassageOutput,
 };
 use ballpass::analysis::preflight::{self, PreflightSettings};
+use ballpass::analysis::stream::file::{self as stream_file, Choice, Naming, StreamMode};
 use ballpass::analysis::{self, export, AnalyzeSettings, PassageSettings};
 use ballpass::bearing;
 use ballpass::recording::segment::{self, Window};
@@ -15,7 +16,7 @@ use pyo3::types::{PyDict, PyList};
 use crate::convert;
 use crate::errors;
 use crate::pool::{self, ThreadPool};
-use crate::recording::{BearingArgs, PyRecording};
+use crate::recording::{BearingArgs, LoadArgs, PyRecording};
 
 pub(crate) fn bearing_args(json: Option<&str>) -> PyResult<BearingArgs> {
     match json {
@@ -94,7 +95,6 @@ pub(crate) fn table<'py>(
 /// analysis' as there.
 #[pyfunction]
 #[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, settings=None, pool=None, force_velocity=false))]
-#[allow(clippy::type_complexity)]
 fn analyze<'py>(
     py: Python<'py>,
     recordings: Vec<PyRef<'py, PyRecording>>,
@@ -103,15 +103,7 @@ fn analyze<'py>(
     settings: Option<&str>,
     pool: Option<Bound<'py, ThreadPool>>,
     force_velocity: bool,
-) -> PyResult<(
-    Bound<'py, PyAny>,
-    Bound<'py, PyDict>,
-    Bound<'py, PyDict>,
-    Bound<'py, PyDict>,
-    Bound<'py, PyDict>,
-    Option<Bound<'py, PyDict>>,
-    Option<Bound<'py, PyDict>>,
-)> {
+) -> PyResult<Tables<'py>> {
     let s: AnalyzeSettings =
         convert::settings(&AnalyzeSettings::default(), settings, "analysis settings")?;
     s.validate().map_err(errors::domain)?;
@@ -131,6 +123,23 @@ fn analyze<'py>(
         Ok::<_, ballpass::Error>(a)
     })
     .map_err(errors::domain)?;
+    results(py, &a)
+}
+
+/// `analyze`'s results: `(analysis.json as a dict, correlations, spectra,
+/// spectra_hires, spectra_unfiltered, spectra_position, sync_average)`.
+type Tables<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyDict>,
+    Bound<'py, PyDict>,
+    Bound<'py, PyDict>,
+    Bound<'py, PyDict>,
+    Option<Bound<'py, PyDict>>,
+    Option<Bound<'py, PyDict>>,
+);
+
+/// An analysis as [`Tables`].
+fn results<'py>(py: Python<'py>, a: &analysis::Analysis) -> PyResult<Tables<'py>> {
     let corr = PyDict::new(py);
     corr.set_item("lag_s", convert::array(py, a.correlations.lag_s.clone()))?;
     for (name, v) in export::correlation_columns(&a.correlations, a.settings.corr_norm) {
@@ -162,6 +171,58 @@ fn analyze<'py>(
         position,
         sync,
     ))
+}
+
+/// `ballpass.analyze` of one record file under `stream` (`auto`, `on`,
+/// `off`), the command line's `--stream`: `(tables, None)` when the
+/// record was analysed streamed (block by block, in memory that does not
+/// grow with its length), `(None, warning)` when it is to be read whole
+/// (the warning, if any, says why a long file could not be streamed).
+/// The velocity is the one given, else the file's; a streamed record
+/// cannot have it measured from the encoder.
+#[pyfunction]
+#[pyo3(signature = (path, stream, load=None, velocity_mm_s=None, settings=None, pool=None))]
+fn analyze_file<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    stream: &str,
+    load: Option<&str>,
+    velocity_mm_s: Option<f64>,
+    settings: Option<&str>,
+    pool: Option<Bound<'py, ThreadPool>>,
+) -> PyResult<(Option<Tables<'py>>, Option<String>)> {
+    let s: AnalyzeSettings =
+        convert::settings(&AnalyzeSettings::default(), settings, "analysis settings")?;
+    s.validate().map_err(errors::domain)?;
+    let mode = StreamMode::parse("stream", stream).map_err(errors::domain)?;
+    let opts = LoadArgs::parse(load)?.options()?;
+    let geometry = opts
+        .geometry
+        .ok_or_else(|| errors::value("load options: no bearing geometry"))?;
+    const NAMING: Naming = Naming {
+        stream: "stream",
+        velocity: "velocity_mm_s",
+    };
+    let files = [path];
+    let analysis = pool::run(py, pool.as_ref(), || {
+        match stream_file::choose(&files, &opts, mode, None, NAMING)? {
+            Choice::Whole(warning) => Ok(Err(warning)),
+            Choice::Stream(mut src) => stream_file::analyze_streamed(
+                &mut src,
+                velocity_mm_s,
+                &geometry,
+                &s,
+                NAMING,
+                &mut |_| {},
+            )
+            .map(Ok),
+        }
+    })
+    .map_err(errors::domain)?;
+    match analysis {
+        Ok(a) => Ok((Some(results(py, &a)?), None)),
+        Err(warning) => Ok((None, warning)),
+    }
 }
 
 /// `ballpass.passages`: the optical ball passages of each recording, as
@@ -253,6 +314,7 @@ fn passages<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(predict, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(analyze_file, m)?)?;
     m.add_function(wrap_pyfunction!(passages, m)?)?;
     Ok(())
 }

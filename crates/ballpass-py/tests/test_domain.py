@@ -147,6 +147,31 @@ def test_analyze_equals_the_cli(recs, cli, tmp):
     assert b.verdict.text and b.correlations.lag_s.shape == (39999,)
 
 
+def test_analyze_streams_a_file_as_the_cli(recs, cli, tmp):
+    """`stream='on'` is `--stream on`: the record read block by block gives
+    the command line's streamed analysis.json and tables; it needs a
+    velocity and one file, and 'auto' reads a short file whole."""
+    out = tmp / "streamed"
+    cli("analyze", recs / "r3.csv", "--velocity", "9", "--stream", "on", "--no-report",
+        "--out", out)
+    with pytest.warns(ballpass.BallpassWarning, match="streamed"):
+        a = ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0, stream="on")
+    assert a.to_dict() == read_json(out / "analysis.json")
+    assert a.to_dict()["stream"]["passes"] == 4
+    assert_table_equals_csv(a.correlations, out / "correlations.csv")
+    assert_table_equals_csv(a.spectra, out / "spectra.csv")
+    assert_table_equals_csv(a.spectra_hires, out / "spectra_hires.csv")
+    assert a.spectra_position is None and a.sync_average is None
+    whole = ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0)
+    assert "stream" not in whole.to_dict()
+    with pytest.raises(ValueError, match="velocity_mm_s"):
+        ballpass.analyze(recs / "r3.csv", stream="on")
+    with pytest.raises(ValueError, match="one record file"):
+        ballpass.analyze([recs / "r3.csv", recs / "r4.csv"], velocity_mm_s=9.0, stream="on")
+    with pytest.raises(ValueError, match="auto.*on.*off"):
+        ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0, stream="sometimes")
+
+
 def test_analyze_runs_the_command_lines_checks(recs, cli, tmp):
     """As `ballpass analyze`: a stated velocity that the encoder contradicts
     is an error unless forced (then a warning, and analysis.json equals the

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight::{self, VelocitySource};
+use ballpass::analysis::stream::file::{self as stream_file, Choice, Naming, StreamMode};
 use ballpass::analysis::MaxLag;
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
@@ -137,7 +138,7 @@ pub struct AnalyzeArgs {
     /// (`auto`, the default: files of 1 GiB and more, about 4.5 hours at
     /// 1 kHz), or always (`on`), or never (`off`: the whole record in
     /// memory, with every output). A streamed record gives no passages,
-    /// synchronous average, stage identification or position spectra.
+    /// synchronous average or position spectra.
     #[arg(long, value_enum, default_value = "auto", value_name = "WHEN")]
     stream: StreamArg,
 }
@@ -149,9 +150,6 @@ enum StreamArg {
     On,
     Off,
 }
-
-/// Files at least this long are streamed under `--stream auto`.
-const STREAM_ABOVE_BYTES: u64 = 1 << 30;
 
 impl AnalyzeArgs {
     /// Settings: defaults, then the profile's `[analysis]` keys that name
@@ -444,59 +442,40 @@ impl Ctx<'_> {
     }
 }
 
-/// The record to stream, if `--stream` and the file say so; on `auto`, a
-/// long file that cannot be streamed is read whole with a warning.
+/// The library's stream choice for this run (`--stream`); a long file
+/// read whole gets its warning printed.
 fn streamable(
     a: &AnalyzeArgs,
     opts: &ballpass::recording::LoadOptions,
 ) -> Result<Option<CsvSource>> {
-    if a.stream == StreamArg::Off {
-        return Ok(None);
-    }
-    let [path] = a.recs.as_slice() else {
-        if a.stream == StreamArg::On {
-            bail!("--stream on takes one record file ({} given)", a.recs.len());
-        }
-        return Ok(None);
+    let mode = match a.stream {
+        StreamArg::Auto => StreamMode::Auto,
+        StreamArg::On => StreamMode::On,
+        StreamArg::Off => StreamMode::Off,
     };
-    let size = std::fs::metadata(path)
-        .with_context(|| format!("cannot read {}", text::path(path)))?
-        .len();
-    if a.stream == StreamArg::Auto && size < STREAM_ABOVE_BYTES {
-        return Ok(None);
-    }
-    let gb = size as f64 / 1e9;
-    let why = if a.segment.segment {
-        Some("--segment needs the record in memory".to_string())
+    let needs_whole = if a.segment.segment {
+        Some("--segment needs the record in memory")
     } else if a.load.window.window.is_some() {
-        Some("a --window part is read whole (it is shorter)".to_string())
+        Some("a --window part is read whole (it is shorter)")
     } else {
         None
     };
-    let src = match why {
-        Some(_) => None,
-        None => ballpass::recording::io::csv::blocks::open(path, opts)?,
-    };
-    match src {
-        Some(s) => Ok(Some(s)),
-        None => {
-            let why = why.unwrap_or_else(|| {
-                "only a plain CSV/TSV file (a uniform time column, no missing values, no given \
-                 rate) is streamed; MATLAB, TDMS and MF4 files are read whole"
-                    .into()
-            });
-            if a.stream == StreamArg::On {
-                bail!("{} cannot be streamed: {why}", text::path(path));
+    match stream_file::choose(&a.recs, opts, mode, needs_whole, NAMING)? {
+        Choice::Stream(src) => Ok(Some(*src)),
+        Choice::Whole(warning) => {
+            if let Some(w) = warning {
+                eprintln!("warning: {}", text::line(&w));
             }
-            eprintln!(
-                "warning: {} is {gb:.1} GB and is read whole ({why}): it needs memory in \
-                 proportion (about 60 bytes per sample of three channels)",
-                text::path(path)
-            );
             Ok(None)
         }
     }
 }
+
+/// How the stream choice's messages name the flags.
+const NAMING: Naming = Naming {
+    stream: "--stream",
+    velocity: "--velocity",
+};
 
 /// `ballpass analyze` of one record streamed from its file.
 fn run_streamed(
@@ -508,26 +487,20 @@ fn run_streamed(
     steps: Option<indicatif::ProgressBar>,
     bearing_name: &str,
 ) -> Result<()> {
-    use ballpass::recording::stream::RecordSource;
     let geometry = opts.geometry.expect("options() resolves the bearing");
-    let Some(v) = a.load.velocity.or(src.meta().velocity_mm_s) else {
-        bail!(
-            "{} is streamed (too long to hold in memory): give --velocity (measuring it from \
-             the encoder needs the record in memory), or --stream off to read it whole",
-            text::path(src.path())
-        );
-    };
-    let prediction = geometry.predict(v, settings.harmonics)?;
     let mut progress = |m: &str| {
         if let Some(s) = &steps {
             s.set_message(m.to_string());
         }
     };
-    let mut analysis =
-        analysis::stream::analyze_stream(&mut src, &prediction, settings, &mut progress)?;
-    analysis
-        .method_notes
-        .push(format!("velocity {v:.4} mm/s, stated"));
+    let analysis = stream_file::analyze_streamed(
+        &mut src,
+        a.load.velocity,
+        &geometry,
+        settings,
+        NAMING,
+        &mut progress,
+    )?;
     let print = || -> std::io::Result<()> {
         let mut err = std::io::stderr().lock();
         for w in &analysis.warnings {

@@ -262,7 +262,7 @@ def predict(velocity_mm_s: float | Sequence[float], *, bearing: str | None = Non
 def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
             ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
             force_velocity: bool = False, settings: dict | None = None, threads=None,
-            **setting_overrides) -> Result:
+            stream: str = "auto", **setting_overrides) -> Result:
     """Correlations, spectra, measured period, phases and harmonics of one
     recording, or of several repeats at one velocity (averaged), as
     ``ballpass analyze``. ``recordings``: Recording objects or file paths.
@@ -291,14 +291,42 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     passage, then ``<signal>_mean_<unit>``, ``<signal>_band_low_<unit>``,
     ``<signal>_band_high_<unit>`` in N and µm/s; ``None`` without a
     synchronous average). The analysis' warnings are also issued as
-    :class:`BallpassWarning`."""
+    :class:`BallpassWarning`.
+
+    ``stream`` is the command line's ``--stream``: one record *file* of
+    1 GiB or more (``'auto'``), or any size (``'on'``), is read block by
+    block in memory that does not grow with its length, if it is a plain
+    CSV/TSV with a uniform time column; ``'off'`` always reads it whole. A
+    streamed record needs a velocity (given or in the file), and gives no
+    passages, synchronous average or position-domain spectra
+    (``to_dict()['stream']`` says so); ``'on'`` with anything that cannot
+    stream is an error that says why."""
     load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
-    recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
-    data, corr, spectra, hires, unfiltered, position, sync = _native.analyze(
-        recs, velocity_mm_s,
-        _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
-        _settings_json(settings, setting_overrides), _pool(threads), bool(force_velocity),
-    )
+    load_opts = {k: v for k, v in load_opts.items() if v is not None}
+    settings_json = _settings_json(settings, setting_overrides)
+    tables = None
+    if stream != "off":
+        if isinstance(recordings, (str, os.PathLike)):
+            load_opts.update(ball_diameter_mm=ball_diameter_mm, free_space_mm=free_space_mm,
+                             balls_in_race=balls_in_race)
+            tables, why = _native.analyze_file(
+                os.fspath(recordings), stream, _load_json(load_opts), velocity_mm_s,
+                settings_json, _pool(threads),
+            )
+            if why is not None:
+                warnings.warn(why, BallpassWarning, stacklevel=2)
+        elif stream == "on":
+            raise ValueError("stream='on' takes one record file path (not Recording objects or a list)")
+        elif stream != "auto":
+            raise ValueError(f"stream: expected 'auto', 'on' or 'off', got {stream!r}")
+    if tables is None:
+        recs = _as_recordings(recordings, load_opts)
+        tables = _native.analyze(
+            recs, velocity_mm_s,
+            _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
+            settings_json, _pool(threads), bool(force_velocity),
+        )
+    data, corr, spectra, hires, unfiltered, position, sync = tables
     _warn(data)
     return Result(
         data,

@@ -119,6 +119,15 @@ def analyze(
     force_velocity: bool = False,
 ) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64], dict[str, F64], dict[str, F64],
            dict[str, F64] | None, dict[str, F64] | None]: ...
+def analyze_file(
+    path: str,
+    stream: str,
+    load: str | None = None,
+    velocity_mm_s: float | None = None,
+    settings: str | None = None,
+    pool: ThreadPool | None = None,
+) -> tuple[tuple[dict[str, Any], dict[str, F64], dict[str, F64], dict[str, F64], dict[str, F64],
+                 dict[str, F64] | None, dict[str, F64] | None] | None, str | None]: ...
 def compensate(
     recordings: list[Recording],
     velocity_mm_s: float | None = None,

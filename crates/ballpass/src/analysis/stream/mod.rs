@@ -66,6 +66,7 @@
 //! `--max-lag full`).
 
 mod chain;
+pub mod file;
 mod stage;
 mod support;
 
