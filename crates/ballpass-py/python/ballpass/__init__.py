@@ -307,10 +307,11 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     tables = None
     if stream != "off":
         if isinstance(recordings, (str, os.PathLike)):
-            load_opts.update(ball_diameter_mm=ball_diameter_mm, free_space_mm=free_space_mm,
-                             balls_in_race=balls_in_race)
+            # The streamed record's geometry comes with its load options.
+            stream_opts = dict(load_opts, ball_diameter_mm=ball_diameter_mm,
+                               free_space_mm=free_space_mm, balls_in_race=balls_in_race)
             tables, why = _native.analyze_file(
-                os.fspath(recordings), stream, _load_json(load_opts), velocity_mm_s,
+                os.fspath(recordings), stream, _load_json(stream_opts), velocity_mm_s,
                 settings_json, _pool(threads),
             )
             if why is not None:

@@ -407,14 +407,12 @@ pub(crate) fn full(p: &Prepared, settings: &AnalyzeSettings) -> Result<Spectra> 
     full_of(&p.signals, p.fs_hz, p.n, settings)
 }
 
-/// Full-range spectra of equal-length signals of `n` samples at `fs_hz`
-/// (the step-2 signals, or the unfiltered ones).
-pub(crate) fn full_of<S: AsRef<[f64]>>(
-    signals: &[(Signal, S)],
-    fs_hz: f64,
-    n: usize,
-    settings: &AnalyzeSettings,
-) -> Result<Spectra> {
+/// The full-range Welch segment and overlap for a record of `n` samples:
+/// the settings' segment capped at the record, half of it by default.
+///
+/// # Errors
+/// [`Error::InvalidSetting`] when the overlap is not below the segment.
+pub(crate) fn full_segments(settings: &AnalyzeSettings, n: usize) -> Result<(usize, usize)> {
     let nperseg = settings.nperseg.min(n);
     let noverlap = settings.noverlap.unwrap_or(nperseg / 2);
     if noverlap >= nperseg {
@@ -423,11 +421,22 @@ pub(crate) fn full_of<S: AsRef<[f64]>>(
             format!("must be less than the segment length ({nperseg} after capping at the record), got {noverlap}"),
         ));
     }
+    Ok((nperseg, noverlap))
+}
+
+/// Full-range spectra of equal-length signals of `n` samples at `fs_hz`
+/// (the step-2 signals, or the unfiltered ones).
+pub(crate) fn full_of<S: AsRef<[f64]>>(
+    signals: &[(Signal, S)],
+    fs_hz: f64,
+    n: usize,
+    settings: &AnalyzeSettings,
+) -> Result<Spectra> {
+    let (nperseg, noverlap) = full_segments(settings, n)?;
     let mut welch = Welch::new(welch_settings(settings, nperseg, noverlap))
         .map_err(|e| Error::dsp("Welch settings", e))?;
     let (mut s, nseg) = welch_all(signals, fs_hz, &mut welch)?;
-    s.info = info("welch", settings, fs_hz, 1, nperseg, noverlap, nseg)?;
-    s.refresh_coherence();
+    complete(&mut s, "welch", settings, fs_hz, 1, nperseg, noverlap, nseg)?;
     Ok(s)
 }
 
@@ -495,7 +504,8 @@ pub(crate) fn hires(p: &Prepared, settings: &AnalyzeSettings, plan: &HiresPlan) 
     };
     let mut welch = Welch::new(ws).map_err(|e| Error::dsp("Welch settings", e))?;
     let (mut s, nseg) = welch_all(&decimated, plan.fs_hz, &mut welch)?;
-    s.info = info(
+    complete(
+        &mut s,
         "decimate+welch",
         settings,
         plan.fs_hz,
@@ -504,7 +514,6 @@ pub(crate) fn hires(p: &Prepared, settings: &AnalyzeSettings, plan: &HiresPlan) 
         plan.noverlap,
         nseg,
     )?;
-    s.refresh_coherence();
     Ok(s)
 }
 

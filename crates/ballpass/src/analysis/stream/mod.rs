@@ -318,14 +318,7 @@ pub(crate) fn analyze_stream_blocks(
     // Pass 2: unfiltered spectra, lines, velocity sums.
     let k = signals.len();
     let (_, cross_idx) = spectra::cross_pairs(&signals);
-    let nperseg = settings.nperseg.min(n);
-    let noverlap = settings.noverlap.unwrap_or(nperseg / 2);
-    if noverlap >= nperseg {
-        return Err(Error::setting(
-            "noverlap",
-            format!("must be less than the segment length ({nperseg} after capping at the record), got {noverlap}"),
-        ));
-    }
+    let (nperseg, noverlap) = spectra::full_segments(settings, n)?;
     let welch = |np: usize, no: usize| {
         WelchStream::new(spectra::welch_settings(settings, np, no), k, &cross_idx)
             .map_err(|e| Error::dsp("Welch settings", e))

@@ -101,7 +101,8 @@ fn parse_in_pieces(
 
 /// Reads a text recording in pieces of `piece_bytes` (the header from its
 /// first `head_bytes`), handing each piece's rows (and the piece's size in
-/// bytes) to `each`; the header and plan, or `None` when the fast path
+/// bytes) to `each`, a piece of fewer than `Recording::MIN_SAMPLES` rows
+/// joined to its neighbour; the header and plan, or `None` when the fast path
 /// does not take the file (module docs).
 ///
 /// # Errors
