@@ -136,9 +136,9 @@ pub struct AnalyzeArgs {
     check: CheckArgs,
     #[command(flatten)]
     segment: SegmentArgs,
-    /// Read a long CSV/TSV record block by block in bounded memory
+    /// Read a long CSV/TSV or TDMS record block by block in bounded memory
     /// (`auto`, the default: files of 1 GiB and more, about 4.5 hours at
-    /// 1 kHz), or always (`on`), or never (`off`: the whole record in
+    /// 1 kHz as CSV), or always (`on`), or never (`off`: the whole record in
     /// memory, with every output). A streamed record gives no passages,
     /// synchronous average or position spectra.
     #[arg(long, value_enum, default_value = "auto", value_name = "WHEN")]
