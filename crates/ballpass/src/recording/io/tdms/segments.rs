@@ -9,17 +9,17 @@ use std::collections::HashMap;
 use crate::error::excerpt;
 
 const LEAD_IN: usize = 28;
-const TOC_META: u32 = 1 << 1;
-const TOC_NEW_OBJ_LIST: u32 = 1 << 2;
-const TOC_RAW: u32 = 1 << 3;
-const TOC_INTERLEAVED: u32 = 1 << 5;
+pub(super) const TOC_META: u32 = 1 << 1;
+pub(super) const TOC_NEW_OBJ_LIST: u32 = 1 << 2;
+pub(super) const TOC_RAW: u32 = 1 << 3;
+pub(super) const TOC_INTERLEAVED: u32 = 1 << 5;
 const TOC_BIG_ENDIAN: u32 = 1 << 6;
 const TOC_DAQMX: u32 = 1 << 7;
 const NO_DATA: u32 = 0xFFFF_FFFF;
 const SAME_AS_BEFORE: u32 = 0;
 const DAQMX_FORMAT_CHANGING: u32 = 0x1269;
 const DAQMX_DIGITAL_LINE: u32 = 0x126A;
-const TY_STRING: u32 = 0x20;
+pub(super) const TY_STRING: u32 = 0x20;
 pub(super) const TY_DAQMX: u32 = 0xFFFF_FFFF;
 /// Most DAQmx scalers of one channel (a channel has one or two).
 const MAX_SCALERS: usize = 8;

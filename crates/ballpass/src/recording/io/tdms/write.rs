@@ -12,13 +12,10 @@ use std::path::Path;
 use crate::error::Result;
 use crate::recording::Recording;
 
-const TOC_META: u32 = 1 << 1;
-const TOC_NEW_OBJ_LIST: u32 = 1 << 2;
-const TOC_RAW: u32 = 1 << 3;
-const TOC_INTERLEAVED: u32 = 1 << 5;
+use super::segments::{TOC_INTERLEAVED, TOC_META, TOC_NEW_OBJ_LIST, TOC_RAW, TY_STRING};
+
 const VERSION: u32 = 4713;
 const TY_DOUBLE: u32 = 10;
-const TY_STRING: u32 = 0x20;
 const GROUP: &str = "ballpass";
 
 fn string(out: &mut Vec<u8>, s: &str) {
