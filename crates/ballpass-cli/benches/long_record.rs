@@ -2,8 +2,14 @@
 //! the SciPy script doing the same steps (`tools/bench_scipy_long.py`).
 //!
 //! ```text
-//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off]
+//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms]
 //! ```
+//!
+//! With `--tdms` the record is written as an NI TDMS file instead
+//! (`ballpass::recording::io::tdms::write_tdms`: float64 channels with
+//! waveform timing, segments of 1000 samples, as DAQmx logging writes
+//! them) and `analyze` is measured streamed (`--stream on`) and read whole
+//! (`--stream off`), side by side.
 //!
 //! For each duration (default 2 h) it simulates a record at 1 kHz
 //! (`ballpass simulate`, good bearing, 9 mm/s) into a temporary folder,
@@ -127,19 +133,21 @@ fn main() {
     let mut scipy = true;
     let mut report = false;
     let mut stream = None;
+    let mut tdms = false;
     for a in std::env::args().skip(1) {
         match a.as_str() {
             "--no-scipy" => scipy = false,
             "--report" => report = true,
             "--stream-on" => stream = Some("on"),
             "--stream-off" => stream = Some("off"),
+            "--tdms" => tdms = true,
             "--bench" => {}
             _ => match a.parse::<f64>() {
                 Ok(h) if h > 0.0 => hours.push(h),
                 _ => {
                     eprintln!(
                         "long_record: unknown argument '{a}' (hours, --no-scipy, --report, \
-                         --stream-on, --stream-off)"
+                         --stream-on, --stream-off, --tdms)"
                     );
                     std::process::exit(2);
                 }
@@ -153,12 +161,77 @@ fn main() {
     let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools");
     let dir = std::env::temp_dir().join(format!("ballpass-long-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temporary folder");
-    let result = run_all(&bin, &tools, &dir, &hours, (scipy, report, stream));
+    let result = if tdms {
+        run_tdms(&bin, &dir, &hours, report)
+    } else {
+        run_all(&bin, &tools, &dir, &hours, (scipy, report, stream))
+    };
     let _ = std::fs::remove_dir_all(&dir);
     if let Err(e) = result {
         eprintln!("long_record: {e}");
         std::process::exit(1);
     }
+}
+
+/// The simulated CSV record of `hours` at `rec` (tiled past what the
+/// simulator holds).
+fn record(bin: &Path, dir: &Path, h: f64, rec: &Path) -> Result<(), String> {
+    if h <= MAX_SIMULATED_HOURS {
+        simulate(bin, h, rec)
+    } else {
+        // The simulator holds at most 50 million samples: a longer
+        // record is a 2-hour one repeated end to end.
+        let piece = dir.join("piece_2h.csv");
+        simulate(bin, 2.0, &piece)?;
+        tile(&piece, rec, (h / 2.0).ceil() as usize)?;
+        let _ = std::fs::remove_file(&piece);
+        Ok(())
+    }
+}
+
+/// `analyze` of a TDMS record streamed and read whole (`--tdms`).
+fn run_tdms(bin: &Path, dir: &Path, hours: &[f64], report: bool) -> Result<(), String> {
+    println!(
+        "| TDMS record | file | streamed: wall (CPU) | peak RSS | read whole: wall (CPU) | peak RSS |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for &h in hours {
+        let csv = dir.join(format!("rec_{h}h.csv"));
+        record(bin, dir, h, &csv)?;
+        let rec = dir.join(format!("rec_{h}h.tdms"));
+        let whole =
+            ballpass::recording::io::load(&csv, &Default::default()).map_err(|e| e.to_string())?;
+        ballpass::recording::io::tdms::write_tdms(&whole, &rec, 1000, false)
+            .map_err(|e| e.to_string())?;
+        drop(whole);
+        let _ = std::fs::remove_file(&csv);
+        let size = std::fs::metadata(&rec).map_err(|e| e.to_string())?.len();
+        let mut runs = Vec::new();
+        for mode in ["on", "off"] {
+            let mut cmd = Command::new(bin);
+            cmd.arg("analyze")
+                .arg(&rec)
+                .args(["--velocity", "9", "--stream", mode, "--out"])
+                .arg(dir.join("bp"));
+            if !report {
+                cmd.arg("--no-report");
+            }
+            runs.push(measured(cmd)?);
+            let _ = std::fs::remove_dir_all(dir.join("bp"));
+        }
+        let _ = std::fs::remove_file(&rec);
+        println!(
+            "| {h} h at 1 kHz | {:.2} GB | {:.1} s ({:.1} s) | {:.0} MB | {:.1} s ({:.1} s) | {:.0} MB |",
+            size as f64 / 1e9,
+            runs[0].seconds,
+            runs[0].cpu_seconds,
+            runs[0].peak_mb,
+            runs[1].seconds,
+            runs[1].cpu_seconds,
+            runs[1].peak_mb
+        );
+    }
+    Ok(())
 }
 
 fn run_all(
@@ -174,16 +247,7 @@ fn run_all(
     println!("|---|---|---|---|---|---|");
     for &h in hours {
         let rec = dir.join(format!("rec_{h}h.csv"));
-        if h <= MAX_SIMULATED_HOURS {
-            simulate(bin, h, &rec)?;
-        } else {
-            // The simulator holds at most 50 million samples: a longer
-            // record is a 2-hour one repeated end to end.
-            let piece = dir.join("piece_2h.csv");
-            simulate(bin, 2.0, &piece)?;
-            tile(&piece, &rec, (h / 2.0).ceil() as usize)?;
-            let _ = std::fs::remove_file(&piece);
-        }
+        record(bin, dir, h, &rec)?;
         let mut ours = Command::new(bin);
         ours.arg("analyze")
             .arg(&rec)

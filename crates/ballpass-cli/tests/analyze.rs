@@ -186,9 +186,36 @@ fn a_missing_channel_is_a_warning_on_stderr() {
 #[test]
 fn a_streamed_record_gives_the_in_memory_tables() {
     let rec = fixture();
+    stream_on_equals_off(&rec, "csv");
+    let out = scratch("stream-no-velocity");
+    let (ok, _, stderr) = run(&[
+        "analyze",
+        rec.to_str().unwrap(),
+        "--stream",
+        "on",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("--velocity"), "{stderr}");
+}
+
+/// The same for the record as a TDMS file (segments of 997 samples).
+#[test]
+fn a_streamed_tdms_record_gives_the_in_memory_tables() {
+    let out = scratch("stream-tdms");
+    let rec = ballpass::recording::io::load(&fixture(), &Default::default()).unwrap();
+    let tdms = out.join("rec.tdms");
+    ballpass::recording::io::tdms::write_tdms(&rec, &tdms, 997, false).unwrap();
+    stream_on_equals_off(&tdms, "tdms");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// `analyze REC --stream on` and `--stream off`: the same correlations and
+/// spectra (module docs of the test above).
+fn stream_on_equals_off(rec: &std::path::Path, tag: &str) {
     let mut tables = Vec::new();
     for mode in ["on", "off"] {
-        let out = scratch(&format!("stream-{mode}"));
+        let out = scratch(&format!("stream-{tag}-{mode}"));
         // The streamed run draws its report: the signals figure and the
         // stage come from the stream too.
         let mut args = vec![
@@ -253,14 +280,4 @@ fn a_streamed_record_gives_the_in_memory_tables() {
             }
         }
     }
-    let out = scratch("stream-no-velocity");
-    let (ok, _, stderr) = run(&[
-        "analyze",
-        rec.to_str().unwrap(),
-        "--stream",
-        "on",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!ok && stderr.contains("--velocity"), "{stderr}");
 }

@@ -38,6 +38,7 @@ use ballpass::campaign::manifest::parse_manifest;
 use ballpass::recording::inspect::{inspect_bytes, InspectSettings};
 use ballpass::recording::io::csv::blocks::check_stream_agrees;
 use ballpass::recording::io::csv::check_fast_path_agrees;
+use ballpass::recording::io::tdms::stream::check_stream_agrees as check_tdms_stream_agrees;
 use ballpass::recording::io::{contents_of_bytes, load_all_bytes};
 use ballpass::recording::{GapPolicy, LoadOptions, Profile, TimeUnit};
 
@@ -287,6 +288,7 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
         config.seed
     ));
     let stream_file = stream_dir.join("fuzz.csv");
+    let stream_tdms = stream_dir.join("fuzz.tdms");
     let have_stream_dir = std::fs::create_dir_all(&stream_dir).is_ok();
     // Seeds by kind, each kind drawn with its weight (so that the many MAT
     // stress files do not crowd out the other formats).
@@ -459,6 +461,16 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
                             Err(d) => panic!("streamed and whole-file readers disagree: {d}"),
                         });
                     }
+                }
+                // The streamed TDMS reader, from disk as well.
+                if kind == Kind::Tdms
+                    && have_stream_dir
+                    && std::fs::write(&stream_tdms, &input).is_ok()
+                {
+                    call("stream", &|| match check_tdms_stream_agrees(&stream_tdms) {
+                        Ok(()) => Ok(()),
+                        Err(d) => panic!("streamed and whole-file TDMS readers disagree: {d}"),
+                    });
                 }
             }
             Kind::Profile => call("parse", &|| {

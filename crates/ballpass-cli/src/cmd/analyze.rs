@@ -7,12 +7,14 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight::{self, VelocitySource};
-use ballpass::analysis::stream::file::{self as stream_file, Choice, Naming, StreamMode};
+use ballpass::analysis::stream::file::{
+    self as stream_file, Choice, FileSource, Naming, StreamMode,
+};
 use ballpass::analysis::MaxLag;
 use ballpass::analysis::{
     self, Analysis, AnalyzeSettings, CorrNorm, Detrend, HiresMethod, WindowKind,
 };
-use ballpass::recording::io::csv::blocks::CsvSource;
+
 use ballpass::recording::segment::Window;
 use ballpass::recording::Recording;
 use clap::{Args, ValueEnum};
@@ -134,9 +136,9 @@ pub struct AnalyzeArgs {
     check: CheckArgs,
     #[command(flatten)]
     segment: SegmentArgs,
-    /// Read a long CSV/TSV record block by block in bounded memory
+    /// Read a long CSV/TSV or TDMS record block by block in bounded memory
     /// (`auto`, the default: files of 1 GiB and more, about 4.5 hours at
-    /// 1 kHz), or always (`on`), or never (`off`: the whole record in
+    /// 1 kHz as CSV), or always (`on`), or never (`off`: the whole record in
     /// memory, with every output). A streamed record gives no passages,
     /// synchronous average or position spectra.
     #[arg(long, value_enum, default_value = "auto", value_name = "WHEN")]
@@ -447,7 +449,7 @@ impl Ctx<'_> {
 fn streamable(
     a: &AnalyzeArgs,
     opts: &ballpass::recording::LoadOptions,
-) -> Result<Option<CsvSource>> {
+) -> Result<Option<FileSource>> {
     let mode = match a.stream {
         StreamArg::Auto => StreamMode::Auto,
         StreamArg::On => StreamMode::On,
@@ -482,7 +484,7 @@ fn run_streamed(
     a: &AnalyzeArgs,
     settings: &AnalyzeSettings,
     opts: &ballpass::recording::LoadOptions,
-    mut src: CsvSource,
+    mut src: FileSource,
     out: ballpass::outdir::OutputDir,
     steps: Option<indicatif::ProgressBar>,
     bearing_name: &str,

@@ -124,3 +124,72 @@ impl RecordSource for RecordingSource<'_> {
         Ok(())
     }
 }
+
+/// The samples of one [`RecordSource::pass`], one series per channel of
+/// [`Channel::ALL`] (empty for a channel the record lacks).
+///
+/// # Errors
+/// The pass's error.
+pub fn collect(src: &mut dyn RecordSource) -> Result<Vec<Vec<f64>>> {
+    let mut got: Vec<Vec<f64>> = vec![Vec::new(); Channel::ALL.len()];
+    src.pass(&mut |b| {
+        for (g, c) in got.iter_mut().zip(Channel::ALL) {
+            g.extend_from_slice(b.channel(c).unwrap_or(&[]));
+        }
+        Ok(())
+    })?;
+    Ok(got)
+}
+
+/// Fuzzing's check that a file read in pieces (`opened`: the source, or
+/// `None` when the file is read whole instead) gives what the whole-file
+/// reader gives (`whole`): the same rate, length, channels and samples to
+/// the bit, or an error from both. `Err` describes a disagreement; a file
+/// declined agrees by definition.
+pub fn check_agrees<S: RecordSource>(
+    opened: Result<Option<S>>,
+    whole: Result<Recording>,
+) -> std::result::Result<(), String> {
+    let mut src = match opened {
+        Ok(Some(src)) => src,
+        Ok(None) => return Ok(()),
+        Err(e) => {
+            return match whole {
+                Ok(_) => Err(format!(
+                    "the scan refused what the whole-file reader read: {e}"
+                )),
+                Err(_) => Ok(()),
+            }
+        }
+    };
+    let got = collect(&mut src);
+    let (got, whole) = match (got, whole) {
+        (Err(_), Err(_)) => return Ok(()),
+        (Ok(_), Err(e)) => return Err(format!("streamed, but the whole-file reader refused: {e}")),
+        (Err(e), Ok(_)) => {
+            return Err(format!(
+                "the whole-file reader read what a pass refused: {e}"
+            ))
+        }
+        (Ok(g), Ok(w)) => (g, w),
+    };
+    if src.fs_hz().to_bits() != whole.fs_hz().to_bits() || src.len() != whole.len() {
+        return Err(format!(
+            "rate or length differ: {} Hz, {} samples streamed; {} Hz, {} whole",
+            src.fs_hz(),
+            src.len(),
+            whole.fs_hz(),
+            whole.len()
+        ));
+    }
+    if src.channels() != whole.channels() {
+        return Err("channels differ".into());
+    }
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (g, c) in got.iter().zip(Channel::ALL) {
+        if bits(g) != bits(whole.channel(c).unwrap_or(&[])) {
+            return Err(format!("{} samples differ", c.column_name()));
+        }
+    }
+    Ok(())
+}

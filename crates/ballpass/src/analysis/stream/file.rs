@@ -2,15 +2,17 @@
 //! with the velocity it needs: the one choice behind the command line's
 //! `--stream` and Python's `stream=`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::analyze_stream;
 use crate::analysis::{Analysis, AnalyzeSettings};
 use crate::bearing::Geometry;
 use crate::error::{shown_path, Error, Result};
 use crate::recording::io::csv::blocks::{self, CsvSource};
-use crate::recording::stream::RecordSource;
-use crate::recording::LoadOptions;
+use crate::recording::io::tdms::stream::{self as tdms_stream, TdmsSource};
+use crate::recording::io::{resolve, Format};
+use crate::recording::stream::{Block, RecordSource};
+use crate::recording::{Channel, LoadOptions, Metadata};
 
 /// When to stream a record file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -43,7 +45,8 @@ impl StreamMode {
 }
 
 /// Files at least this long are streamed under [`StreamMode::Auto`]:
-/// 1 GiB, about 4.5 hours of three channels at 1 kHz as CSV.
+/// 1 GiB, about 4.5 hours of three channels at 1 kHz as CSV, 12 hours as
+/// float64 TDMS.
 pub const STREAM_ABOVE_BYTES: u64 = 1 << 30;
 
 /// How the front end names what the messages ask the user to give.
@@ -55,11 +58,66 @@ pub struct Naming {
     pub velocity: &'static str,
 }
 
+/// A record file read in pieces: the sources [`choose`] streams.
+#[derive(Debug)]
+pub enum FileSource {
+    /// A plain CSV/TSV file.
+    Csv(CsvSource),
+    /// An NI TDMS file (or one group of it).
+    Tdms(TdmsSource),
+}
+
+impl FileSource {
+    /// The file read.
+    pub fn path(&self) -> &Path {
+        match self {
+            FileSource::Csv(s) => s.path(),
+            FileSource::Tdms(s) => s.path(),
+        }
+    }
+
+    fn inner(&mut self) -> &mut dyn RecordSource {
+        match self {
+            FileSource::Csv(s) => s,
+            FileSource::Tdms(s) => s,
+        }
+    }
+
+    fn get(&self) -> &dyn RecordSource {
+        match self {
+            FileSource::Csv(s) => s,
+            FileSource::Tdms(s) => s,
+        }
+    }
+}
+
+impl RecordSource for FileSource {
+    fn fs_hz(&self) -> f64 {
+        self.get().fs_hz()
+    }
+
+    fn len(&self) -> usize {
+        self.get().len()
+    }
+
+    fn channels(&self) -> Vec<Channel> {
+        self.get().channels()
+    }
+
+    fn meta(&self) -> &Metadata {
+        self.get().meta()
+    }
+
+    fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
+        self.inner().pass(f)
+    }
+}
+
 /// What [`choose`] decided.
 #[derive(Debug)]
 pub enum Choice {
     /// Stream the record from this source.
-    Stream(Box<CsvSource>),
+    Stream(Box<FileSource>),
     /// Read the records whole; with a warning when a long file could not
     /// be streamed (it says why, and that memory grows with the record).
     Whole(Option<String>),
@@ -92,30 +150,38 @@ pub fn choose(
         }
         return Ok(Choice::Whole(None));
     };
-    let size = std::fs::metadata(path)
+    // `FILE#GROUP` names a group of a TDMS file.
+    let (file, file_opts) = resolve(path, opts)?;
+    let size = std::fs::metadata(&file)
         .map_err(|source| Error::Io {
-            path: path.clone(),
+            path: file.clone(),
             source,
         })?
         .len();
     if mode == StreamMode::Auto && size < STREAM_ABOVE_BYTES {
         return Ok(Choice::Whole(None));
     }
-    let src = match needs_whole {
-        Some(_) => None,
-        None => blocks::open(path, opts)?,
+    let src =
+        match needs_whole {
+            Some(why) => Err(why.to_string()),
+            None => match file_opts.format.unwrap_or_else(|| Format::from_path(&file)) {
+                Format::Csv | Format::Tsv => blocks::open(path, opts)?
+                    .map(FileSource::Csv)
+                    .ok_or_else(|| {
+                        "only a plain CSV/TSV file (a uniform time column, no missing values, no \
+                     given rate) is streamed"
+                            .to_string()
+                    }),
+                Format::Tdms => tdms_stream::open(path, opts)?.map(FileSource::Tdms),
+                Format::Mat | Format::Mf4 => Err(
+                    "MATLAB and MF4 files are read whole (CSV/TSV and TDMS are streamed)".into(),
+                ),
+            },
+        };
+    let why = match src {
+        Ok(src) => return Ok(Choice::Stream(Box::new(src))),
+        Err(why) => why,
     };
-    if let Some(src) = src {
-        return Ok(Choice::Stream(Box::new(src)));
-    }
-    let why = needs_whole.map_or_else(
-        || {
-            "only a plain CSV/TSV file (a uniform time column, no missing values, no given \
-             rate) is streamed; MATLAB, TDMS and MF4 files are read whole"
-                .to_string()
-        },
-        str::to_string,
-    );
     let shown = shown_path(path);
     if mode == StreamMode::On {
         return Err(Error::setting(
@@ -139,7 +205,7 @@ pub fn choose(
 /// (measuring it from the encoder needs the record in memory); the
 /// analysis' errors.
 pub fn analyze_streamed(
-    src: &mut CsvSource,
+    src: &mut FileSource,
     velocity_mm_s: Option<f64>,
     geometry: &Geometry,
     settings: &AnalyzeSettings,

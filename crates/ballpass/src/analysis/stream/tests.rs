@@ -279,3 +279,34 @@ const STAGE_TOL: f64 = 1e-9;
 /// ~1e-8 (measured: 1.3e-8). 1e-6 relative is still far below the digits an interval is
 /// reported with.
 const STAGE_CI_TOL: f64 = 1e-6;
+
+/// A TDMS file streamed from disk ([`crate::recording::io::tdms::stream`],
+/// blocks of 777 samples through 4 kB windows) gives the in-memory
+/// analysis of the file read whole, within [`TOL`].
+#[test]
+fn a_streamed_tdms_file_gives_the_in_memory_analysis() {
+    use crate::recording::io::tdms::{stream, write_tdms};
+    use crate::recording::io::{load, LoadOptions};
+    let dir = std::env::temp_dir().join(format!("ballpass-stream-tdms-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("rec.tdms");
+    write_tdms(&record(3, 40.0), &p, 1500, true).unwrap();
+    let settings = AnalyzeSettings {
+        max_lag: MaxLag::Seconds(6.0),
+        ..Default::default()
+    };
+    let pred = lookup("sr25w")
+        .expect("catalog")
+        .geometry
+        .predict(9.0, settings.harmonics)
+        .expect("predicts");
+    let whole = load(&p, &LoadOptions::default()).unwrap();
+    let mem = analyze(std::slice::from_ref(&whole), &pred, &settings).expect("in memory");
+    let mut src = stream::open_sized(&p, &LoadOptions::default(), (777, 4096))
+        .unwrap()
+        .expect("streams");
+    let st =
+        analyze_stream_blocks(&mut src, &pred, &settings, &mut |_| {}, 3000).expect("streamed");
+    compare(&mem, &st);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -39,7 +39,7 @@ pub mod mat;
 mod mf4;
 pub(crate) mod names;
 mod options;
-mod tdms;
+pub mod tdms;
 pub mod timebase;
 pub(crate) mod units;
 
@@ -135,16 +135,21 @@ fn check_holds_records(file: &Path, opts: &LoadOptions, name: &str) -> Result<()
 /// The recordings of `FILE#NAME` named after it (source and test id), so
 /// that records of one file are told apart in every output.
 fn named(path: &Path, mut recs: Vec<Recording>, opts: &LoadOptions) -> Vec<Recording> {
-    let Some(name) = &opts.record else {
-        return recs;
-    };
     for r in &mut recs {
-        r.meta.source = Some(path.to_path_buf());
-        if opts.test_id.is_none() {
-            r.meta.test_id = r.meta.test_id.take().map(|t| format!("{t}#{name}"));
-        }
+        name_record(path, &mut r.meta, opts);
     }
     recs
+}
+
+/// The metadata of a record of `FILE#NAME` named after it (see [`named`]).
+pub(crate) fn name_record(path: &Path, meta: &mut super::Metadata, opts: &LoadOptions) {
+    let Some(name) = &opts.record else {
+        return;
+    };
+    meta.source = Some(path.to_path_buf());
+    if opts.test_id.is_none() {
+        meta.test_id = meta.test_id.take().map(|t| format!("{t}#{name}"));
+    }
 }
 
 /// A long text file read in pieces (`csv::parse_streamed`), when it is one.
@@ -298,6 +303,9 @@ pub(crate) enum Locator {
     /// Binary file: 1-based sample number within a variable.
     #[default]
     Samples,
+    /// A piece of a binary file read in pieces: its sample `i` is sample
+    /// `i + offset` of the variable.
+    SamplesFrom(usize),
 }
 
 impl Locator {
@@ -309,9 +317,9 @@ impl Locator {
                 column: Some(column.to_string()),
                 reason,
             },
-            Locator::Samples => Error::Format {
+            Locator::Samples | Locator::SamplesFrom(_) => Error::Format {
                 path: path.to_path_buf(),
-                reason: format!("'{column}', sample {}: {reason}", i + 1),
+                reason: format!("'{column}', {}: {reason}", self.place(i)),
             },
         }
     }
@@ -321,6 +329,7 @@ impl Locator {
         match self {
             Locator::Lines(lines) => format!("line {}", lines.get(i).copied().unwrap_or(0)),
             Locator::Samples => format!("sample {}", i + 1),
+            Locator::SamplesFrom(offset) => format!("sample {}", offset + i + 1),
         }
     }
 }

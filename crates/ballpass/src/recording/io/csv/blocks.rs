@@ -246,56 +246,7 @@ impl RecordSource for CsvSource {
 pub fn check_stream_agrees(path: &Path) -> std::result::Result<(), String> {
     let opts = LoadOptions::default();
     let whole = crate::recording::io::load(path, &opts);
-    let mut src = match open_sized(path, &opts, (4096, 1024)) {
-        Ok(Some(src)) => src,
-        Ok(None) => return Ok(()),
-        Err(e) => {
-            return match whole {
-                Ok(_) => Err(format!(
-                    "the scan refused what the whole-file reader read: {e}"
-                )),
-                Err(_) => Ok(()),
-            }
-        }
-    };
-    let mut got: Vec<Vec<f64>> = vec![Vec::new(); Channel::ALL.len()];
-    let read = src.pass(&mut |b| {
-        for (g, c) in got.iter_mut().zip(Channel::ALL) {
-            g.extend_from_slice(b.channel(c).unwrap_or(&[]));
-        }
-        Ok(())
-    });
-    let whole = match (read, whole) {
-        (Err(_), Err(_)) => return Ok(()),
-        (Ok(()), Err(e)) => {
-            return Err(format!("streamed, but the whole-file reader refused: {e}"))
-        }
-        (Err(e), Ok(_)) => {
-            return Err(format!(
-                "the whole-file reader read what a pass refused: {e}"
-            ))
-        }
-        (Ok(()), Ok(w)) => w,
-    };
-    if src.fs_hz().to_bits() != whole.fs_hz().to_bits() || src.len() != whole.len() {
-        return Err(format!(
-            "rate or length differ: {} Hz, {} samples streamed; {} Hz, {} whole",
-            src.fs_hz(),
-            src.len(),
-            whole.fs_hz(),
-            whole.len()
-        ));
-    }
-    if src.channels() != whole.channels() {
-        return Err("channels differ".into());
-    }
-    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    for (g, c) in got.iter().zip(Channel::ALL) {
-        if bits(g) != bits(whole.channel(c).unwrap_or(&[])) {
-            return Err(format!("{} samples differ", c.column_name()));
-        }
-    }
-    Ok(())
+    crate::recording::stream::check_agrees(open_sized(path, &opts, (4096, 1024)), whole)
 }
 
 #[cfg(test)]
