@@ -55,18 +55,23 @@
 //! (measured 1.3e-8: central differences of step 1e-6); the signals
 //! figures' samples to the bit.
 //!
+//! The position-domain spectra ([`position`]) ride along: the exact
+//! median speed over the first three passes, the resampling and Welch
+//! segments in the fourth (a fifth pass, of its own, for a record without
+//! friction, which has no load-cell pass); the same numbers as in memory
+//! (their tests).
+//!
 //! Not computed on a streamed record (each needs the record in memory;
 //! the outputs say so, `NOT_COMPUTED`): the ball passages and the
 //! synchronous average (the detection's template, coupling and
-//! thresholds come from the whole optical signal), and the
-//! position-domain spectra (a median of the whole record's speed, the
-//! longest run, and every segment re-read). Only one
+//! thresholds come from the whole optical signal). Only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
 
 mod chain;
 pub mod file;
+mod position;
 mod stage;
 mod support;
 
@@ -110,11 +115,9 @@ pub struct StreamInfo {
 }
 
 /// Why the parts [`analyze_stream`] leaves out are left out.
-const NOT_COMPUTED: [&str; 3] = [
+const NOT_COMPUTED: [&str; 2] = [
     "ball passages (passage detection reads the whole optical signal)",
     "synchronous average (needs the passages)",
-    "position-domain spectra (their stop threshold is the median speed of the whole record, \
-     their segment length follows the longest run, and the line search re-reads every segment)",
 ];
 
 /// What every pass of the chain over the record shares.
@@ -282,7 +285,25 @@ pub(crate) fn analyze_stream_blocks(
     let mut plan_warnings = Vec::new();
     let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut plan_warnings)?;
     let has_friction = signals.contains(&Signal::Friction);
-    let passes = 3 + usize::from(has_friction);
+    // The position-domain spectra: three passes select the median speed,
+    // the next resamples (`position`); without the load-cell pass, one
+    // pass more.
+    let stage_filters = position::StageFilters::new()?;
+    let mut pos = signals.contains(&Signal::VelocityError).then(|| {
+        position::PositionPass::new(
+            &name,
+            fs,
+            (trim, n),
+            &signals,
+            pred.d_avg_mm,
+            filter.as_ref(),
+            filter_block,
+            &stage_filters,
+            settings,
+        )
+    });
+    let extra = pos.is_some() && !has_friction;
+    let passes = 3 + usize::from(has_friction) + usize::from(extra);
     let mut pass_no = 0;
     let mut next_pass = |what: &str, progress: &mut dyn FnMut(&str)| {
         pass_no += 1;
@@ -309,7 +330,11 @@ pub(crate) fn analyze_stream_blocks(
     // Pass 1: the load cell.
     let (restore, mut dc, friction_mean) = if has_friction {
         let what = next_pass("load cell", progress);
-        let (undo, dc, mean) = load_cell_pass(src, pred, settings, &what, progress)?;
+        position::begin(&mut pos, None);
+        let (undo, dc, mean) = load_cell_pass(src, pred, settings, &what, progress, &mut |b| {
+            position::push(&mut pos, b);
+        })?;
+        position::end(&mut pos);
         (undo, Some(dc), Some(mean))
     } else {
         (None, None, None)
@@ -360,8 +385,10 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
+        position::begin(&mut pos, restore);
         let mut on_block = |b: Block<'_>| {
             gather.push(b);
+            position::push(&mut pos, b);
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
                     friction_dev += (y - m) * (y - m);
@@ -369,6 +396,7 @@ pub(crate) fn analyze_stream_blocks(
             }
         };
         kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
+        position::end(&mut pos);
     }
     if let (Some(dc), Some(mean)) = (dc.as_mut(), friction_mean) {
         // The mean over the standard deviation (ddof 1) of the recorded
@@ -477,7 +505,10 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
-        kit(restore).run(src, what, progress, &mut |_| {}, &mut eat)?;
+        position::begin(&mut pos, restore);
+        let mut on_block = |b: Block<'_>| position::push(&mut pos, b);
+        kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
+        position::end(&mut pos);
     }
     let correlations = {
         let mut out = corr.finish().map_err(|e| Error::dsp("correlations", e))?;
@@ -584,13 +615,23 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
-        let mut on_block = |b: Block<'_>| gather.push_detail(b);
+        position::begin(&mut pos, restore);
+        let mut on_block = |b: Block<'_>| {
+            gather.push_detail(b);
+            position::push(&mut pos, b);
+        };
         let kit = PassKit {
             untrimmed: &[],
             ..kit(restore)
         };
         kit.run(src, what, progress, &mut on_block, &mut eat)?;
+        position::end(&mut pos);
     }
+    if extra {
+        let what = next_pass("position-domain spectra", progress);
+        position::extra_pass(&mut pos, src, restore, what, progress)?;
+    }
+    let position = position::finish(pos, &mut notes, &mut warnings);
     fill_line_phases(
         &mut findings.phases,
         &line.finish(),
@@ -691,7 +732,7 @@ pub(crate) fn analyze_stream_blocks(
         spectra: full,
         spectra_hires: hr,
         spectra_unfiltered: unfiltered,
-        position: None,
+        position,
         stream: Some(stream),
     })
 }
