@@ -216,16 +216,18 @@ fn a_streamed_record_gives_the_in_memory_tables() {
             assert!(json["stage"].is_object(), "{}", json["stage"]);
             let html = std::fs::read_to_string(out.join("report.html")).unwrap();
             assert!(html.contains("Signals of"), "no signals figure");
-            // The position-domain spectra are streamed too (their figure
-            // drawn), the passages are not.
+            // The position-domain spectra, the passages and the
+            // synchronous average are streamed too (their figures drawn).
             assert!(html.contains("cycles/mm"), "no position-domain figure");
+            assert!(json["sync"].is_object(), "{}", json["sync"]);
+            assert!(json["passages"][0]["count"].as_u64().unwrap() > 2);
             let not: Vec<String> = json["stream"]["not_computed"]
                 .as_array()
                 .unwrap()
                 .iter()
                 .map(|v| v.as_str().unwrap().to_string())
                 .collect();
-            assert!(not.iter().all(|s| !s.contains("position")), "{not:?}");
+            assert!(not.is_empty(), "{not:?}");
         }
         let read = |f: &str| -> (Vec<String>, Vec<Vec<f64>>) {
             let text = std::fs::read_to_string(out.join(f)).unwrap();
@@ -244,6 +246,7 @@ fn a_streamed_record_gives_the_in_memory_tables() {
             read("correlations.csv"),
             read("spectra_hires.csv"),
             read("spectra_position.csv"),
+            read("sync_average.csv"),
         ));
     }
     for (x, y, tol) in [
@@ -252,6 +255,8 @@ fn a_streamed_record_gives_the_in_memory_tables() {
         // The position-domain spectra add the decimation's streamed
         // filters (the library's tested tolerance, 1e-10 of the peak).
         (&tables[0].2, &tables[1].2, 1e-10),
+        // The synchronous average's sums (the library's tolerance, 1e-9).
+        (&tables[0].3, &tables[1].3, 1e-9),
     ] {
         let ((head, a), (_, b)) = (x, y);
         assert_eq!(a.len(), b.len());

@@ -59,21 +59,25 @@
 //! median speed over the first three passes, the resampling and Welch
 //! segments in the fourth (a fifth pass, of its own, for a record without
 //! friction, which has no load-cell pass); the same numbers as in memory
-//! (their tests).
+//! (their tests). The ball passages are detected in pass 2 on overlapping
+//! windows of the optical signal ([`passages`]): a different method from
+//! the whole-record detection, the same on a record of one window.
 //!
-//! Not computed on a streamed record (each needs the record in memory;
-//! the outputs say so, `NOT_COMPUTED`): the ball passages and the
-//! synchronous average (the detection's template, coupling and
-//! thresholds come from the whole optical signal). Only one
+//! The synchronous average keyed to those passages is summed in pass 3
+//! ([`sync`]). Not computed on a streamed record: the synchronous average
+//! keyed on the encoder when no passages were found (the outputs say so,
+//! `not_computed`). Only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
 
 mod chain;
 pub mod file;
+pub mod passages;
 mod position;
 mod stage;
 mod support;
+mod sync;
 
 use ballpass_dsp::{WelchStream, WindowCorrelation, ZeroPhaseStream};
 use serde::Serialize;
@@ -113,12 +117,6 @@ pub struct StreamInfo {
     #[serde(skip)]
     pub signals: Option<SignalSamples>,
 }
-
-/// Why the parts [`analyze_stream`] leaves out are left out.
-const NOT_COMPUTED: [&str; 2] = [
-    "ball passages (passage detection reads the whole optical signal)",
-    "synchronous average (needs the passages)",
-];
 
 /// What every pass of the chain over the record shares.
 struct PassKit<'a> {
@@ -354,6 +352,15 @@ pub(crate) fn analyze_stream_blocks(
     let (mut raw_v, mut low_v) = (Moments::new(), Moments::new());
     let mut friction_dev = -0.0;
     let mut gather = SignalGatherer::new(name.clone(), len, fs, src.meta().start_time_s, &channels);
+    // The passages, window by window in pass 2 (`passages`).
+    let mut found = passages::StreamPassages::new(
+        &name,
+        fs,
+        src.meta().start_time_s,
+        len,
+        pred,
+        channels.contains(&crate::recording::Channel::Optical),
+    );
     {
         let what = next_pass("low-pass and trend", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -388,6 +395,7 @@ pub(crate) fn analyze_stream_blocks(
         position::begin(&mut pos, restore);
         let mut on_block = |b: Block<'_>| {
             gather.push(b);
+            found.push(b);
             position::push(&mut pos, b);
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
@@ -412,6 +420,46 @@ pub(crate) fn analyze_stream_blocks(
             && dc.level_over_spread.abs() < 3.0;
     }
     let trends: Vec<_> = lines.iter().map(|t| t.trend(settings.detrend)).collect();
+    // The passages (pass 2), then the synchronous average keyed to them
+    // (pass 3).
+    let (passage_times, passage_summary) = match found.finish(&name) {
+        Some((times, summary, note)) => {
+            notes.extend(note);
+            (times, summary)
+        }
+        None => (
+            Err("no optical channel".to_string()),
+            PassageSummary {
+                source: name.clone(),
+                count: None,
+                f_c_hz: None,
+                tau_c_s: None,
+                tau_p_s: None,
+                tau_p_over_tau_c: None,
+                conditions: Vec::new(),
+                note: Some("no optical channel".into()),
+            },
+        ),
+    };
+    let mut not_computed = Vec::new();
+    let mut sync = match &passage_times {
+        Ok(t) if t.len() >= 3 => {
+            let t0 = src.meta().start_time_s + trim as f64 / fs;
+            let keys: Vec<f64> = t.iter().map(|t| t - t0).collect();
+            sync::SyncStream::new(&keys, n, fs, &signals, pred.balls_in_race)
+        }
+        other => {
+            let why = match other {
+                Ok(t) => format!("{} passages", t.len()),
+                Err(e) => e.clone(),
+            };
+            not_computed.push(format!(
+                "synchronous average ({why}; keying it on the encoder instead reads the whole \
+                 record)"
+            ));
+            None
+        }
+    };
     let nf = n as f64;
     let (raw_mean, low_mean) = (raw_v.sum / nf, low_v.sum / nf);
 
@@ -457,6 +505,9 @@ pub(crate) fn analyze_stream_blocks(
             }
             if let Some(st) = stage.as_mut() {
                 st.push(out)?;
+            }
+            if let Some(s) = sync.as_mut() {
+                s.push(out.filtered_at, &detrended);
             }
             let xs: Vec<&[f64]> = detrended.iter().map(Vec::as_slice).collect();
             if xs.first().is_some_and(|x| !x.is_empty()) {
@@ -658,7 +709,7 @@ pub(crate) fn analyze_stream_blocks(
         passes,
         lowpass_overlap_samples: filter.as_ref().map(ZeroPhaseStream::overlap_for),
         decimation_overlap_samples: dec_filter.map(ZeroPhaseStream::overlap_for),
-        not_computed: NOT_COMPUTED.iter().map(|s| s.to_string()).collect(),
+        not_computed: not_computed.clone(),
         signals: Some(gather.finish()),
     };
     notes.push(format!(
@@ -673,9 +724,20 @@ pub(crate) fn analyze_stream_blocks(
             .map_or("no".into(), |p| p.to_string()),
     ));
     warnings.push(format!(
-        "{name} was streamed (too long to hold in memory): not computed: {}",
-        NOT_COMPUTED.join("; ")
+        "{name} was streamed (too long to hold in memory){}",
+        if not_computed.is_empty() {
+            "; its ball passages were detected window by window".to_string()
+        } else {
+            format!("; not computed: {}", not_computed.join("; "))
+        }
     ));
+    let sync = sync.and_then(|s| match s.finish(&name) {
+        Ok(a) => Some(a),
+        Err(e) => {
+            warnings.push(format!("no synchronous average: {e}"));
+            None
+        }
+    });
     let verdict = verdict_of(pred, &findings);
     let correlation_window =
         super::CorrelationWindow::of(&correlations, settings.max_lag, pred.tau_c_s);
@@ -716,17 +778,8 @@ pub(crate) fn analyze_stream_blocks(
         stage_spectra,
         repeats: None,
         verdict,
-        passages: vec![PassageSummary {
-            source: name,
-            count: None,
-            f_c_hz: None,
-            tau_c_s: None,
-            tau_p_s: None,
-            tau_p_over_tau_c: None,
-            conditions: Vec::new(),
-            note: Some("not detected: the record was streamed".into()),
-        }],
-        sync: None,
+        passages: vec![passage_summary],
+        sync,
         warnings,
         correlations,
         spectra: full,
