@@ -220,7 +220,10 @@ fn a_streamed_record_gives_the_in_memory_tables() {
             // synchronous average are streamed too (their figures drawn).
             assert!(html.contains("cycles/mm"), "no position-domain figure");
             assert!(json["sync"].is_object(), "{}", json["sync"]);
-            assert!(html.contains("Ball-pass waveform"), "no synchronous-average section");
+            assert!(
+                html.contains("Ball-pass waveform"),
+                "no synchronous-average section"
+            );
             assert!(json["passages"][0]["count"].as_u64().unwrap() > 2);
             let not: Vec<String> = json["stream"]["not_computed"]
                 .as_array()

@@ -301,7 +301,7 @@ pub(crate) fn analyze_stream_blocks(
         )
     });
     let extra = pos.is_some() && !has_friction;
-    let passes = 3 + usize::from(has_friction) + usize::from(extra);
+    let mut passes = 3 + usize::from(has_friction) + usize::from(extra);
     let mut pass_no = 0;
     let mut next_pass = |what: &str, progress: &mut dyn FnMut(&str)| {
         pass_no += 1;
@@ -429,16 +429,7 @@ pub(crate) fn analyze_stream_blocks(
         }
         None => (
             Err("no optical channel".to_string()),
-            PassageSummary {
-                source: name.clone(),
-                count: None,
-                f_c_hz: None,
-                tau_c_s: None,
-                tau_p_s: None,
-                tau_p_over_tau_c: None,
-                conditions: Vec::new(),
-                note: Some("no optical channel".into()),
-            },
+            PassageSummary::without(name.clone(), "no optical channel".into()),
         ),
     };
     let mut not_computed = Vec::new();
@@ -446,7 +437,13 @@ pub(crate) fn analyze_stream_blocks(
         Ok(t) if t.len() >= 3 => {
             let t0 = src.meta().start_time_s + trim as f64 / fs;
             let keys: Vec<f64> = t.iter().map(|t| t - t0).collect();
-            sync::SyncStream::new(&keys, n, fs, &signals, pred.balls_in_race)
+            let s = sync::SyncStream::new(&keys, n, fs, &signals, pred.balls_in_race);
+            if s.is_none() {
+                warnings.push(format!(
+                    "no synchronous average: {name}: neither friction nor velocity error present"
+                ));
+            }
+            s
         }
         other => {
             let why = match other {
@@ -680,7 +677,10 @@ pub(crate) fn analyze_stream_blocks(
     }
     if extra {
         let what = next_pass("position-domain spectra", progress);
-        position::extra_pass(&mut pos, src, restore, what, progress)?;
+        if !position::extra_pass(&mut pos, src, restore, what, progress)? {
+            // The spectra had already failed: the pass was not made.
+            passes -= 1;
+        }
     }
     let position = position::finish(pos, &mut notes, &mut warnings);
     fill_line_phases(

@@ -364,16 +364,7 @@ impl StreamPassages {
     /// `None` without an optical channel.
     pub(super) fn finish(self, name: &str) -> Option<Found> {
         let w = self.inner?;
-        let empty = |note: String| crate::analysis::PassageSummary {
-            source: name.into(),
-            count: None,
-            f_c_hz: None,
-            tau_c_s: None,
-            tau_p_s: None,
-            tau_p_over_tau_c: None,
-            conditions: Vec::new(),
-            note: Some(note),
-        };
+        let empty = |note: String| crate::analysis::PassageSummary::without(name.into(), note);
         let r = match self.error {
             Some(e) => Err(e),
             None => w.finish(),

@@ -701,7 +701,8 @@ pub(super) fn end(pos: &mut Option<PositionPass<'_>>) {
     }
 }
 
-/// A pass of its own, for a record without the load-cell pass.
+/// A pass of its own, for a record without the load-cell pass; whether it
+/// was made (not when the spectra had already failed).
 ///
 /// # Errors
 /// The source's read errors.
@@ -711,12 +712,12 @@ pub(super) fn extra_pass(
     restore: Option<(f64, f64)>,
     what: String,
     progress: &mut dyn FnMut(&str),
-) -> Result<()> {
+) -> Result<bool> {
     let Some(p) = pos.as_mut() else {
-        return Ok(());
+        return Ok(false);
     };
     if p.done() {
-        return Ok(());
+        return Ok(false);
     }
     p.begin_pass(restore);
     let mut prog = Progress {
@@ -732,7 +733,7 @@ pub(super) fn extra_pass(
         Ok(())
     })?;
     p.end_pass();
-    Ok(())
+    Ok(true)
 }
 
 /// The spectra, with the note or the warning the in-memory analysis
