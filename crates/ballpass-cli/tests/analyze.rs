@@ -243,6 +243,22 @@ fn stream_on_equals_off(rec: &std::path::Path, tag: &str) {
             assert!(json["stage"].is_object(), "{}", json["stage"]);
             let html = std::fs::read_to_string(out.join("report.html")).unwrap();
             assert!(html.contains("Signals of"), "no signals figure");
+            // The position-domain spectra, the passages and the
+            // synchronous average are streamed too (their figures drawn).
+            assert!(html.contains("cycles/mm"), "no position-domain figure");
+            assert!(json["sync"].is_object(), "{}", json["sync"]);
+            assert!(
+                html.contains("Ball-pass waveform"),
+                "no synchronous-average section"
+            );
+            assert!(json["passages"][0]["count"].as_u64().unwrap() > 2);
+            let not: Vec<String> = json["stream"]["not_computed"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_str().unwrap().to_string())
+                .collect();
+            assert!(not.is_empty(), "{not:?}");
         }
         let read = |f: &str| -> (Vec<String>, Vec<Vec<f64>>) {
             let text = std::fs::read_to_string(out.join(f)).unwrap();
@@ -257,9 +273,22 @@ fn stream_on_equals_off(rec: &std::path::Path, tag: &str) {
                 .collect();
             (head, rows)
         };
-        tables.push((read("correlations.csv"), read("spectra_hires.csv")));
+        tables.push((
+            read("correlations.csv"),
+            read("spectra_hires.csv"),
+            read("spectra_position.csv"),
+            read("sync_average.csv"),
+        ));
     }
-    for (x, y) in [(&tables[0].0, &tables[1].0), (&tables[0].1, &tables[1].1)] {
+    for (x, y, tol) in [
+        (&tables[0].0, &tables[1].0, 1e-12),
+        (&tables[0].1, &tables[1].1, 1e-12),
+        // The position-domain spectra add the decimation's streamed
+        // filters (the library's tested tolerance, 1e-10 of the peak).
+        (&tables[0].2, &tables[1].2, 1e-10),
+        // The synchronous average's sums (the library's tolerance, 1e-9).
+        (&tables[0].3, &tables[1].3, 1e-9),
+    ] {
         let ((head, a), (_, b)) = (x, y);
         assert_eq!(a.len(), b.len());
         for col in 0..a[0].len() {
@@ -272,7 +301,7 @@ fn stream_on_equals_off(rec: &std::path::Path, tag: &str) {
             };
             for (x, y) in a.iter().zip(b) {
                 assert!(
-                    (x[col] - y[col]).abs() <= 1e-12 * peak,
+                    (x[col] - y[col]).abs() <= tol * peak,
                     "column {col}: {} {} {peak}",
                     x[col],
                     y[col]

@@ -674,6 +674,22 @@ pub struct PassageSummary {
     pub note: Option<String>,
 }
 
+impl PassageSummary {
+    /// No summary of record `source`, with why.
+    pub(crate) fn without(source: String, note: String) -> Self {
+        PassageSummary {
+            source,
+            count: None,
+            f_c_hz: None,
+            tau_c_s: None,
+            tau_p_s: None,
+            tau_p_over_tau_c: None,
+            conditions: Vec::new(),
+            note: Some(note),
+        }
+    }
+}
+
 /// A record's passage times (s, on its own clock), or why there are none.
 pub(crate) type PassageTimes = std::result::Result<Vec<f64>, String>;
 
@@ -688,16 +704,7 @@ fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<(PassageSumma
     };
     recs.par_iter()
         .map(|r| {
-            let empty = |note: String| PassageSummary {
-                source: r.source_name(),
-                count: None,
-                f_c_hz: None,
-                tau_c_s: None,
-                tau_p_s: None,
-                tau_p_over_tau_c: None,
-                conditions: Vec::new(),
-                note: Some(note),
-            };
+            let empty = |note: String| PassageSummary::without(r.source_name(), note);
             if r.channel(crate::recording::Channel::Optical).is_none() {
                 return (
                     empty("no optical channel".into()),

@@ -494,21 +494,11 @@ pub(crate) fn run_staged_above(
     let position = if wants_position {
         match early_position.unwrap_or_else(|| position_of(&restored, filter.as_ref())) {
             Ok(p) => {
-                notes.push(format!(
-                    "position-domain spectra: {} runs of one direction, {:.0} mm of travel on a \
-                     {:.4} mm grid, {}-point Hann segments (resolution {:.5} cycles/mm), line at \
-                     1/(2 d_avg) = {:.5} cycles/mm",
-                    p.runs.iter().filter(|r| r.segments > 0).count(),
-                    p.travel_used_mm,
-                    p.dx_mm,
-                    p.nperseg,
-                    p.resolution_per_mm,
-                    p.line_per_mm
-                ));
+                notes.push(super::position::note(&p));
                 Some(p)
             }
             Err(e) => {
-                warnings.push(format!("no position-domain spectra: {e}"));
+                warnings.push(super::position::failure(&e));
                 None
             }
         }

@@ -14,10 +14,18 @@ use crate::stats::median;
 /// the segments is the Welch PSD at any `f` (up to its scale), so its
 /// maximum near a peak bin is the zero-padded Welch peak, free of an
 /// interpolation formula's bias.
-pub(super) struct LineScan {
+///
+/// A streamed record gives instead, per signal, the sum over its segments
+/// of each windowed segment's autocorrelation `R[l] = Σ s[i] s[i+l]`
+/// ([`LineScan::from_autocorrelations`]): the same mean power is then
+/// `(R[0] + 2 Σ_{l≥1} R[l] cos(2π f l dx)) / segments`, equal to the sum
+/// over the segments up to rounding, in memory of one segment per signal.
+pub(crate) struct LineScan {
     window: Vec<f64>,
     dx: f64,
     segments: Vec<(Signal, Vec<f64>)>,
+    /// Per signal, summed autocorrelations (lags `0..n`) and segments.
+    acf: Vec<(Signal, Vec<f64>, usize)>,
 }
 
 impl LineScan {
@@ -26,7 +34,41 @@ impl LineScan {
             window: window.to_vec(),
             dx,
             segments: Vec::new(),
+            acf: Vec::new(),
         }
+    }
+
+    /// A scan from the summed autocorrelations of the windowed, detrended
+    /// segments of each signal (lags `0..n`) and their numbers of
+    /// segments.
+    pub(crate) fn from_autocorrelations(dx: f64, acf: Vec<(Signal, Vec<f64>, usize)>) -> Self {
+        LineScan {
+            window: Vec::new(),
+            dx,
+            segments: Vec::new(),
+            acf,
+        }
+    }
+
+    /// Mean segment power of `s` at each of `freqs` from its summed
+    /// autocorrelation (struct docs); `None` when there is none.
+    fn acf_powers(&self, s: Signal, freqs: &[f64]) -> Option<Vec<f64>> {
+        let (_, r, count) = self.acf.iter().find(|(t, _, c)| *t == s && *c > 0)?;
+        let tau = std::f64::consts::TAU;
+        Some(
+            freqs
+                .iter()
+                .map(|&f| {
+                    let w = tau * f * self.dx;
+                    let tail: f64 = r[1..]
+                        .iter()
+                        .enumerate()
+                        .map(|(l, v)| v * (w * (l + 1) as f64).cos())
+                        .sum();
+                    (r[0] + 2.0 * tail) / *count as f64
+                })
+                .collect(),
+        )
     }
 
     /// Adds the segments of `x` as Welch cuts them (step `n/2`, linear
@@ -61,12 +103,15 @@ impl LineScan {
     /// is the reference, checked bit for bit). `None` without segments.
     fn peaks(&self, s: Signal, ranges: &[(f64, f64)]) -> Option<Vec<f64>> {
         let segs = self.segments_of(s);
-        let powers = |f: &[f64]| {
-            ballpass_dsp::segment_powers(&segs, self.dx, f)
-                .expect("Welch segments of one length, finite frequencies")
+        let by_acf = self.acf_powers(s, &[]).is_some();
+        let powers = |f: &[f64]| match self.acf_powers(s, f) {
+            Some(p) => p,
+            None => ballpass_dsp::segment_powers(&segs, self.dx, f)
+                .expect("Welch segments of one length, finite frequencies"),
         };
-        if segs.is_empty() || ranges.is_empty() {
-            return (!segs.is_empty()).then(Vec::new);
+        let any = by_acf || !segs.is_empty();
+        if !any || ranges.is_empty() {
+            return any.then(Vec::new);
         }
         let n = 64;
         let grid: Vec<f64> = ranges

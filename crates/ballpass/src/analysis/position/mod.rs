@@ -54,7 +54,8 @@ use crate::stats::{median, welch_dof};
 
 mod lines;
 
-use lines::{lines, LineScan};
+use lines::lines;
+pub(crate) use lines::LineScan;
 
 /// Grid points per ball-pass period of travel (`2 d_avg`).
 pub const POINTS_PER_PERIOD: usize = 64;
@@ -299,6 +300,84 @@ fn moving_average_valid(x: &[f64], w: usize) -> Vec<f64> {
     out
 }
 
+/// Welch segment lengths tried, longest first (module docs).
+pub(crate) const SEGMENT_CHOICES: [usize; 3] = [
+    PERIODS_PER_SEGMENT * POINTS_PER_PERIOD,
+    PERIODS_PER_SEGMENT / 2 * POINTS_PER_PERIOD,
+    PERIODS_PER_SEGMENT / 4 * POINTS_PER_PERIOD,
+];
+
+/// The Welch segment length for runs whose longest has `longest` grid
+/// points: the longest of [`SEGMENT_CHOICES`] that fits.
+///
+/// # Errors
+/// [`Error::InvalidRecording`] (naming `names`) when none fits.
+pub(crate) fn choose_nperseg(longest: usize, names: &str, d_avg_mm: f64) -> Result<usize> {
+    let dx = 2.0 * d_avg_mm / POINTS_PER_PERIOD as f64;
+    SEGMENT_CHOICES
+        .into_iter()
+        .find(|&n| n <= longest)
+        .ok_or_else(|| Error::InvalidRecording {
+            source_name: names.into(),
+            reason: format!(
+                "no run of one direction covers {} ball-pass periods ({:.1} mm of travel beyond \
+                 one period for the velocity error's mean); longest {:.1} mm: no \
+                 position-domain spectrum",
+                PERIODS_PER_SEGMENT / 4,
+                (PERIODS_PER_SEGMENT / 4) as f64 * 2.0 * d_avg_mm,
+                longest as f64 * dx
+            ),
+        })
+}
+
+/// What the runs gave, summed over their Welch segments, for [`assemble`].
+pub(crate) struct Accumulated {
+    /// Per signal, the sum over segments of each segment's PSD.
+    pub sums: Vec<(Signal, Vec<f64>)>,
+    pub freq: Vec<f64>,
+    pub n_segments: usize,
+    pub dof: f64,
+    pub runs: Vec<DirectionRun>,
+    pub travel: f64,
+    pub min_speed: f64,
+}
+
+/// The spectra of `acc` (segments of `nperseg` grid points of `d_avg_mm / 32`),
+/// averaged, with their lines (located with `scan` when given).
+pub(crate) fn assemble(
+    mut acc: Accumulated,
+    d_avg_mm: f64,
+    nperseg: usize,
+    n_records: usize,
+    settings: &AnalyzeSettings,
+    scan: Option<&LineScan>,
+) -> PositionSpectra {
+    let dx = 2.0 * d_avg_mm / POINTS_PER_PERIOD as f64;
+    for (_, s) in &mut acc.sums {
+        s.iter_mut().for_each(|a| *a /= acc.n_segments as f64);
+    }
+    acc.sums.sort_by_key(|(s, _)| *s);
+    let mut out = PositionSpectra {
+        d_avg_mm,
+        line_per_mm: 1.0 / (2.0 * d_avg_mm),
+        dx_mm: dx,
+        nperseg,
+        n_segments: acc.n_segments,
+        n_records,
+        resolution_per_mm: (1.0 / dx) / nperseg as f64,
+        dof: acc.dof,
+        band: psd_band(acc.dof, settings.band_confidence),
+        travel_used_mm: acc.travel,
+        min_speed_mm_s: acc.min_speed,
+        runs: acc.runs,
+        lines: Vec::new(),
+        freq_per_mm: acc.freq,
+        auto: acc.sums,
+    };
+    out.lines = lines(&out, settings.harmonics, scan);
+    out
+}
+
 /// Decimates by `q` (a power of two) in stages of at most 8.
 fn decimate_pow2(mut x: Vec<f64>, mut q: usize, what: &str) -> Result<Vec<f64>> {
     while q > 1 {
@@ -314,6 +393,34 @@ fn decimate_pow2(mut x: Vec<f64>, mut q: usize, what: &str) -> Result<Vec<f64>> 
         q /= step;
     }
     Ok(x)
+}
+
+/// The stop speed `STOP_FRACTION · median|v|` and the fine grid's factor
+/// `q` (module docs) from the median speed `med` of a record at `fs`.
+///
+/// # Errors
+/// [`Error::InvalidRecording`] when the median speed is not positive.
+pub(crate) fn grid_step(
+    name: &str,
+    med: f64,
+    fs: f64,
+    settings: &AnalyzeSettings,
+    dx: f64,
+) -> Result<(f64, usize)> {
+    if med.is_nan() || med <= 0.0 {
+        return Err(Error::InvalidRecording {
+            source_name: name.into(),
+            reason: "the stage does not move (median speed 0): no position-domain spectrum".into(),
+        });
+    }
+    let v_stop = STOP_FRACTION * med;
+    let f_b = settings.lowpass_hz.unwrap_or(fs / 2.0).min(fs / 2.0);
+    // Fine spacing dx/q ≤ v_stop / (2 f_b): alias-free at every kept speed.
+    let mut q = 1usize;
+    while dx / q as f64 > v_stop / (2.0 * f_b) {
+        q *= 2;
+    }
+    Ok((v_stop, q))
 }
 
 /// Shortest stretch (fine points) the zero-phase decimation stages take:
@@ -360,19 +467,7 @@ fn resample_record(
         let speeds: Vec<f64> = v.iter().map(|x| x.abs()).collect();
         median(&speeds).unwrap_or(0.0)
     };
-    if med.is_nan() || med <= 0.0 {
-        return Err(Error::InvalidRecording {
-            source_name: name,
-            reason: "the stage does not move (median speed 0): no position-domain spectrum".into(),
-        });
-    }
-    let v_stop = STOP_FRACTION * med;
-    let f_b = settings.lowpass_hz.unwrap_or(fs / 2.0).min(fs / 2.0);
-    // Fine spacing dx/q ≤ v_stop / (2 f_b): alias-free at every kept speed.
-    let mut q = 1usize;
-    while dx / q as f64 > v_stop / (2.0 * f_b) {
-        q *= 2;
-    }
+    let (v_stop, q) = grid_step(&name, med, fs, settings, dx)?;
     let fine = dx / q as f64;
     // Odd window for a centred mean.
     let period_pts = POINTS_PER_PERIOD | 1;
@@ -513,7 +608,6 @@ pub(crate) fn compute_with(
     detail: Detail,
 ) -> Result<PositionSpectra> {
     let full = detail == Detail::Full;
-    let line = 1.0 / (2.0 * d_avg_mm);
     let dx = 2.0 * d_avg_mm / POINTS_PER_PERIOD as f64;
     let mut all = Vec::new();
     for (rec, fr, range) in recs {
@@ -533,29 +627,12 @@ pub(crate) fn compute_with(
         .flat_map(|s| s.iter().map(|(_, x)| x.len()))
         .max()
         .unwrap_or(0);
-    let nperseg = [
-        PERIODS_PER_SEGMENT,
-        PERIODS_PER_SEGMENT / 2,
-        PERIODS_PER_SEGMENT / 4,
-    ]
-    .into_iter()
-    .map(|k| k * POINTS_PER_PERIOD)
-    .find(|&n| n <= longest)
-    .ok_or_else(|| Error::InvalidRecording {
-        source_name: recs
-            .iter()
-            .map(|(r, _, _)| r.source_name())
-            .collect::<Vec<_>>()
-            .join(", "),
-        reason: format!(
-            "no run of one direction covers {} ball-pass periods ({:.1} mm of travel beyond \
-                 one period for the velocity error's mean); longest {:.1} mm: no \
-                 position-domain spectrum",
-            PERIODS_PER_SEGMENT / 4,
-            (PERIODS_PER_SEGMENT / 4) as f64 * 2.0 * d_avg_mm,
-            longest as f64 * dx
-        ),
-    })?;
+    let names = recs
+        .iter()
+        .map(|(r, _, _)| r.source_name())
+        .collect::<Vec<_>>()
+        .join(", ");
+    let nperseg = choose_nperseg(longest, &names, d_avg_mm)?;
     let mut welch = Welch::new(WelchSettings {
         window: settings.window.to_dsp(),
         nperseg,
@@ -614,29 +691,23 @@ pub(crate) fn compute_with(
             runs.push(run);
         }
     }
-    for (_, acc) in &mut sums {
-        acc.iter_mut().for_each(|a| *a /= n_segments as f64);
-    }
-    sums.sort_by_key(|(s, _)| *s);
-    let mut out = PositionSpectra {
-        d_avg_mm,
-        line_per_mm: line,
-        dx_mm: dx,
-        nperseg,
+    let acc = Accumulated {
+        sums,
+        freq,
         n_segments,
-        n_records: recs.len(),
-        resolution_per_mm: fs_x / nperseg as f64,
         dof,
-        band: psd_band(dof, settings.band_confidence),
-        travel_used_mm: travel,
-        min_speed_mm_s: min_speed,
         runs,
-        lines: Vec::new(),
-        freq_per_mm: freq,
-        auto: sums,
+        travel,
+        min_speed,
     };
-    out.lines = lines(&out, settings.harmonics, full.then_some(&scan));
-    Ok(out)
+    Ok(assemble(
+        acc,
+        d_avg_mm,
+        nperseg,
+        recs.len(),
+        settings,
+        full.then_some(&scan),
+    ))
 }
 
 /// Position-domain spectra of records of one bearing with average ball
@@ -675,4 +746,24 @@ pub fn position_spectra(
         all.push((r, None, trim..r.len()));
     }
     compute(&all, settings, filter.as_ref(), d_avg_mm)
+}
+
+/// The method note of computed spectra (`analysis.json`'s notes).
+pub(crate) fn note(p: &PositionSpectra) -> String {
+    format!(
+        "position-domain spectra: {} runs of one direction, {:.0} mm of travel on a \
+         {:.4} mm grid, {}-point Hann segments (resolution {:.5} cycles/mm), line at \
+         1/(2 d_avg) = {:.5} cycles/mm",
+        p.runs.iter().filter(|r| r.segments > 0).count(),
+        p.travel_used_mm,
+        p.dx_mm,
+        p.nperseg,
+        p.resolution_per_mm,
+        p.line_per_mm
+    )
+}
+
+/// The warning when the spectra could not be made.
+pub(crate) fn failure(e: &Error) -> String {
+    format!("no position-domain spectra: {e}")
 }

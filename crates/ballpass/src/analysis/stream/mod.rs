@@ -55,20 +55,29 @@
 //! (measured 1.3e-8: central differences of step 1e-6); the signals
 //! figures' samples to the bit.
 //!
-//! Not computed on a streamed record (each needs the record in memory;
-//! the outputs say so, `NOT_COMPUTED`): the ball passages and the
-//! synchronous average (the detection's template, coupling and
-//! thresholds come from the whole optical signal), and the
-//! position-domain spectra (a median of the whole record's speed, the
-//! longest run, and every segment re-read). Only one
+//! The position-domain spectra ([`position`]) ride along: the exact
+//! median speed over the first three passes, the resampling and Welch
+//! segments in the fourth (a fifth pass, of its own, for a record without
+//! friction, which has no load-cell pass); the same numbers as in memory
+//! (their tests). The ball passages are detected in pass 2 on overlapping
+//! windows of the optical signal ([`passages`]): a different method from
+//! the whole-record detection, the same on a record of one window.
+//!
+//! The synchronous average keyed to those passages is summed in pass 3
+//! ([`sync`]). Not computed on a streamed record: the synchronous average
+//! keyed on the encoder when no passages were found (the outputs say so,
+//! `not_computed`). Only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
 
 mod chain;
 pub mod file;
+pub mod passages;
+mod position;
 mod stage;
 mod support;
+mod sync;
 
 use ballpass_dsp::{WelchStream, WindowCorrelation, ZeroPhaseStream};
 use serde::Serialize;
@@ -108,14 +117,6 @@ pub struct StreamInfo {
     #[serde(skip)]
     pub signals: Option<SignalSamples>,
 }
-
-/// Why the parts [`analyze_stream`] leaves out are left out.
-const NOT_COMPUTED: [&str; 3] = [
-    "ball passages (passage detection reads the whole optical signal)",
-    "synchronous average (needs the passages)",
-    "position-domain spectra (their stop threshold is the median speed of the whole record, \
-     their segment length follows the longest run, and the line search re-reads every segment)",
-];
 
 /// What every pass of the chain over the record shares.
 struct PassKit<'a> {
@@ -282,7 +283,25 @@ pub(crate) fn analyze_stream_blocks(
     let mut plan_warnings = Vec::new();
     let plan = spectra::plan_hires(settings, fs, n, pred.f_c_hz, &mut plan_warnings)?;
     let has_friction = signals.contains(&Signal::Friction);
-    let passes = 3 + usize::from(has_friction);
+    // The position-domain spectra: three passes select the median speed,
+    // the next resamples (`position`); without the load-cell pass, one
+    // pass more.
+    let stage_filters = position::StageFilters::new()?;
+    let mut pos = signals.contains(&Signal::VelocityError).then(|| {
+        position::PositionPass::new(
+            &name,
+            fs,
+            (trim, n),
+            &signals,
+            pred.d_avg_mm,
+            filter.as_ref(),
+            filter_block,
+            &stage_filters,
+            settings,
+        )
+    });
+    let extra = pos.is_some() && !has_friction;
+    let mut passes = 3 + usize::from(has_friction) + usize::from(extra);
     let mut pass_no = 0;
     let mut next_pass = |what: &str, progress: &mut dyn FnMut(&str)| {
         pass_no += 1;
@@ -309,7 +328,11 @@ pub(crate) fn analyze_stream_blocks(
     // Pass 1: the load cell.
     let (restore, mut dc, friction_mean) = if has_friction {
         let what = next_pass("load cell", progress);
-        let (undo, dc, mean) = load_cell_pass(src, pred, settings, &what, progress)?;
+        position::begin(&mut pos, None);
+        let (undo, dc, mean) = load_cell_pass(src, pred, settings, &what, progress, &mut |b| {
+            position::push(&mut pos, b);
+        })?;
+        position::end(&mut pos);
         (undo, Some(dc), Some(mean))
     } else {
         (None, None, None)
@@ -329,6 +352,15 @@ pub(crate) fn analyze_stream_blocks(
     let (mut raw_v, mut low_v) = (Moments::new(), Moments::new());
     let mut friction_dev = -0.0;
     let mut gather = SignalGatherer::new(name.clone(), len, fs, src.meta().start_time_s, &channels);
+    // The passages, window by window in pass 2 (`passages`).
+    let mut found = passages::StreamPassages::new(
+        &name,
+        fs,
+        src.meta().start_time_s,
+        len,
+        pred,
+        channels.contains(&crate::recording::Channel::Optical),
+    );
     {
         let what = next_pass("low-pass and trend", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -360,8 +392,11 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
+        position::begin(&mut pos, restore);
         let mut on_block = |b: Block<'_>| {
             gather.push(b);
+            found.push(b);
+            position::push(&mut pos, b);
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
                     friction_dev += (y - m) * (y - m);
@@ -369,6 +404,7 @@ pub(crate) fn analyze_stream_blocks(
             }
         };
         kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
+        position::end(&mut pos);
     }
     if let (Some(dc), Some(mean)) = (dc.as_mut(), friction_mean) {
         // The mean over the standard deviation (ddof 1) of the recorded
@@ -384,6 +420,43 @@ pub(crate) fn analyze_stream_blocks(
             && dc.level_over_spread.abs() < 3.0;
     }
     let trends: Vec<_> = lines.iter().map(|t| t.trend(settings.detrend)).collect();
+    // The passages (pass 2), then the synchronous average keyed to them
+    // (pass 3).
+    let (passage_times, passage_summary) = match found.finish(&name) {
+        Some((times, summary, note)) => {
+            notes.extend(note);
+            (times, summary)
+        }
+        None => (
+            Err("no optical channel".to_string()),
+            PassageSummary::without(name.clone(), "no optical channel".into()),
+        ),
+    };
+    let mut not_computed = Vec::new();
+    let mut sync = match &passage_times {
+        Ok(t) if t.len() >= 3 => {
+            let t0 = src.meta().start_time_s + trim as f64 / fs;
+            let keys: Vec<f64> = t.iter().map(|t| t - t0).collect();
+            let s = sync::SyncStream::new(&keys, n, fs, &signals, pred.balls_in_race);
+            if s.is_none() {
+                warnings.push(format!(
+                    "no synchronous average: {name}: neither friction nor velocity error present"
+                ));
+            }
+            s
+        }
+        other => {
+            let why = match other {
+                Ok(t) => format!("{} passages", t.len()),
+                Err(e) => e.clone(),
+            };
+            not_computed.push(format!(
+                "synchronous average ({why}; keying it on the encoder instead reads the whole \
+                 record)"
+            ));
+            None
+        }
+    };
     let nf = n as f64;
     let (raw_mean, low_mean) = (raw_v.sum / nf, low_v.sum / nf);
 
@@ -429,6 +502,9 @@ pub(crate) fn analyze_stream_blocks(
             }
             if let Some(st) = stage.as_mut() {
                 st.push(out)?;
+            }
+            if let Some(s) = sync.as_mut() {
+                s.push(out.filtered_at, &detrended);
             }
             let xs: Vec<&[f64]> = detrended.iter().map(Vec::as_slice).collect();
             if xs.first().is_some_and(|x| !x.is_empty()) {
@@ -477,7 +553,10 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
-        kit(restore).run(src, what, progress, &mut |_| {}, &mut eat)?;
+        position::begin(&mut pos, restore);
+        let mut on_block = |b: Block<'_>| position::push(&mut pos, b);
+        kit(restore).run(src, what, progress, &mut on_block, &mut eat)?;
+        position::end(&mut pos);
     }
     let correlations = {
         let mut out = corr.finish().map_err(|e| Error::dsp("correlations", e))?;
@@ -584,13 +663,26 @@ pub(crate) fn analyze_stream_blocks(
             }
             Ok(())
         };
-        let mut on_block = |b: Block<'_>| gather.push_detail(b);
+        position::begin(&mut pos, restore);
+        let mut on_block = |b: Block<'_>| {
+            gather.push_detail(b);
+            position::push(&mut pos, b);
+        };
         let kit = PassKit {
             untrimmed: &[],
             ..kit(restore)
         };
         kit.run(src, what, progress, &mut on_block, &mut eat)?;
+        position::end(&mut pos);
     }
+    if extra {
+        let what = next_pass("position-domain spectra", progress);
+        if !position::extra_pass(&mut pos, src, restore, what, progress)? {
+            // The spectra had already failed: the pass was not made.
+            passes -= 1;
+        }
+    }
+    let position = position::finish(pos, &mut notes, &mut warnings);
     fill_line_phases(
         &mut findings.phases,
         &line.finish(),
@@ -617,7 +709,7 @@ pub(crate) fn analyze_stream_blocks(
         passes,
         lowpass_overlap_samples: filter.as_ref().map(ZeroPhaseStream::overlap_for),
         decimation_overlap_samples: dec_filter.map(ZeroPhaseStream::overlap_for),
-        not_computed: NOT_COMPUTED.iter().map(|s| s.to_string()).collect(),
+        not_computed: not_computed.clone(),
         signals: Some(gather.finish()),
     };
     notes.push(format!(
@@ -632,9 +724,20 @@ pub(crate) fn analyze_stream_blocks(
             .map_or("no".into(), |p| p.to_string()),
     ));
     warnings.push(format!(
-        "{name} was streamed (too long to hold in memory): not computed: {}",
-        NOT_COMPUTED.join("; ")
+        "{name} was streamed (too long to hold in memory){}",
+        if not_computed.is_empty() {
+            "; its ball passages were detected window by window".to_string()
+        } else {
+            format!("; not computed: {}", not_computed.join("; "))
+        }
     ));
+    let sync = sync.and_then(|s| match s.finish(&name) {
+        Ok(a) => Some(a),
+        Err(e) => {
+            warnings.push(format!("no synchronous average: {e}"));
+            None
+        }
+    });
     let verdict = verdict_of(pred, &findings);
     let correlation_window =
         super::CorrelationWindow::of(&correlations, settings.max_lag, pred.tau_c_s);
@@ -675,23 +778,14 @@ pub(crate) fn analyze_stream_blocks(
         stage_spectra,
         repeats: None,
         verdict,
-        passages: vec![PassageSummary {
-            source: name,
-            count: None,
-            f_c_hz: None,
-            tau_c_s: None,
-            tau_p_s: None,
-            tau_p_over_tau_c: None,
-            conditions: Vec::new(),
-            note: Some("not detected: the record was streamed".into()),
-        }],
-        sync: None,
+        passages: vec![passage_summary],
+        sync,
         warnings,
         correlations,
         spectra: full,
         spectra_hires: hr,
         spectra_unfiltered: unfiltered,
-        position: None,
+        position,
         stream: Some(stream),
     })
 }

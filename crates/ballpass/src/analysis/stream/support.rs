@@ -5,7 +5,7 @@ use crate::analysis::load_cell::{self, Decision};
 use crate::analysis::{AnalyzeSettings, Signal};
 use crate::bearing::Prediction;
 use crate::error::{Error, Result};
-use crate::recording::stream::RecordSource;
+use crate::recording::stream::{Block, RecordSource};
 use crate::recording::Channel;
 
 /// Running sums of one pass, reported as a percentage.
@@ -52,7 +52,8 @@ pub(super) fn check_count(name: &str, got: usize, want: usize) -> Result<()> {
 /// friction's mean.
 pub(super) type LoadCellPass = (Option<(f64, f64)>, load_cell::DcRestoration, f64);
 
-/// Pass 1: the friction's mean and the discharge fit's sums; the
+/// Pass 1: the friction's mean and the discharge fit's sums (`on_block`
+/// sees each block as read); the
 /// restoration to undo and what was done (its `level_over_spread` is
 /// filled in after pass 2, which has the friction's spread).
 pub(super) fn load_cell_pass(
@@ -61,6 +62,7 @@ pub(super) fn load_cell_pass(
     settings: &AnalyzeSettings,
     what: &str,
     progress: &mut dyn FnMut(&str),
+    on_block: &mut dyn FnMut(Block<'_>),
 ) -> Result<LoadCellPass> {
     let (fs, len) = (src.fs_hz(), src.len());
     let w = load_cell::block_width(len, fs);
@@ -89,6 +91,7 @@ pub(super) fn load_cell_pass(
         shown: 0,
     };
     src.pass(&mut |b| {
+        on_block(b);
         let f = b.friction_n.unwrap_or(&[]);
         for &y in f {
             sum += y;

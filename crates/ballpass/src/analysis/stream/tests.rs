@@ -129,8 +129,73 @@ fn compare(mem: &Analysis, st: &Analysis) {
     compare_stage(mem, st);
     assert!(mem.stream.is_none());
     let s = st.stream.as_ref().expect("says it was streamed");
-    assert!(s.passes == 4 && !s.not_computed.is_empty());
+    assert_eq!(s.passes, 4);
+    assert!(s.not_computed.is_empty(), "{:?}", s.not_computed);
     assert!(st.warnings.iter().any(|w| w.contains("streamed")));
+    compare_sync(mem, st);
+}
+
+/// The synchronous average: these records are one passage window, so the
+/// same keys; the sums give the mean and band to rounding (1e-9 of the
+/// waveform's peak: sums of ~1000 periods against a sum of quotients),
+/// the variance explained to 1e-9 (a quadratic form in the mean against
+/// the direct residual: cancellation of Σx² against its explained part).
+fn compare_sync(mem: &Analysis, st: &Analysis) {
+    let (a, b) = (
+        mem.sync.as_ref().expect("in memory"),
+        st.sync.as_ref().expect("streamed"),
+    );
+    assert_eq!(
+        (
+            a.key,
+            a.bins,
+            a.periods_used,
+            a.periods_rejected,
+            a.period_s
+        ),
+        (
+            b.key,
+            b.bins,
+            b.periods_used,
+            b.periods_rejected,
+            b.period_s
+        )
+    );
+    assert_eq!(a.per_ball_note, b.per_ball_note);
+    let mut worst = (0.0_f64, 0.0_f64);
+    for (x, y) in a.waveforms.iter().zip(&b.waveforms) {
+        assert_eq!(x.signal, y.signal);
+        for (p, q) in [
+            (&x.mean, &y.mean),
+            (&x.band_low, &y.band_low),
+            (&x.band_high, &y.band_high),
+        ] {
+            worst.0 = worst.0.max(rel(p, q));
+        }
+        worst.1 = worst
+            .1
+            .max((x.variance_explained - y.variance_explained).abs());
+        let top = x.mean.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!((x.peak_to_peak - y.peak_to_peak).abs() <= 1e-9 * top);
+    }
+    eprintln!(
+        "sync: waveforms within {:e} of peak, variance explained within {:e}",
+        worst.0, worst.1
+    );
+    assert!(worst.0 < 1e-9 && worst.1 < 1e-9, "{worst:?}");
+    assert_eq!(a.per_ball.len(), b.per_ball.len());
+    for (x, y) in a.per_ball.iter().zip(&b.per_ball) {
+        assert_eq!((x.ball, x.periods), (y.ball, y.periods));
+        let close = |p: Option<f64>, q: Option<f64>| match (p, q) {
+            (Some(p), Some(q)) => (p - q).abs() <= 1e-9 * p.abs().max(1e-12),
+            (p, q) => p.is_none() && q.is_none(),
+        };
+        assert!(
+            close(x.friction_peak_to_peak_n, y.friction_peak_to_peak_n),
+            "{x:?} {y:?}"
+        );
+        assert!(close(x.friction_max_n, y.friction_max_n), "{x:?} {y:?}");
+    }
 }
 
 fn both(rec: &Recording, settings: &AnalyzeSettings, block: usize) -> (Analysis, Analysis) {

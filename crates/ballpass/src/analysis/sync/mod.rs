@@ -248,7 +248,7 @@ fn interp(x: &[f64], fs: f64, t: f64) -> f64 {
 
 /// Accepted periods of one record: `(start_s, end_s, key index)`, and the
 /// count rejected.
-fn periods(keys: &[f64], n: usize, fs: f64) -> (Vec<(f64, f64, usize)>, usize) {
+pub(crate) fn periods(keys: &[f64], n: usize, fs: f64) -> (Vec<(f64, f64, usize)>, usize) {
     let t_end = (n.saturating_sub(1)) as f64 / fs;
     let intervals: Vec<f64> = keys.windows(2).map(|w| w[1] - w[0]).collect();
     let Some(med) = crate::stats::median(&intervals) else {
@@ -426,8 +426,6 @@ pub fn synchronous_average(
         }
         let refs: Vec<&Vec<f64>> = r.iter().collect();
         let (mean, band_low, band_high) = mean_band(&refs, bins, tq);
-        let c1 = coefficient(&mean, 1);
-        let theta = c1.1.atan2(c1.0);
         // Variance explained over every record's samples.
         let mut num = 0.0;
         let mut den = 0.0;
@@ -447,21 +445,63 @@ pub fn synchronous_average(
                 den += samples as f64;
             }
         }
-        waveforms.push(SyncWaveform {
-            signal: *signal,
+        waveforms.push(waveform(
+            *signal,
             unit,
-            peak_to_peak: peak_to_peak(&mean),
-            fundamental_amplitude: 2.0 * c1.0.hypot(c1.1),
-            fundamental_phase_deg: theta.to_degrees(),
-            fundamental_peak_phase: (-theta / std::f64::consts::TAU).rem_euclid(1.0),
-            variance_explained: if den > 0.0 { num / den } else { 0.0 },
-            noise_fraction: 1.0 / p as f64,
-            mean,
-            band_low,
-            band_high,
-        });
+            [mean, band_low, band_high],
+            if den > 0.0 { num / den } else { 0.0 },
+            p,
+        ));
     }
     let (per_ball, per_ball_note) = split_balls(inputs, &per_record, &rows, balls_in_circuit, key);
+    Ok(finish(
+        key,
+        settings,
+        rejected,
+        &all_periods,
+        waveforms,
+        (per_ball, per_ball_note),
+    ))
+}
+
+/// One signal's waveform from its `[mean, band_low, band_high]` per bin,
+/// the variance it explains and the periods `p` averaged.
+pub(crate) fn waveform(
+    signal: Signal,
+    unit: &'static str,
+    [mean, band_low, band_high]: [Vec<f64>; 3],
+    variance_explained: f64,
+    p: usize,
+) -> SyncWaveform {
+    let c1 = coefficient(&mean, 1);
+    let theta = c1.1.atan2(c1.0);
+    SyncWaveform {
+        signal,
+        unit,
+        peak_to_peak: peak_to_peak(&mean),
+        fundamental_amplitude: 2.0 * c1.0.hypot(c1.1),
+        fundamental_phase_deg: theta.to_degrees(),
+        fundamental_peak_phase: (-theta / std::f64::consts::TAU).rem_euclid(1.0),
+        variance_explained,
+        noise_fraction: 1.0 / p as f64,
+        mean,
+        band_low,
+        band_high,
+    }
+}
+
+/// The average from its waveforms: the periods used (`all_periods`, at
+/// least two) and rejected, the per-ball rows and note.
+pub(crate) fn finish(
+    key: SyncKey,
+    settings: &SyncSettings,
+    rejected: usize,
+    all_periods: &[f64],
+    waveforms: Vec<SyncWaveform>,
+    (per_ball, per_ball_note): (Vec<BallRow>, String),
+) -> SyncAverage {
+    let p = all_periods.len();
+    let bins = settings.bins;
     let key_text = match key {
         SyncKey::OpticalPassage => {
             "phase 0 = the optical ball passage (pulse centre); a period runs to the next passage"
@@ -479,7 +519,7 @@ pub fn synchronous_average(
              or spurious key)"
         ));
     }
-    Ok(SyncAverage {
+    SyncAverage {
         key,
         key_text,
         bins,
@@ -492,13 +532,13 @@ pub fn synchronous_average(
         ),
         periods_used: p,
         periods_rejected: rejected,
-        period_s: MeanStd::of(&all_periods).expect("at least two periods"),
+        period_s: MeanStd::of(all_periods).expect("at least two periods"),
         pitch_mm: None,
         waveforms,
         per_ball,
         per_ball_note,
         notes,
-    })
+    }
 }
 
 /// A record's index, accepted periods `(start_s, end_s, key index)` and
@@ -572,8 +612,14 @@ fn split_balls(
                 .map(|m| m.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
         });
     }
+    let note = ball_note(&out, nb);
+    (out, note)
+}
+
+/// The note of rows `out` of `nb` balls told apart.
+pub(crate) fn ball_note(out: &[BallRow], nb: usize) -> String {
     let min = out.iter().map(|r| r.periods).min().unwrap_or(0);
-    let note = if out.len() < nb {
+    if out.len() < nb {
         format!(
             "balls told apart (passage index mod N_B = {nb}, ball 0 = the first passage): only {} \
              of the {nb} balls passed in the record",
@@ -584,8 +630,7 @@ fn split_balls(
             "balls told apart (passage index mod N_B = {nb}, ball 0 = the first passage), at \
              least {min} period(s) each"
         )
-    };
-    (out, note)
+    }
 }
 
 /// Unit token of a waveform's columns (`n`, `um_s`).

@@ -292,6 +292,15 @@ fn true_passages(t: &Truth) -> Vec<TruePassage> {
 
 /// Scores an analysis of `sim` run with `settings`.
 pub fn score_simulation(sim: &Simulation, settings: &PassageSettings) -> PassageScore {
+    score_with(sim, |r| detect_passages(r, settings))
+}
+
+/// Scores the passages `detect` finds in `sim`'s record (another detection
+/// method, such as the windowed one of streamed records).
+pub fn score_with(
+    sim: &Simulation,
+    detect: impl FnOnce(&crate::recording::Recording) -> Result<crate::analysis::PassageAnalysis>,
+) -> PassageScore {
     let t = &sim.truth;
     let o = &t.settings.optical;
     let truths = true_passages(t);
@@ -343,7 +352,7 @@ pub fn score_simulation(sim: &Simulation, settings: &PassageSettings) -> Passage
         widths.iter().sum::<f64>() / widths.len() as f64
     };
     let true_inside = truths.iter().filter(|p| p.inside).count();
-    let a = match detect_passages(&sim.recording, settings) {
+    let a = match detect(&sim.recording) {
         Ok(a) => a,
         Err(e) => {
             return PassageScore {
