@@ -15,8 +15,10 @@ same arrays (call overhead included on both sides).
    ``scipy.signal`` (``numpy.gradient``) call.
 
 Timing: best of ``--repeat`` timeit repeats (each a loop sized to ~0.2 s),
-the two sides interleaved so that both see the same machine load; one core
-for SciPy (NumPy/SciPy do not thread these calls) and ballpass in its
+the two sides interleaved so that both see the same machine load; one
+thread for SciPy (the script sets ``OPENBLAS_NUM_THREADS=1`` unless the
+environment sets it: NumPy's BLAS would otherwise run workers whose
+busy-waiting ``--cpu`` counts as SciPy's time) and ballpass in its
 default pool (analyze parallelises over channels; the signal kernels run
 in the calling thread).
 
@@ -29,18 +31,27 @@ tools/requirements-py.txt.
 """
 import argparse
 import json
+import os
 import pathlib
 import sys
 import time
 import timeit
 import warnings
 
-import numpy as np
-import scipy
-from scipy import signal as ss
+# SciPy on one thread, as ballpass with RAYON_NUM_THREADS=1: NumPy's BLAS
+# (OpenBLAS in the wheels) otherwise starts a worker per core, and with
+# `--cpu` their busy-waiting is counted as SciPy's time (on this 2-core
+# machine it doubled the pipeline's CPU time: 146 against 78 ms). Set
+# before NumPy loads; a value in the environment is kept.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import ballpass
-from ballpass import signal as bs
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+from scipy import signal as ss  # noqa: E402
+
+import ballpass  # noqa: E402
+from ballpass import signal as bs  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import reference_analyze as ref  # noqa: E402
@@ -138,7 +149,9 @@ def main():
     if a.cpu:
         TIMER = time.process_time
     print(f"ballpass {ballpass.__version__}, scipy {scipy.__version__}, numpy {np.__version__}, "
-          f"{'CPU time' if a.cpu else 'wall time'}")
+          f"{'CPU time' if a.cpu else 'wall time'}, "
+          f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}, "
+          f"RAYON_NUM_THREADS={os.environ.get('RAYON_NUM_THREADS', 'unset')}")
     out = {}
     t_bp, t_sp = analyze_case(a.repeat)
     out["analyze_30s"] = {"ballpass_s": t_bp, "scipy_s": t_sp, "speedup": t_sp / t_bp}

@@ -29,6 +29,14 @@
 //! | freqz | 185.4 us | 185.4 us | (unchanged) |
 //! | gradient | 20.4 us | 11.4 us | interior in wide vectors |
 //!
+//! `segment_powers10` / `segment_powers16` time `analyze`'s line search
+//! in the position-domain spectra (8 segments of 1024 points; 10
+//! frequencies, a golden-section step of five lines, and 16, a grid
+//! chunk): 20.5 us both (session 10), since 10 frequencies run in a chunk
+//! of 16 lanes. A 12-lane chunk for 9-12 frequencies (bitwise the same)
+//! compiled to 66.8 us here (the compiler does not keep 12 lanes in
+//! registers), so it was not kept.
+//!
 //! Of correlate's 400 us, the three FFTs of 31 104 complex points (the real
 //! transforms of 62 208) take ~290 us (96 us each; RustFFT was no faster
 //! at 30 000, 30 720, 31 250, 32 000 or 32 768 points, measured), so 5x
@@ -129,8 +137,26 @@ fn main() {
         lags: Vec::new(),
         values: Vec::new(),
     };
+    // `analyze`'s line search in the position-domain spectra: 8 Welch
+    // segments of 1024 points, 10 frequencies (a golden-section step of
+    // five lines) and 16 (a grid chunk).
+    let segs: Vec<&[f64]> = x.chunks_exact(1024).take(8).collect();
+    let f10: Vec<f64> = (0..10).map(|j| 0.01 + 0.003 * j as f64).collect();
+    let f16: Vec<f64> = (0..16).map(|j| 0.01 + 0.002 * j as f64).collect();
     type Kernel<'a> = (&'static str, Box<dyn FnMut() + 'a>);
     let kernels: Vec<Kernel> = vec![
+        (
+            "segment_powers10",
+            Box::new(|| {
+                black_box(dsp::segment_powers(&segs, 0.1, &f10).expect("ok"));
+            }),
+        ),
+        (
+            "segment_powers16",
+            Box::new(|| {
+                black_box(dsp::segment_powers(&segs, 0.1, &f16).expect("ok"));
+            }),
+        ),
         (
             "correlate",
             Box::new(|| {

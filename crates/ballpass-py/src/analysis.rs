@@ -123,7 +123,7 @@ fn analyze<'py>(
         Ok::<_, ballpass::Error>(a)
     })
     .map_err(errors::domain)?;
-    results(py, &a)
+    results(py, a)
 }
 
 /// `analyze`'s results: `(analysis.json as a dict, correlations, spectra,
@@ -139,12 +139,11 @@ type Tables<'py> = (
 );
 
 /// An analysis as [`Tables`].
-fn results<'py>(py: Python<'py>, a: &analysis::Analysis) -> PyResult<Tables<'py>> {
-    let corr = PyDict::new(py);
-    corr.set_item("lag_s", convert::array(py, a.correlations.lag_s.clone()))?;
-    for (name, v) in export::correlation_columns(&a.correlations, a.settings.corr_norm) {
-        corr.set_item(name, convert::array(py, v.to_vec()))?;
-    }
+fn results<'py>(py: Python<'py>, mut a: analysis::Analysis) -> PyResult<Tables<'py>> {
+    let json = convert::serialize(py, &a)?;
+    let spectra = spectra_columns(py, &a.spectra)?;
+    let hires = spectra_columns(py, &a.spectra_hires)?;
+    let unfiltered = spectra_columns(py, &a.spectra_unfiltered)?;
     let position = a
         .position
         .as_ref()
@@ -162,15 +161,24 @@ fn results<'py>(py: Python<'py>, a: &analysis::Analysis) -> PyResult<Tables<'py>
         .as_ref()
         .map(|s| table(py, "phase", &s.phases(), s.csv_columns()))
         .transpose()?;
-    Ok((
-        convert::serialize(py, &a)?,
-        corr,
-        spectra_columns(py, &a.spectra)?,
-        spectra_columns(py, &a.spectra_hires)?,
-        spectra_columns(py, &a.spectra_unfiltered)?,
-        position,
-        sync,
-    ))
+    // The correlations (the largest series, 2N - 1 points each) become the
+    // arrays without a copy: the analysis is not used after this.
+    let names: Vec<String> = export::correlation_columns(&a.correlations, a.settings.corr_norm)
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    let corr = PyDict::new(py);
+    corr.set_item(
+        "lag_s",
+        convert::array(py, std::mem::take(&mut a.correlations.lag_s)),
+    )?;
+    for (name, (_, v)) in names
+        .into_iter()
+        .zip(std::mem::take(&mut a.correlations.series))
+    {
+        corr.set_item(name, convert::array(py, v))?;
+    }
+    Ok((json, corr, spectra, hires, unfiltered, position, sync))
 }
 
 /// `ballpass.analyze` of one record file under `stream` (`auto`, `on`,
@@ -220,7 +228,7 @@ fn analyze_file<'py>(
     })
     .map_err(errors::domain)?;
     match analysis {
-        Ok(a) => Ok((Some(results(py, &a)?), None)),
+        Ok(a) => Ok((Some(results(py, a)?), None)),
         Err(warning) => Ok((None, warning)),
     }
 }

@@ -52,11 +52,15 @@ pub(super) fn fit_pulse(
     let xs: Vec<f64> = (lo..=hi).map(|i| i as f64).collect();
     let ys: Vec<f64> = (lo..=hi).map(data).collect();
     let ys = &ys[..];
-    let cost = |th: &[f64; 4]| -> f64 {
-        xs.iter()
+    let mut pts = Points::new(samples);
+    let mut cost = |th: &[f64; 4]| -> f64 {
+        pts.fill(&xs, th, t, false);
+        pts.p0
+            .iter()
             .zip(ys)
-            .map(|(x, y)| {
-                let r = y - th[3] - th[0] * t.value((x - th[1]) / th[2]);
+            .map(|(&p, y)| {
+                // y − o − a·t.value((x − c) / s)
+                let r = y - th[3] - th[0] * t.at_point(p);
                 r * r
             })
             .sum()
@@ -65,13 +69,16 @@ pub(super) fn fit_pulse(
     let mut c0 = cost(&th);
     let mut lambda = 1e-3;
     let mut jtj = [[0.0; 4]; 4];
+    let mut jac = Points::new(samples);
     for _ in 0..30 {
         let mut g = [0.0; 4];
         jtj = [[0.0; 4]; 4];
-        for (x, y) in xs.iter().zip(ys) {
-            let u = (x - th[1]) / th[2];
-            let hv = t.value(u);
-            let hs = t.slope(u);
+        jac.fill(&xs, &th, t, true);
+        for (k, y) in ys.iter().enumerate() {
+            let u = jac.u[k];
+            // t.value(u), t.slope(u)
+            let hv = t.at_point(jac.p0[k]);
+            let hs = (t.at_point(jac.p1[k]) - t.at_point(jac.p2[k])) / t.dx;
             let jr = [hv, -th[0] * hs / th[2], -th[0] * hs * u / th[2], 1.0];
             let r = y - th[3] - th[0] * hv;
             for a in 0..4 {
@@ -146,12 +153,79 @@ pub(super) fn fit_pulse(
     fit
 }
 
+/// Per sample of a fit window, `u = (x − c) / s` and the template's grid
+/// positions of `t.value(u)` (`p0`) and of the two values of `t.slope(u)`
+/// (`p1`, `p2`), computed over the whole window at once with exactly the
+/// operations of [`Template::value`] and `Template::slope` (the centred
+/// difference of two values over one grid step): one loop per
+/// quantity, so the divisions run side by side in vector registers.
+struct Points {
+    u: Vec<f64>,
+    p0: Vec<f64>,
+    p1: Vec<f64>,
+    p2: Vec<f64>,
+}
+
+impl Points {
+    fn new(n: usize) -> Self {
+        Self {
+            u: vec![0.0; n],
+            p0: vec![0.0; n],
+            p1: vec![0.0; n],
+            p2: vec![0.0; n],
+        }
+    }
+
+    /// The positions for parameters `th = (a, c, s, o)` at samples `xs`;
+    /// `p1`, `p2` only with `slope`.
+    fn fill(&mut self, xs: &[f64], th: &[f64; 4], t: &Template, slope: bool) {
+        let (dx, origin) = (t.dx, t.origin as f64);
+        for (u, x) in self.u.iter_mut().zip(xs) {
+            *u = (x - th[1]) / th[2];
+        }
+        for (p, u) in self.p0.iter_mut().zip(&self.u) {
+            *p = u / dx + origin;
+        }
+        if slope {
+            for (p, u) in self.p1.iter_mut().zip(&self.u) {
+                *p = (u + 0.5 * dx) / dx + origin;
+            }
+            for (p, u) in self.p2.iter_mut().zip(&self.u) {
+                *p = (u - 0.5 * dx) / dx + origin;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn gauss(sigma: f64) -> impl Fn(f64) -> f64 {
         move |u: f64| (-0.5 * (u / sigma).powi(2)).exp()
+    }
+
+    /// The positions computed side by side give `Template::value` and
+    /// `Template::slope` bit for bit.
+    #[test]
+    fn points_give_value_and_slope_bitwise() {
+        let t = Template::from_fn(30.0, 25.0, 0.37, gauss(6.0));
+        let xs: Vec<f64> = (0..400).map(|i| i as f64).collect();
+        for th in [
+            [1.5, 199.3, 1.07, 0.1],
+            [-0.7, 12.0, 0.31, 0.0],
+            [2.0, 390.5, 3.3, -1.0],
+        ] {
+            let mut pts = Points::new(xs.len());
+            pts.fill(&xs, &th, &t, true);
+            for (k, x) in xs.iter().enumerate() {
+                let u = (x - th[1]) / th[2];
+                assert_eq!(pts.u[k].to_bits(), u.to_bits());
+                assert_eq!(t.at_point(pts.p0[k]).to_bits(), t.value(u).to_bits());
+                let hs = (t.at_point(pts.p1[k]) - t.at_point(pts.p2[k])) / t.dx;
+                assert_eq!(hs.to_bits(), t.slope(u).to_bits(), "{th:?} {k}");
+            }
+        }
     }
 
     #[test]
