@@ -22,11 +22,10 @@
 //! the detection's buffers of it, plus 40 bytes per passage kept (8 MB at
 //! 24 hours at 9 mm/s).
 
-use crate::analysis::passage::{detect_passages, Condition, Passage, PassageAnalysis};
+use crate::analysis::passage::{detect_passages, Condition, Passage, PassageAnalysis, TrainStats};
 use crate::analysis::PassageSettings;
 use crate::error::{Error, Result};
 use crate::recording::{Channels, Metadata, Recording};
-use crate::stats::{median, MeanStd};
 
 /// Shortest window, s.
 pub const MIN_WINDOW_S: f64 = 300.0;
@@ -254,34 +253,15 @@ impl WindowedPassages {
         a.duration_s = self.len as f64 / self.fs;
         a.count = a.passages.len();
         a.count_inverted = a.passages.iter().filter(|p| p.polarity < 0).count();
-        let col = |f: &dyn Fn(&Passage) -> Option<f64>| -> Vec<f64> {
-            a.passages.iter().filter_map(f).collect()
-        };
         // The whole-record detection's statistics (passage::detect_passages).
-        let tau_c_all = col(&|p| p.tau_c_s);
-        let tau_c_stats = MeanStd::of(&tau_c_all)
+        let stats = TrainStats::of(&a.passages)
             .ok_or_else(|| no("no period between the passages of the windows".into()))?;
-        let tau_p = MeanStd::of(&col(&|p| p.width_used.then_some(p.tau_p_s))).unwrap_or(MeanStd {
-            mean: f64::NAN,
-            std: f64::NAN,
-            n: 0,
-        });
-        let sigma = MeanStd::of(&col(&|p| p.width_used.then_some(p.sigma_s))).unwrap_or(tau_p);
-        let ratio =
-            MeanStd::of(&col(&|p| p.tau_p_over_tau_c.filter(|_| p.width_used))).unwrap_or(tau_p);
-        let amp = MeanStd::of(&col(&|p| Some(p.amplitude_v))).unwrap_or(tau_c_stats);
-        let med_tau = median(&tau_c_all).unwrap_or(f64::NAN);
-        let regular: Vec<f64> = tau_c_all
-            .iter()
-            .copied()
-            .filter(|t| *t < 1.6 * med_tau)
-            .collect();
-        let tau_c_stats = MeanStd::of(&regular).unwrap_or(tau_c_stats);
+        let tau_c_stats = stats.tau_c;
         a.tau_c_s = tau_c_stats;
-        a.tau_p_s = tau_p;
-        a.sigma_s = sigma;
-        a.tau_p_over_tau_c = ratio;
-        a.amplitude_v = amp;
+        a.tau_p_s = stats.tau_p;
+        a.sigma_s = stats.sigma;
+        a.tau_p_over_tau_c = stats.tau_p_over_tau_c;
+        a.amplitude_v = stats.amplitude;
         a.f_c_measured_hz = 1.0 / tau_c_stats.mean;
         a.f_c_relative_error = a.f_c_predicted_hz.map(|p| (a.f_c_measured_hz - p) / p);
         a.d_avg_implied_mm = v.map(|v| v * tau_c_stats.mean / 2.0);
