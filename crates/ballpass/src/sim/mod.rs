@@ -722,3 +722,17 @@ fn plateau_truth(p: &SpeedProfile, position: &[f64], s: &SimSettings) -> Vec<Pla
         })
         .collect()
 }
+
+/// The tests' simulated record: the default bench at 9 mm/s for
+/// `duration_s`, drawn from `seed`.
+#[cfg(test)]
+pub(crate) fn test_record(seed: u64, duration_s: f64) -> crate::recording::Recording {
+    simulate(&SimSettings {
+        velocity_mm_s: 9.0,
+        duration_s,
+        seed,
+        ..Default::default()
+    })
+    .expect("simulates")
+    .recording
+}

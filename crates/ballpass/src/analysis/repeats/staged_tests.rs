@@ -7,17 +7,9 @@ use super::{run, run_staged_above};
 use crate::analysis::{AnalyzeSettings, MaxLag};
 use crate::bearing::lookup;
 use crate::recording::Recording;
-use crate::sim::{simulate, SimSettings};
 
 fn record(seed: u64, duration_s: f64) -> Recording {
-    simulate(&SimSettings {
-        velocity_mm_s: 9.0,
-        duration_s,
-        seed,
-        ..Default::default()
-    })
-    .expect("simulates")
-    .recording
+    crate::sim::test_record(seed, duration_s)
 }
 
 /// Every output of the two schedules, compared exactly: `analysis.json`

@@ -392,17 +392,9 @@ mod tests {
     use crate::bearing::lookup;
     use crate::recording::stream::RecordingSource;
     use crate::recording::Channel;
-    use crate::sim::{simulate, SimSettings};
 
     fn record(seed: u64, duration_s: f64) -> Recording {
-        simulate(&SimSettings {
-            velocity_mm_s: 9.0,
-            duration_s,
-            seed,
-            ..Default::default()
-        })
-        .expect("simulates")
-        .recording
+        crate::sim::test_record(seed, duration_s)
     }
 
     #[test]

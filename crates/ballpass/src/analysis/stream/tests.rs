@@ -9,17 +9,9 @@ use crate::bearing::lookup;
 use crate::recording::stream::RecordingSource;
 use crate::recording::Recording;
 use crate::report::envelope::SignalSamples;
-use crate::sim::{simulate, SimSettings};
 
 fn record(seed: u64, duration_s: f64) -> Recording {
-    simulate(&SimSettings {
-        velocity_mm_s: 9.0,
-        duration_s,
-        seed,
-        ..Default::default()
-    })
-    .expect("simulates")
-    .recording
+    crate::sim::test_record(seed, duration_s)
 }
 
 /// Largest difference between two series relative to the larger's peak.

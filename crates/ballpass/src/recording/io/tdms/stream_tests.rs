@@ -16,21 +16,12 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ballpass-tdms-{test}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(test: &str) -> crate::test_scratch::Scratch {
+    crate::test_scratch::scratch_in("tdms", test)
 }
 
 fn record(duration_s: f64) -> Recording {
-    crate::sim::simulate(&crate::sim::SimSettings {
-        velocity_mm_s: 9.0,
-        duration_s,
-        seed: 7,
-        ..Default::default()
-    })
-    .unwrap()
-    .recording
+    crate::sim::test_record(7, duration_s)
 }
 
 /// Streams `path` under `opts` in blocks of `sizes` and asserts rate,
@@ -98,7 +89,6 @@ fn records_of_many_segments_stream_to_the_bit() {
             same_as_whole(&p, &LoadOptions::default(), sizes);
         }
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A value that is not finite is refused as the whole-file reader refuses
@@ -130,7 +120,6 @@ fn gaps_are_refused_at_their_sample_or_read_whole() {
         ..LoadOptions::default()
     };
     assert!(open_sized(&p, &fill, (300, 256)).unwrap().is_err());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A file that changes between passes is an error, not a wrong sample.
@@ -147,5 +136,4 @@ fn a_file_changed_after_the_scan_is_an_error() {
     std::fs::write(&p, &bytes).unwrap();
     let e = collect(&mut src).unwrap_err().to_string();
     assert!(e.contains("rec.tdms") && e.contains("changed"), "{e}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
