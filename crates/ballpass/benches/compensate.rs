@@ -29,6 +29,13 @@
 //! table built from the bench recorded by a DC-coupled force sensor, and
 //! the friction level the replay used.
 //!
+//! With `--stall`, takes apart each sticking bench whose velocity-error
+//! std is over 30 % of the velocity (session 10,
+//! [`ballpass::validate::compensation_stall`]): stuck time and periods
+//! without a table, with the product's table and with the table learnt on
+//! the bench itself (fundamental only, then 12 harmonics; the best of
+//! each's steps by f_c component, and by std among those meeting −80 %).
+//!
 //! With `--rounds`, compensates each bench in three rounds, each table
 //! built from the run with the previous one applied
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
@@ -51,6 +58,10 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--rounds") {
         refine();
+        return;
+    }
+    if std::env::args().any(|a| a == "--stall") {
+        stall();
         return;
     }
     let (n, seed) = n_and_seed(7_000_000);
@@ -235,7 +246,7 @@ fn n_and_seed(default_seed: u64) -> (u64, u64) {
 fn variants() {
     let (n, seed) = n_and_seed(7_600_000);
     println!(
-        "v_mm_s,condition,std_over_v,fc_before_um_s,std_before_um_s,fc_after_um_s,std_after_um_s,fc_pred_um_s,std_pred_um_s,fc_sync_table_um_s,std_sync_table_um_s"
+        "v_mm_s,condition,std_over_v,fc_before_um_s,std_before_um_s,fc_after_um_s,std_after_um_s,fc_pred_um_s,std_pred_um_s,fc_sync_table_um_s,std_sync_table_um_s,fc_model_err_um_s"
     );
     for i in 0..n {
         let s = bench(seed, i);
@@ -243,7 +254,7 @@ fn variants() {
             Ok(c) => {
                 let p = &c.product;
                 println!(
-                    "{:.3},{},{:.3},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1}",
+                    "{:.3},{},{:.3},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1}",
                     p.velocity_mm_s,
                     p.condition.name(),
                     p.std_before_um_s * 1e-3 / p.velocity_mm_s,
@@ -255,6 +266,7 @@ fn variants() {
                     p.std_predicted_um_s,
                     c.sync_table_um_s.0,
                     c.sync_table_um_s.1,
+                    c.f_c_model_error_um_s,
                 );
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
@@ -301,6 +313,78 @@ fn diagnose() {
                     d.friction_level_n.1,
                 );
             }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+}
+
+/// The `--stall` measurement (module docs).
+fn stall() {
+    use ballpass::validate::compensation_stall::{diagnose_stall, Run};
+    let (n, seed) = n_and_seed(9_500_000);
+    println!(
+        "i,v_mm_s,std_over_v,fc0,std0,stuck0,pstuck0,share0,fc_prod,std_prod,stuck_prod,pstuck_prod,fc_pred,std_pred,fc_sync,std_sync,fund_best_fc,fund_best_fc_std,shape_best_fc,shape_best_fc_std,shape_best_ok_std,shape_stuck,u1_learnt_n,miss_prod,miss_sync,miss_inverse,learn_fc_steps"
+    );
+    let fmt = |r: &[Run]| {
+        r.iter()
+            .map(|x| format!("{:.1}/{:.0}", x.f_c_um_s, x.std_um_s))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    for i in 0..n {
+        let s = ballpass::validate::compensation::bench(seed, i);
+        if s.condition != ballpass::sim::Condition::Sticking || s.velocity_mm_s > 6.0 {
+            continue;
+        }
+        match diagnose_stall(&s, 0.3) {
+            Ok(Some(d)) => {
+                let best = |r: &[Run]| {
+                    r.iter()
+                        .min_by(|a, b| a.f_c_um_s.total_cmp(&b.f_c_um_s))
+                        .cloned()
+                };
+                let f = best(&d.learnt_fundamental);
+                let sh = best(&d.learnt_shape);
+                let ok_std = d
+                    .learnt_shape
+                    .iter()
+                    .chain(&d.learnt_fundamental)
+                    .filter(|x| x.f_c_um_s <= 0.2 * d.none.f_c_um_s)
+                    .map(|x| x.std_um_s)
+                    .fold(f64::NAN, f64::min);
+                let (f, sh) = (f.unwrap_or(d.none.clone()), sh.unwrap_or(d.none.clone()));
+                println!(
+                    "{i},{:.3},{:.3},{:.1},{:.0},{:.3},{:.2},{:.2},{:.1},{:.0},{:.3},{:.2},{:.1},{:.0},{:.1},{:.0},{:.1},{:.0},{:.1},{:.0},{:.0},{:.3},{:.2},{:.3},{:.3},{:.3},{} | {}",
+                    d.velocity_mm_s,
+                    d.std_over_v,
+                    d.none.f_c_um_s,
+                    d.none.std_um_s,
+                    d.none.stuck_fraction,
+                    d.none.periods_stuck,
+                    d.none.periodic_share,
+                    d.product.f_c_um_s,
+                    d.product.std_um_s,
+                    d.product.stuck_fraction,
+                    d.product.periods_stuck,
+                    d.predicted_um_s.0,
+                    d.predicted_um_s.1,
+                    d.sync_table.f_c_um_s,
+                    d.sync_table.std_um_s,
+                    f.f_c_um_s,
+                    f.std_um_s,
+                    sh.f_c_um_s,
+                    sh.std_um_s,
+                    ok_std,
+                    sh.stuck_fraction,
+                    d.learnt_fundamental_n,
+                    d.fundamental_miss.0,
+                    d.fundamental_miss.1,
+                    d.fundamental_miss.2,
+                    fmt(&d.learnt_fundamental),
+                    fmt(&d.learnt_shape),
+                );
+            }
+            Ok(None) => {}
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
         }
     }

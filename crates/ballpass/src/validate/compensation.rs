@@ -305,6 +305,8 @@ pub struct VariantCheck {
     /// f_c component and std with the synchronous-average table,
     /// simulated, µm/s.
     pub sync_table_um_s: (f64, f64),
+    /// The product's f_c floor (`prediction.f_c_model_error_um_s`), µm/s.
+    pub f_c_model_error_um_s: f64,
 }
 
 /// [`check`], and the same bench with the synchronous-average table.
@@ -319,6 +321,7 @@ pub fn check_variants(s: &SimSettings) -> Result<VariantCheck> {
         key: FeedforwardKey::OpticalPassage,
     };
     Ok(VariantCheck {
+        f_c_model_error_um_s: comp.prediction.f_c_model_error_um_s,
         product,
         sync_table_um_s: closed_loop(s, sync, &pred)?,
     })

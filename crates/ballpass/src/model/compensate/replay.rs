@@ -34,13 +34,20 @@ pub(crate) struct Design {
     pub after: Replayed,
     /// Each record's friction level ([`fit_levels`]).
     pub levels: Vec<LevelFit>,
+    /// Amplitude of the difference between the fundamentals of the
+    /// records' velocity error and of the replay without a table, µm/s:
+    /// how far the replay is from the stage it stands for, at the f_c
+    /// component.
+    pub f_c_model_error_um_s: f64,
 }
 
 /// The table of `bins` bins the compensated stage meets: starting from the
 /// friction against travel ([`super::travel`]), each round replays the
 /// records with the table and takes the friction met, averaged over time
 /// against the travel phase (a fixed point: the table equals the periodic
-/// friction as the stage moves with it applied); [`ROUNDS`] rounds.
+/// friction as the stage moves with it applied); [`ROUNDS`] rounds. Then
+/// [`FUNDAMENTAL_STEPS`] steps of [`correct_fundamental`] on the replay
+/// with the table, and the replay's own error at f_c without a table.
 pub(crate) fn design(
     keys: &[RecordKeys],
     stage: &PdLoop,
@@ -74,12 +81,53 @@ pub(crate) fn design(
             .friction_met_n
             .ok_or("the replay did not reach the passages")?;
     }
-    let after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+    let mut after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+    let measured = a
+        .sync
+        .as_ref()
+        .and_then(|s| s.waveform(Signal::VelocityError))
+        .map(|w| crate::analysis::sync::coefficient(&w.mean, 1));
+    let bare = replay(keys, stage, None, pitch, v, &a.settings)?;
+    let (re, im) = crate::analysis::sync::coefficient(&bare.waveform_um_s, 1);
+    let f_c_model_error_um_s = measured.map_or(f64::NAN, |m| 2.0 * (m.0 - re).hypot(m.1 - im));
+    if let Some(w_c) = a
+        .sync
+        .as_ref()
+        .map(|s| std::f64::consts::TAU / s.period_s.mean)
+    {
+        for _ in 0..FUNDAMENTAL_STEPS {
+            correct_fundamental(&mut table, &after.waveform_um_s, stage, w_c);
+            after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+        }
+    }
     Ok(Design {
         table,
         after,
         levels,
+        f_c_model_error_um_s,
     })
+}
+
+/// Steps of the fundamental's correction ([`correct_fundamental`]).
+pub(crate) const FUNDAMENTAL_STEPS: usize = 3;
+
+/// Moves the table's fundamental by `−R_1 / G_vf(jω_c)`, `R_1` the
+/// fundamental of the replayed velocity error `waveform_um_s` (µm/s):
+/// the change of the table's fundamental that cancels it if the stage
+/// responds to the table's fundamental as the linear loop does.
+pub(crate) fn correct_fundamental(
+    table: &mut [f64],
+    waveform_um_s: &[f64],
+    stage: &PdLoop,
+    w_c: f64,
+) {
+    let (re, im) = crate::analysis::sync::coefficient(waveform_um_s, 1);
+    let d = -rustfft::num_complex::Complex64::new(re, im) / (stage.g_vf(w_c) * 1e6);
+    let b = table.len() as f64;
+    for (j, u) in table.iter_mut().enumerate() {
+        let th = std::f64::consts::TAU * j as f64 / b;
+        *u += 2.0 * (d.re * th.cos() - d.im * th.sin());
+    }
 }
 
 /// Candidate friction levels above the lowest one, in stds of the

@@ -1,6 +1,6 @@
 //! The replay against the linear loop, and the records' frame check.
 
-use super::replay::replay;
+use super::replay::{correct_fundamental, replay};
 use super::travel::{at_index, travel_bins, travel_table, RecordKeys};
 use super::{rail_grid, RECORD_OFFSET_LIMIT};
 use crate::analysis::AnalyzeSettings;
@@ -71,6 +71,36 @@ fn the_replay_is_the_linear_loop_for_a_small_friction_and_the_table_cancels_it()
         // The mean over ±1/128 period of a cosine: cos·sinc, 0.04 % low.
         assert!((m - f).abs() < 0.002, "bin {j}: {m} vs {f}");
     }
+}
+
+/// The fundamental's correction from the replay alone, without the
+/// friction: starting from no table, one step of `−R_1 / G_vf` on the
+/// linear loop is the friction's fundamental (thesis Eq. 6.6), and the
+/// replay with it leaves almost no f_c component.
+#[test]
+fn the_fundamental_correction_is_the_friction_s_fundamental_in_the_linear_loop() {
+    let (v, pitch, a) = (9.0, 8.1, 0.2);
+    let keys = vec![record(v, pitch, a, 30.0)];
+    let st = stage();
+    let settings = AnalyzeSettings::default();
+    let w = std::f64::consts::TAU * v / pitch;
+    let before = replay(&keys, &st, None, pitch, v, &settings).unwrap();
+    let mut table = vec![0.0; 64];
+    correct_fundamental(&mut table, &before.waveform_um_s, &st, w);
+    // The friction's periodic part is a·cos(2πφ) in travel, and time and
+    // travel phase agree at a constant velocity: the table is that cosine
+    // to the 2 % of the replay's f_c component (start transient, low-pass).
+    for (j, u) in table.iter().enumerate() {
+        let f = a * (std::f64::consts::TAU * j as f64 / 64.0).cos();
+        assert!((u - f).abs() < 0.02 * a, "bin {j}: {u} vs {f}");
+    }
+    let after = replay(&keys, &st, Some(&table), pitch, v, &settings).unwrap();
+    assert!(
+        after.f_c_um_s < 0.03 * before.f_c_um_s,
+        "{} vs {}",
+        after.f_c_um_s,
+        before.f_c_um_s
+    );
 }
 
 /// Passage positions on one grid with a slow wander (1 % of the pitch),
