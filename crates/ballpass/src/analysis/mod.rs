@@ -675,6 +675,20 @@ pub struct PassageSummary {
 }
 
 impl PassageSummary {
+    /// The summary of record `source`'s detected passages `p`.
+    pub(crate) fn of(source: String, p: &passage::PassageAnalysis) -> Self {
+        PassageSummary {
+            source,
+            count: Some(p.count),
+            f_c_hz: Some(p.f_c_measured_hz).filter(|f| f.is_finite()),
+            tau_c_s: Some(p.tau_c_s),
+            tau_p_s: Some(p.tau_p_s),
+            tau_p_over_tau_c: Some(p.tau_p_over_tau_c),
+            conditions: p.conditions.iter().map(|c| c.message.clone()).collect(),
+            note: None,
+        }
+    }
+
     /// No summary of record `source`, with why.
     pub(crate) fn without(source: String, note: String) -> Self {
         PassageSummary {
@@ -713,16 +727,7 @@ fn passage_summaries(recs: &[Recording], pred: &Prediction) -> Vec<(PassageSumma
             }
             match detect_passages(r, &settings) {
                 Ok(p) => (
-                    PassageSummary {
-                        source: r.source_name(),
-                        count: Some(p.count),
-                        f_c_hz: Some(p.f_c_measured_hz).filter(|f| f.is_finite()),
-                        tau_c_s: Some(p.tau_c_s),
-                        tau_p_s: Some(p.tau_p_s),
-                        tau_p_over_tau_c: Some(p.tau_p_over_tau_c),
-                        conditions: p.conditions.iter().map(|c| c.message.clone()).collect(),
-                        note: None,
-                    },
+                    PassageSummary::of(r.source_name(), &p),
                     Ok(p.passages.iter().map(|q| q.time_s).collect()),
                 ),
                 Err(e) => (empty(e.to_string()), Err(e.to_string())),

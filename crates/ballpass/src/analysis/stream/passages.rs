@@ -352,16 +352,7 @@ impl StreamPassages {
         Some(match r {
             Ok((p, win)) => (
                 Ok(p.passages.iter().map(|q| q.time_s).collect()),
-                crate::analysis::PassageSummary {
-                    source: name.into(),
-                    count: Some(p.count),
-                    f_c_hz: Some(p.f_c_measured_hz).filter(|f| f.is_finite()),
-                    tau_c_s: Some(p.tau_c_s),
-                    tau_p_s: Some(p.tau_p_s),
-                    tau_p_over_tau_c: Some(p.tau_p_over_tau_c),
-                    conditions: p.conditions.iter().map(|c| c.message.clone()).collect(),
-                    note: None,
-                },
+                crate::analysis::PassageSummary::of(name.into(), &p),
                 Some(format!(
                     "passages of the streamed record detected window by window ({} windows of \
                      {:.0} s overlapping by {:.1} s, each with its own template, baseline and \
