@@ -161,7 +161,10 @@ def test_analyze_streams_a_file_as_the_cli(recs, cli, tmp):
     assert_table_equals_csv(a.correlations, out / "correlations.csv")
     assert_table_equals_csv(a.spectra, out / "spectra.csv")
     assert_table_equals_csv(a.spectra_hires, out / "spectra_hires.csv")
-    assert a.spectra_position is None and a.sync_average is None
+    # Streamed records get the position-domain spectra and the synchronous
+    # average too (docs/methods.md §15), as the command line writes them.
+    assert_table_equals_csv(a.spectra_position, out / "spectra_position.csv")
+    assert_table_equals_csv(a.sync_average, out / "sync_average.csv")
     whole = ballpass.analyze(recs / "r3.csv", velocity_mm_s=9.0)
     assert "stream" not in whole.to_dict()
     with pytest.raises(ValueError, match="velocity_mm_s"):

@@ -296,11 +296,12 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     ``stream`` is the command line's ``--stream``: one record *file* of
     1 GiB or more (``'auto'``), or any size (``'on'``), is read block by
     block in memory that does not grow with its length, if it is a plain
-    CSV/TSV with a uniform time column; ``'off'`` always reads it whole. A
-    streamed record needs a velocity (given or in the file), and gives no
-    passages, synchronous average or position-domain spectra
-    (``to_dict()['stream']`` says so); ``'on'`` with anything that cannot
-    stream is an error that says why."""
+    CSV/TSV with a uniform time column or a TDMS file; ``'off'`` always
+    reads it whole. A streamed record needs a velocity (given or in the
+    file); its passages are detected window by window (``to_dict()['stream']``
+    says how), its synchronous average and position-domain spectra are the
+    in-memory ones; ``'on'`` with anything that cannot stream is an error
+    that says why."""
     load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
     load_opts = {k: v for k, v in load_opts.items() if v is not None}
     settings_json = _settings_json(settings, setting_overrides)
