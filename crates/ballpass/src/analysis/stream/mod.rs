@@ -64,9 +64,9 @@
 //! the whole-record detection, the same on a record of one window.
 //!
 //! The synchronous average keyed to those passages is summed in pass 3
-//! ([`sync`]). Not computed on a streamed record: the synchronous average
-//! keyed on the encoder when no passages were found (the outputs say so,
-//! `not_computed`). Only one
+//! ([`sync`]); without passages it is keyed on the encoder at the
+//! predicted ball pitch, as in memory, the keys found in pass 2
+//! ([`EncoderKeys`]). Not computed on a streamed record: only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
@@ -91,6 +91,7 @@ use super::preprocess::{self, VelocityErrorStats};
 use super::repeats::series_info;
 use super::repeats::{evaluate_findings, fill_line_phases, verdict_of};
 use super::spectra::{self, Spectra};
+use super::sync::{records::encoder_note, EncoderKeys, SyncKey};
 use super::{
     Analysis, AnalyzeSettings, HiresMethod, InputInfo, MaxLag, PassageSummary, Signal, SCHEMA,
 };
@@ -361,6 +362,13 @@ pub(crate) fn analyze_stream_blocks(
         pred,
         channels.contains(&crate::recording::Channel::Optical),
     );
+    // The encoder keys at the predicted ball pitch, for a synchronous
+    // average without optical passages (as in memory): the analysed
+    // positions, in pass 2.
+    let pitch_mm = 2.0 * pred.d_avg_mm;
+    let mut encoder = channels
+        .contains(&crate::recording::Channel::Position)
+        .then(|| (0usize, EncoderKeys::new(fs, pitch_mm)));
     {
         let what = next_pass("low-pass and trend", progress);
         let mut eat = |out: &mut Output, _last: bool| -> Result<()> {
@@ -396,6 +404,11 @@ pub(crate) fn analyze_stream_blocks(
         let mut on_block = |b: Block<'_>| {
             gather.push(b);
             found.push(b);
+            if let (Some((at, keys)), Some(p)) = (encoder.as_mut(), b.position_mm) {
+                let part = |i: usize| i.saturating_sub(*at).min(p.len());
+                keys.push(&p[part(trim)..part(trim + n)]);
+                *at += p.len();
+            }
             position::push(&mut pos, b);
             if let (Some(m), Some(f)) = (friction_mean, b.friction_n) {
                 for &y in f {
@@ -433,28 +446,59 @@ pub(crate) fn analyze_stream_blocks(
         ),
     };
     let mut not_computed = Vec::new();
-    let mut sync = match &passage_times {
-        Ok(t) if t.len() >= 3 => {
+    let no_sync = |warnings: &mut Vec<String>| {
+        warnings.push(format!(
+            "no synchronous average: {name}: neither friction nor velocity error present"
+        ));
+    };
+    // The average's key, and the note an encoder key adds to it.
+    let mut encoder_keyed = None;
+    let mut sync = match (&passage_times, encoder) {
+        (Ok(t), _) if t.len() >= 3 => {
             let t0 = src.meta().start_time_s + trim as f64 / fs;
             let keys: Vec<f64> = t.iter().map(|t| t - t0).collect();
-            let s = sync::SyncStream::new(&keys, n, fs, &signals, pred.balls_in_race);
+            let s = sync::SyncStream::new(
+                SyncKey::OpticalPassage,
+                &keys,
+                n,
+                fs,
+                &signals,
+                pred.balls_in_race,
+            );
             if s.is_none() {
-                warnings.push(format!(
-                    "no synchronous average: {name}: neither friction nor velocity error present"
-                ));
+                no_sync(&mut warnings);
             }
             s
         }
-        other => {
+        (other, encoder) => {
             let why = match other {
                 Ok(t) => format!("{} passages", t.len()),
                 Err(e) => e.clone(),
             };
-            not_computed.push(format!(
-                "synchronous average ({why}; keying it on the encoder instead reads the whole \
-                 record)"
-            ));
-            None
+            match encoder {
+                Some((_, keys)) => {
+                    let keys = keys.finish();
+                    let s = sync::SyncStream::new(
+                        SyncKey::EncoderPitch,
+                        &keys,
+                        n,
+                        fs,
+                        &signals,
+                        pred.balls_in_race,
+                    );
+                    if s.is_none() {
+                        no_sync(&mut warnings);
+                    }
+                    encoder_keyed = Some(encoder_note(pitch_mm, &[format!("{name}: {why}")]));
+                    s
+                }
+                None => {
+                    not_computed.push(format!(
+                        "synchronous average ({why}, and no encoder position to key it on)"
+                    ));
+                    None
+                }
+            }
         }
     };
     let nf = n as f64;
@@ -732,7 +776,13 @@ pub(crate) fn analyze_stream_blocks(
         }
     ));
     let sync = sync.and_then(|s| match s.finish(&name) {
-        Ok(a) => Some(a),
+        Ok(mut a) => {
+            if let Some(note) = encoder_keyed {
+                a.pitch_mm = Some(pitch_mm);
+                a.notes.insert(0, note);
+            }
+            Some(a)
+        }
         Err(e) => {
             warnings.push(format!("no synchronous average: {e}"));
             None

@@ -52,6 +52,7 @@ struct Acc {
 
 /// The synchronous average fed the analysed samples in order.
 pub(super) struct SyncStream {
+    key: SyncKey,
     bins: usize,
     fs: f64,
     n: usize,
@@ -69,11 +70,13 @@ pub(super) struct SyncStream {
 }
 
 impl SyncStream {
-    /// For `key_times_s` (s from the first analysed sample) over `n`
-    /// samples at `fs`; `signals` are the analysis' signals;
-    /// `balls_in_circuit` is `N_B` when known. `None` without friction and
-    /// velocity error.
+    /// For `key_times_s` (s from the first analysed sample; optical
+    /// passages or encoder keys, as `key` says) over `n` samples at `fs`;
+    /// `signals` are the analysis' signals; `balls_in_circuit` is `N_B`
+    /// when known (balls are told apart on optical passages only). `None`
+    /// without friction and velocity error.
     pub(super) fn new(
+        key: SyncKey,
         key_times_s: &[f64],
         n: usize,
         fs: f64,
@@ -113,14 +116,19 @@ impl SyncStream {
             return None;
         }
         let k = acc.len();
+        let balls = match key {
+            SyncKey::OpticalPassage => balls_in_circuit.map(|b| b as usize).filter(|&b| b > 0),
+            SyncKey::EncoderPitch => None,
+        };
         Some(SyncStream {
+            key,
             bins,
             fs,
             n,
             settings,
             per,
             rejected,
-            balls: balls_in_circuit.map(|b| b as usize).filter(|&b| b > 0),
+            balls,
             acc,
             next: (0, 0),
             ex: 0,
@@ -279,6 +287,10 @@ impl SyncStream {
             ball_means.push((acc.signal, per_ball));
         }
         let per_ball = match self.balls {
+            None if self.key == SyncKey::EncoderPitch => (
+                Vec::new(),
+                "balls not told apart: no optical passages (keyed on the encoder)".to_string(),
+            ),
             None => (
                 Vec::new(),
                 "balls not told apart: the number of balls in the circuit is unknown (bearing \
@@ -327,7 +339,7 @@ impl SyncStream {
         };
         let all: Vec<f64> = self.per.iter().map(|&(a, e, _)| e - a).collect();
         let mut avg = finish(
-            SyncKey::OpticalPassage,
+            self.key,
             &self.settings,
             self.rejected,
             &all,

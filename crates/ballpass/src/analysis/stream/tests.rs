@@ -367,3 +367,43 @@ fn a_streamed_tdms_file_gives_the_in_memory_analysis() {
     compare(&mem, &st);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_streamed_record_without_an_optical_channel_keys_its_average_on_the_encoder() {
+    use crate::analysis::sync::SyncKey;
+    use crate::recording::{Channel, Channels};
+    let full = record(7, 40.0);
+    let rec = Recording::new(
+        full.fs_hz(),
+        Channels {
+            friction_n: full.channel(Channel::Friction).map(<[f64]>::to_vec),
+            position_mm: full.channel(Channel::Position).map(<[f64]>::to_vec),
+            optical_v: None,
+        },
+        full.meta.clone(),
+    )
+    .expect("valid");
+    let settings = AnalyzeSettings {
+        trim_start_s: 1.5,
+        max_lag: MaxLag::Seconds(6.0),
+        ..Default::default()
+    };
+    let (mem, st) = both(&rec, &settings, 1500);
+    // `compare` also checks the average (waveforms, band, periods, the
+    // per-ball note) and that nothing is left out of the streamed one.
+    compare(&mem, &st);
+    let (a, b) = (mem.sync.as_ref().unwrap(), st.sync.as_ref().unwrap());
+    assert_eq!(a.key, SyncKey::EncoderPitch);
+    assert!(a.periods_used > 20, "{}", a.periods_used);
+    assert_eq!(a.pitch_mm, b.pitch_mm);
+    assert!(
+        a.notes[0].starts_with("keyed on the encoder"),
+        "{:?}",
+        a.notes
+    );
+    assert!(
+        b.notes[0].starts_with("keyed on the encoder"),
+        "{:?}",
+        b.notes
+    );
+}

@@ -212,28 +212,89 @@ impl SyncAverage {
 /// stage moves backwards), linear interpolation between samples, s from the
 /// first sample. The level `x_0` itself is key 0 at time 0.
 pub fn encoder_keys(position_mm: &[f64], fs_hz: f64, pitch_mm: f64) -> Vec<f64> {
-    let (Some(&x0), Some(&x1)) = (position_mm.first(), position_mm.last()) else {
-        return Vec::new();
-    };
-    if pitch_mm.is_nan() || pitch_mm <= 0.0 || x0 == x1 {
-        return Vec::new();
-    }
-    let dir = (x1 - x0).signum();
-    let mut keys = vec![0.0];
-    let mut level = pitch_mm;
-    for (i, w) in position_mm.windows(2).enumerate() {
-        let (a, b) = ((w[0] - x0) * dir, (w[1] - x0) * dir);
-        while b >= level && a < level {
-            let frac = if b > a { (level - a) / (b - a) } else { 0.0 };
-            keys.push((i as f64 + frac) / fs_hz);
-            level += pitch_mm;
+    let mut keys = EncoderKeys::new(fs_hz, pitch_mm);
+    keys.push(position_mm);
+    keys.finish()
+}
+
+/// [`encoder_keys`] fed the positions block by block (a streamed record),
+/// the same keys to the bit. The direction of travel is known only at the
+/// last sample, so the crossings are followed both ways; the way not
+/// travelled holds few keys (key 0, and a few more only where the stage
+/// first backs up by more than a pitch).
+#[derive(Debug, Clone)]
+pub(crate) struct EncoderKeys {
+    fs_hz: f64,
+    pitch_mm: f64,
+    /// First and latest position.
+    ends: Option<(f64, f64)>,
+    /// Samples read.
+    at: usize,
+    /// Forward, then backward: the next level and the keys so far.
+    ways: [(f64, Vec<f64>); 2],
+}
+
+impl EncoderKeys {
+    pub(crate) fn new(fs_hz: f64, pitch_mm: f64) -> Self {
+        EncoderKeys {
+            fs_hz,
+            pitch_mm,
+            ends: None,
+            at: 0,
+            ways: [(pitch_mm, vec![0.0]), (pitch_mm, vec![0.0])],
         }
-        // A crossing missed by a backward step is taken at the next forward one.
-        while b >= level + pitch_mm {
-            level += pitch_mm;
+    }
+
+    /// The next positions, in order.
+    pub(crate) fn push(&mut self, position_mm: &[f64]) {
+        let pitch = self.pitch_mm;
+        // (No crossings at a pitch that is not a positive length: `finish`
+        // gives no keys then, and a zero step would never end.)
+        let valid = pitch > 0.0;
+        for &x in position_mm {
+            let Some((x0, prev)) = self.ends else {
+                self.ends = Some((x, x));
+                self.at = 1;
+                continue;
+            };
+            let i = self.at - 1;
+            for ((level, keys), dir) in self.ways.iter_mut().zip([1.0, -1.0]) {
+                if !valid {
+                    break;
+                }
+                let (a, b) = ((prev - x0) * dir, (x - x0) * dir);
+                while b >= *level && a < *level {
+                    let frac = if b > a { (*level - a) / (b - a) } else { 0.0 };
+                    keys.push((i as f64 + frac) / self.fs_hz);
+                    *level += pitch;
+                }
+                // A crossing missed by a backward step is taken at the next
+                // forward one.
+                while b >= *level + pitch {
+                    *level += pitch;
+                }
+            }
+            self.ends = Some((x0, x));
+            self.at += 1;
         }
     }
-    keys
+
+    /// The keys in the direction of travel (first to last position); none
+    /// without travel or a valid pitch.
+    pub(crate) fn finish(self) -> Vec<f64> {
+        let Some((x0, x1)) = self.ends else {
+            return Vec::new();
+        };
+        if self.pitch_mm.is_nan() || self.pitch_mm <= 0.0 || x0 == x1 {
+            return Vec::new();
+        }
+        let [fwd, back] = self.ways;
+        if x1 > x0 {
+            fwd.1
+        } else {
+            back.1
+        }
+    }
 }
 
 /// Linear interpolation of `x` (sampled at `fs`) at `t` seconds.

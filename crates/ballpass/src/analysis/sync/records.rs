@@ -71,14 +71,7 @@ pub(crate) fn for_records(
                 Ok(_) => None,
             })
             .collect();
-        notes.insert(
-            0,
-            format!(
-                "keyed on the encoder at the predicted ball pitch 2·d_avg = {pitch:.4} mm, not on \
-                 ball passages ({})",
-                why.join("; ")
-            ),
-        );
+        notes.insert(0, encoder_note(pitch, &why));
     }
     let balls = pred.balls_in_race;
     let key = if optical {
@@ -93,4 +86,14 @@ pub(crate) fn for_records(
     notes.append(&mut avg.notes);
     avg.notes = notes;
     Ok(avg)
+}
+
+/// The note of an average keyed on the encoder at `pitch_mm` of travel,
+/// with why each record gave no passages to key on.
+pub(crate) fn encoder_note(pitch_mm: f64, why: &[String]) -> String {
+    format!(
+        "keyed on the encoder at the predicted ball pitch 2·d_avg = {pitch_mm:.4} mm, not on ball \
+         passages ({})",
+        why.join("; ")
+    )
 }

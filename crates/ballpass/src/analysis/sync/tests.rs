@@ -140,6 +140,79 @@ fn encoder_keys_fall_at_each_pitch_of_travel() {
     assert_eq!(encoder_keys(&back, 1000.0, 8.1), keys);
 }
 
+/// The keys as they were computed before the block-wise accumulator (the
+/// direction from the first and last samples, one pass): the reference
+/// the accumulator must equal to the bit.
+fn keys_in_one_pass(position_mm: &[f64], fs_hz: f64, pitch_mm: f64) -> Vec<f64> {
+    let (Some(&x0), Some(&x1)) = (position_mm.first(), position_mm.last()) else {
+        return Vec::new();
+    };
+    if pitch_mm.is_nan() || pitch_mm <= 0.0 || x0 == x1 {
+        return Vec::new();
+    }
+    let dir = (x1 - x0).signum();
+    let mut keys = vec![0.0];
+    let mut level = pitch_mm;
+    for (i, w) in position_mm.windows(2).enumerate() {
+        let (a, b) = ((w[0] - x0) * dir, (w[1] - x0) * dir);
+        while b >= level && a < level {
+            let frac = if b > a { (level - a) / (b - a) } else { 0.0 };
+            keys.push((i as f64 + frac) / fs_hz);
+            level += pitch_mm;
+        }
+        while b >= level + pitch_mm {
+            level += pitch_mm;
+        }
+    }
+    keys
+}
+
+#[test]
+fn encoder_keys_fed_in_blocks_equal_one_pass_to_the_bit() {
+    // Noisy travel that backs up now and then (steps of up to a pitch back),
+    // both ways, fed in uneven blocks.
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut uniform = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (dir, pitch) in [(1.0, 8.1), (-1.0, 8.1), (1.0, 0.7), (-1.0, 3.3)] {
+        let mut x = 2.0;
+        let pos: Vec<f64> = (0..20_000)
+            .map(|i| {
+                x += dir * (0.009 + 0.004 * (uniform() - 0.5));
+                if i % 3001 == 3000 {
+                    x -= dir * pitch * uniform();
+                }
+                x
+            })
+            .collect();
+        let reference = keys_in_one_pass(&pos, 1000.0, pitch);
+        assert!(reference.len() > 10, "{}", reference.len());
+        assert_eq!(encoder_keys(&pos, 1000.0, pitch), reference);
+        let mut acc = super::EncoderKeys::new(1000.0, pitch);
+        let mut at = 0;
+        for size in [1usize, 2, 777, 4096, 13].iter().cycle() {
+            if at == pos.len() {
+                break;
+            }
+            let end = (at + size).min(pos.len());
+            acc.push(&pos[at..end]);
+            at = end;
+        }
+        assert_eq!(acc.finish(), reference, "dir {dir} pitch {pitch}");
+    }
+    // No travel, no valid pitch, no samples: no keys, as before.
+    assert!(encoder_keys(&[1.0; 50], 1000.0, 8.1).is_empty());
+    let ramp: Vec<f64> = (0..50).map(f64::from).collect();
+    for pitch in [0.0, -1.0, f64::NAN] {
+        assert!(encoder_keys(&ramp, 1000.0, pitch).is_empty());
+    }
+    assert!(encoder_keys(&[], 1000.0, 8.1).is_empty());
+}
+
 #[test]
 fn too_few_periods_is_an_error_naming_the_record() {
     let x = vec![0.0; 100];
