@@ -13,7 +13,7 @@ samples at 1 kHz of the signals of tools/make_mat_fixtures.py:
     position_mm[i] = 9 t
     optical_V[i]   = 0.25 + 0.125 cos(2 pi 20 t)
 
-TDMS (npTDMS writes the first two; the others are laid out byte by byte
+TDMS (npTDMS writes the first two, tdms_timed and tdms_stamps; the others are laid out byte by byte
 here, as LabVIEW and DAQmx write them, and checked by reading them back
 with npTDMS):
     tdms_plain.tdms        group 'Measurements', float64 channels in two
@@ -26,6 +26,8 @@ with npTDMS):
     tdms_bigendian.tdms    a big-endian segment
     tdms_daqmx.tdms        DAQmx raw data: one int16 buffer of 3 scalers,
                            NI polynomial scales on each channel
+    tdms_timed.tdms        a time channel and no waveform timing: float64 s
+    tdms_stamps.tdms       the same with TDMS timestamps
     tdms_runs.tdms         three runs in one file, one group each ('Run 1',
                            'Run 2', 'Run 3'), as LabVIEW logs a run per
                            group: the same channel names in every group,
@@ -128,6 +130,30 @@ def tdms_plain(s):
         "position_mm": g["position_mm"][:],
         "optical_V": g["optical_V"][:],
     })
+
+
+def tdms_timed(s):
+    """A time channel and no waveform timing, as LabVIEW's measurement-file
+    writer logs, in two segments: tdms_timed.tdms has float64 seconds from
+    3.25 s ('time_s'), tdms_stamps.tdms TDMS timestamps 1 ms apart from
+    START ('time_s'); one group 'Log' each."""
+    t = 3.25 + np.arange(N) / FS
+    stamps = np.datetime64(START) + np.arange(N) * np.timedelta64(1, "ms")
+    for name, time in (("tdms_timed.tdms", t), ("tdms_stamps.tdms", stamps)):
+        with TdmsWriter(path(name)) as w:
+            for half in (slice(0, N // 2), slice(N // 2, N)):
+                w.write_segment([
+                    RootObject({"title": "ballpass fixture"}),
+                    GroupObject("Log"),
+                    ChannelObject("Log", "time_s", time[half]),
+                    ChannelObject("Log", "friction_N", s["friction_N"][half], {"unit_string": "N"}),
+                    ChannelObject("Log", "position_mm", s["position_mm"][half],
+                                  {"unit_string": "mm"}),
+                    ChannelObject("Log", "optical_V", s["optical_V"][half], {"unit_string": "V"}),
+                ])
+        g = TdmsFile.read(path(name))["Log"]
+        cols = ("time_s",) if time is t else ()
+        expected(name, {c: g[c][:] for c in cols + ("friction_N", "position_mm", "optical_V")})
 
 
 def tdms_runs(s):
@@ -504,7 +530,8 @@ def struct_v5(s):
 def main():
     os.makedirs(OUT, exist_ok=True)
     s = signals()
-    every = [tdms_plain, tdms_scaled, tdms_runs, tdms_interleaved, tdms_bigendian, tdms_daqmx,
+    every = [tdms_plain, tdms_scaled, tdms_runs, tdms_timed, tdms_interleaved, tdms_bigendian,
+             tdms_daqmx,
              mf4_fixtures, v73_fixtures, struct_v5]
     wanted = sys.argv[1:]
     unknown = [w for w in wanted if w not in {f.__name__ for f in every}]

@@ -80,6 +80,20 @@ fn tdms_plain_two_segments_with_waveform_timing() {
 }
 
 #[test]
+fn tdms_time_channel_without_waveform_timing() {
+    for name in ["tdms_timed.tdms", "tdms_stamps.tdms"] {
+        let r = load(&data(name), &LoadOptions::default()).unwrap();
+        assert_eq!(r.fs_hz(), 1000.0, "{name}");
+        assert_eq!(r.len(), 200);
+        assert_eq!(r.channels(), Channel::ALL.to_vec());
+        // npTDMS's channels, and its float seconds.
+        assert_matches(name, &r);
+    }
+    let r = load(&data("tdms_timed.tdms"), &LoadOptions::default()).unwrap();
+    assert_eq!(r.meta.start_time_s, 3.25);
+}
+
+#[test]
 fn tdms_ni_scaling_and_group_channel_paths() {
     let path = data("tdms_scaled.tdms");
     let mut o = LoadOptions::default();

@@ -12,8 +12,13 @@
 //! functions as the whole-file reader and finishes each block the same
 //! way, so every sample equals the whole-file read to the bit.
 //!
-//! Declined (read whole, the reason said): a time channel (its steps are
-//! checked on the whole column), a gap policy that fills or splits,
+//! A time channel is scanned in pieces at the open: every stamp finite,
+//! every step positive, and the grid uniform within the tolerance of the
+//! smallest step, which gives the same rate and start as the whole
+//! column's check, to the bit. Declined (read whole, the reason said): a
+//! time channel that needs more (gaps, jitter beyond that tolerance, a
+//! rate stated or given beside it, which is checked against the whole
+//! column), a gap policy that fills or splits,
 //! channels of different lengths (the whole-file reader's error), DAQmx
 //! scalers of different lengths.
 //!
@@ -27,8 +32,11 @@ use std::path::{Path, PathBuf};
 use super::segments::{Bytes, Object, Run, R, TY_DAQMX};
 use super::values::{check_run, decode, scaled, scaling, Scaling};
 use super::{channel_err, column, format_err, plan};
+use crate::error::excerpt;
 use crate::error::{Error, Result};
-use crate::recording::io::{finish, name_record, resolve, LoadOptions, Locator, RawTable};
+use crate::recording::io::{
+    finish, name_record, resolve, timebase, LoadOptions, Locator, RawTable, TimeUnit,
+};
 use crate::recording::stream::{Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
@@ -127,12 +135,6 @@ pub(crate) fn open_sized(
         },
     )?;
     let plan = plan(&file_path, &t, opts)?;
-    if let Some(i) = plan.time {
-        return Ok(Err(format!(
-            "it has a time channel ('{}'), whose steps are checked on the whole column",
-            crate::error::excerpt(&t.objects[i].label())
-        )));
-    }
     let mut lanes = Vec::with_capacity(plan.channels.len());
     for &(c, i) in &plan.channels {
         let o = t.objects[i].clone();
@@ -166,10 +168,40 @@ pub(crate) fn open_sized(
     if lanes.iter().any(|(_, o)| o.values != len) {
         return Ok(Err("its channels hold different numbers of values".into()));
     }
+    // A time channel: its steps scanned in pieces.
+    let timed = match plan.time {
+        None => None,
+        Some(i) => {
+            let o = &t.objects[i];
+            let why = |what: &str| {
+                Ok(Err(format!(
+                    "its time channel ('{}') {what}, which is checked on the whole column",
+                    crate::error::excerpt(&o.label())
+                )))
+            };
+            if plan.stated_rate.is_some() || opts.fs_hz.is_some() {
+                return why("comes with a rate stated or given");
+            }
+            if o.values != len {
+                return why("holds a different number of values from the channels");
+            }
+            match scan_time(&file_path, &mut file, o, sizes, size, opts) {
+                Some(base) => Some(base),
+                None => {
+                    return why(
+                        "does not step uniformly within the tolerance from its smallest step \
+                         (a gap, jitter or a bad stamp)",
+                    )
+                }
+            }
+        }
+    };
     // The first block, finished as the whole file is: the rate, channels
     // and metadata of the record, and any error of units or options.
     let first_opts = LoadOptions {
         velocity_mm_s: None,
+        // The rate the time channel's scan found (its steps checked).
+        fs_hz: timed.as_ref().map_or(opts.fs_hz, |b| Some(b.0.fs_hz)),
         ..opts.clone()
     };
     let first = first_block(len, sizes.0);
@@ -189,6 +221,11 @@ pub(crate) fn open_sized(
         .ok_or_else(|| format_err(&file_path, "no samples"))?;
     let mut meta = rec.meta.clone();
     meta.velocity_mm_s = opts.velocity_mm_s;
+    if let Some((base, note)) = &timed {
+        // As the whole-file reader places a record with a time column.
+        meta.start_time_s = base.start_time_s;
+        meta.notes.extend(note.clone());
+    }
     name_record(path, &mut meta, opts);
     Ok(Ok(TdmsSource {
         path: file_path,
@@ -207,6 +244,61 @@ pub(crate) fn open_sized(
         channels: rec.channels(),
         meta,
     }))
+}
+
+/// The time channel `o` scanned in pieces of `block` values through a
+/// window of `cap` bytes: its steps as the whole-file reader checks them
+/// (every stamp finite, every step positive, the grid uniform within the
+/// tolerance of the smallest step: [`timebase::uniform`], which gives the
+/// rate and start [`timebase::derive`] gives the whole column, to the
+/// bit), with the note the whole-file reader adds for a unit other than
+/// seconds. `None` for anything else (the whole-file reader then reads it
+/// and reports or repairs what it finds).
+fn scan_time(
+    path: &Path,
+    file: &mut File,
+    o: &Object,
+    (block, cap): (usize, usize),
+    size: usize,
+    opts: &LoadOptions,
+) -> Option<(timebase::Timebase, Option<String>)> {
+    let lane = [(Channel::Position, o.clone())];
+    let mut rd = readers(path, &lane, (cap, size)).ok()?;
+    // TDMS states no time unit: the option's, else seconds.
+    let unit = finish::time_unit(path, &RawTable::default(), opts).ok()?;
+    let k = unit.seconds();
+    let (mut first, mut prev, mut n) = (0.0, 0.0, 0usize);
+    let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    while n < o.values {
+        let take = block.min(o.values - n);
+        let mut col = read_block(path, file, &lane, &mut rd, take).ok()?;
+        let (_, col) = col.pop()?;
+        for raw in col.values {
+            let v = if unit == TimeUnit::S { raw } else { raw * k };
+            if !v.is_finite() {
+                return None;
+            }
+            if n == 0 {
+                first = v;
+            } else {
+                let d = v - prev;
+                if d <= 0.0 {
+                    return None;
+                }
+                dmin = dmin.min(d);
+                dmax = dmax.max(d);
+            }
+            prev = v;
+            n += 1;
+        }
+    }
+    if n < 2 {
+        return None;
+    }
+    let base = timebase::uniform(first, prev, n, (dmin, dmax), 0.0, opts.time_step_tolerance)?;
+    let note = (unit != TimeUnit::S)
+        .then(|| format!("time '{}' read in {}", excerpt(&o.label()), unit.symbol()));
+    Some((base, note))
 }
 
 /// Samples in the block starting at 0: `block`, or all when what would be

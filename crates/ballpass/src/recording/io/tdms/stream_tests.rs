@@ -71,6 +71,58 @@ fn fixtures_stream_to_the_bit_in_tiny_pieces() {
     }
 }
 
+/// A time channel and no waveform timing (npTDMS-written, float64 seconds
+/// and TDMS timestamps, `tdms_timed`/`tdms_stamps`): its steps scanned in pieces, the same rate,
+/// start, notes and samples as the whole column's check; with a rate
+/// given beside it, read whole, saying why.
+#[test]
+fn a_time_channel_is_scanned_in_pieces() {
+    let file = data("tdms_timed.tdms");
+    for name in ["tdms_timed.tdms", "tdms_stamps.tdms"] {
+        for sizes in [(16, 64), (17, 8), (BLOCK_SAMPLES, WINDOW_BYTES)] {
+            same_as_whole(&data(name), &LoadOptions::default(), sizes);
+        }
+    }
+    // Seconds read as milliseconds: the unit's note, a rate of 1 MHz.
+    let ms = LoadOptions {
+        time_unit: Some(crate::recording::io::TimeUnit::Ms),
+        ..LoadOptions::default()
+    };
+    same_as_whole(&file, &ms, (16, 64));
+    let src = open_sized(&file, &ms, (16, 64)).unwrap().unwrap();
+    assert_eq!(src.fs_hz(), 1e6);
+    assert!(src.meta().notes.iter().any(|n| n.contains("read in ms")));
+    // A rate given beside the time channel: read whole, the reason said.
+    let given = LoadOptions {
+        fs_hz: Some(1000.0),
+        ..LoadOptions::default()
+    };
+    let why = open_sized(&file, &given, (16, 64)).unwrap().unwrap_err();
+    assert!(
+        why.contains("time channel ('Log/time_s')") && why.contains("rate"),
+        "{why}"
+    );
+    // One stamp moved by 0.4 of a step: the scan declines, the whole
+    // column's check refuses it at its sample.
+    let dir = scratch("timed");
+    let p = dir.join("jitter.tdms");
+    let mut bytes = std::fs::read(&file).unwrap();
+    let stamp = (3.25 + 50.0 / 1000.0_f64).to_le_bytes();
+    let at = bytes
+        .windows(8)
+        .position(|w| w == stamp)
+        .expect("the stamp of sample 50");
+    bytes[at..at + 8].copy_from_slice(&(3.25 + 50.4 / 1000.0_f64).to_le_bytes());
+    std::fs::write(&p, &bytes).unwrap();
+    let why = open_sized(&p, &LoadOptions::default(), (16, 64))
+        .unwrap()
+        .unwrap_err();
+    assert!(why.contains("uniformly"), "{why}");
+    let whole = load(&p, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(whole.contains("sampling is not uniform"), "{whole}");
+    assert_eq!(check_stream_agrees(&p), Ok(()));
+}
+
 /// A record of many segments (the last one shorter, its own index),
 /// contiguous and interleaved, in blocks that straddle segments.
 #[test]
