@@ -47,7 +47,7 @@ impl StreamMode {
 
 /// Files at least this long are streamed under [`StreamMode::Auto`]:
 /// 1 GiB, about 4.5 hours of three channels at 1 kHz as CSV, 12 hours as
-/// float64 TDMS or MATLAB v7.3.
+/// float64 TDMS, 9 hours as MATLAB v7.3 doubles with a time vector.
 pub const STREAM_ABOVE_BYTES: u64 = 1 << 30;
 
 /// How the front end names what the messages ask the user to give.
