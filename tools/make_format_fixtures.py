@@ -46,6 +46,14 @@ MATLAB v7.3 (h5py, in MATLAB's layout: 512-byte text header, MATLAB_class):
                            rec with X (1x1 struct) and Y (1x3 struct array of
                            object references into #refs#)
     v73_struct.mat         bearing.gs (vector), bearing.sr (scalar), a cell
+    v73_chunked.mat        2000 samples (not 200) in many chunks, for reading
+                           in ranges: friction deflate+shuffle in chunks of
+                           300, position a MATLAB row vector (HDF5 shape
+                           (n, 1)) in deflate chunks of 128, optical int16
+                           counts in plain chunks of 77, time contiguous
+    v73_analyze.mat        the analysis fixture tests/fixtures/analyze/input.csv
+                           (8 s at 200 Hz) as v7.3, friction in deflate chunks
+                           of 100: the command line's streamed-versus-whole test
 MATLAB level 5 structs (scipy.io.savemat):
     struct_v5.mat          bearing.gs, bearing.sr, nested.inner.data, a cell
 
@@ -499,6 +507,39 @@ def v73_fixtures(s):
         })
 
 
+def v73_chunked(s):
+    n = 2000
+    t = np.arange(n) / FS
+    name = "v73_chunked.mat"
+    optical = np.round((0.25 + 0.125 * np.cos(2 * np.pi * 20 * t)) * 1000).astype(np.int16)
+    with h5_file(name) as f:
+        mat_double(f, "time_s", t)
+        mat_double(f, "friction_N", 2 + 0.5 * np.sin(2 * np.pi * 5 * t),
+                   chunks=(1, 300), compression="gzip", shuffle=True)
+        p = f.create_dataset("position_mm", data=(9 * t).reshape(-1, 1), chunks=(128, 1), compression="gzip")
+        p.attrs["MATLAB_class"] = np.bytes_("double")
+        o = f.create_dataset("optical_V", data=optical.reshape(1, -1), chunks=(1, 77))
+        o.attrs["MATLAB_class"] = np.bytes_("int16")
+    matlab_header(name)
+    with h5py.File(path(name), "r") as f:
+        assert f["friction_N"].chunks == (1, 300) and f["optical_V"].chunks == (1, 77)
+        expected(name, {k: f[k][()].ravel().astype(np.float64) for k in s})
+
+
+def v73_analyze(s):
+    src = os.path.join(OUT, "..", "fixtures", "analyze", "input.csv")
+    cols = np.genfromtxt(src, delimiter=",", names=True, dtype=np.float64)
+    name = "v73_analyze.mat"
+    with h5_file(name) as f:
+        for k in cols.dtype.names:
+            kw = {"chunks": (1, 100), "compression": "gzip"} if k == "friction_N" else {}
+            mat_double(f, k, cols[k], **kw)
+    matlab_header(name)
+    with h5py.File(path(name), "r") as f:
+        for k in cols.dtype.names:
+            assert np.array_equal(f[k][()].ravel(), cols[k])
+
+
 # ---------------------------------------------------------------- MATLAB level 5 structs
 
 
@@ -531,8 +572,7 @@ def main():
     os.makedirs(OUT, exist_ok=True)
     s = signals()
     every = [tdms_plain, tdms_scaled, tdms_runs, tdms_timed, tdms_interleaved, tdms_bigendian,
-             tdms_daqmx,
-             mf4_fixtures, v73_fixtures, struct_v5]
+             tdms_daqmx, mf4_fixtures, v73_fixtures, struct_v5, v73_chunked, v73_analyze]
     wanted = sys.argv[1:]
     unknown = [w for w in wanted if w not in {f.__name__ for f in every}]
     if unknown:

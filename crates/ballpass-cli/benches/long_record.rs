@@ -2,14 +2,20 @@
 //! the SciPy script doing the same steps (`tools/bench_scipy_long.py`).
 //!
 //! ```text
-//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms]
+//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms|--mat73|--mat73-deflate]
 //! ```
 //!
 //! With `--tdms` the record is written as an NI TDMS file instead
 //! (`ballpass::recording::io::tdms::write_tdms`: float64 channels with
 //! waveform timing, segments of 1000 samples, as DAQmx logging writes
 //! them) and `analyze` is measured streamed (`--stream on`) and read whole
-//! (`--stream off`), side by side.
+//! (`--stream off`), side by side. With `--mat73` it is written as a MATLAB
+//! v7.3 file instead (contiguous doubles; `--mat73-deflate`: chunks of 65536
+//! values, deflate level 4 with shuffle, as MATLAB compresses by default),
+//! by `tools/make_long_v73.py` with h5py from the channels' raw doubles
+//! (`$PYTHON`, else `python3`, with tools/requirements-formats.txt). With
+//! `--stream-on` these two measure the streamed run alone (a 24-hour
+//! record read whole needs several times its 2.8 GB).
 //!
 //! For each duration (default 2 h) it simulates a record at 1 kHz
 //! (`ballpass simulate`, good bearing, 9 mm/s) into a temporary folder,
@@ -133,21 +139,23 @@ fn main() {
     let mut scipy = true;
     let mut report = false;
     let mut stream = None;
-    let mut tdms = false;
+    let mut binary = None;
     for a in std::env::args().skip(1) {
         match a.as_str() {
             "--no-scipy" => scipy = false,
             "--report" => report = true,
             "--stream-on" => stream = Some("on"),
             "--stream-off" => stream = Some("off"),
-            "--tdms" => tdms = true,
+            "--tdms" => binary = Some(Binary::Tdms),
+            "--mat73" => binary = Some(Binary::Mat73 { deflate: false }),
+            "--mat73-deflate" => binary = Some(Binary::Mat73 { deflate: true }),
             "--bench" => {}
             _ => match a.parse::<f64>() {
                 Ok(h) if h > 0.0 => hours.push(h),
                 _ => {
                     eprintln!(
                         "long_record: unknown argument '{a}' (hours, --no-scipy, --report, \
-                         --stream-on, --stream-off, --tdms)"
+                         --stream-on, --stream-off, --tdms, --mat73, --mat73-deflate)"
                     );
                     std::process::exit(2);
                 }
@@ -161,10 +169,9 @@ fn main() {
     let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools");
     let dir = std::env::temp_dir().join(format!("ballpass-long-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temporary folder");
-    let result = if tdms {
-        run_tdms(&bin, &dir, &hours, report)
-    } else {
-        run_all(&bin, &tools, &dir, &hours, (scipy, report, stream))
+    let result = match binary {
+        Some(kind) => run_binary(&bin, &tools, &dir, &hours, (report, stream), kind),
+        None => run_all(&bin, &tools, &dir, &hours, (scipy, report, stream)),
     };
     let _ = std::fs::remove_dir_all(&dir);
     if let Err(e) = result {
@@ -189,25 +196,104 @@ fn record(bin: &Path, dir: &Path, h: f64, rec: &Path) -> Result<(), String> {
     }
 }
 
-/// `analyze` of a TDMS record streamed and read whole (`--tdms`).
-fn run_tdms(bin: &Path, dir: &Path, hours: &[f64], report: bool) -> Result<(), String> {
+/// A binary format the record is written in (`--tdms`, `--mat73`).
+#[derive(Debug, Clone, Copy)]
+enum Binary {
+    Tdms,
+    Mat73 { deflate: bool },
+}
+
+/// Writes `rec` as a MATLAB v7.3 file at `out` through
+/// `tools/make_long_v73.py` (its raw doubles first, removed after).
+fn write_mat73(
+    rec: &ballpass::recording::Recording,
+    tools: &Path,
+    out: &Path,
+    deflate: bool,
+) -> Result<(), String> {
+    use ballpass::recording::Channel;
+    use std::io::{BufWriter, Write};
+    let raw = out.with_extension("raw");
+    std::fs::create_dir_all(&raw).map_err(|e| format!("{raw:?}: {e}"))?;
+    let t0 = rec.meta.start_time_s;
+    let fs = rec.fs_hz();
+    let time: Vec<f64> = (0..rec.len()).map(|i| t0 + i as f64 / fs).collect();
+    let columns = [
+        ("time_s", Some(&time[..])),
+        ("friction_N", rec.channel(Channel::Friction)),
+        ("position_mm", rec.channel(Channel::Position)),
+        ("optical_V", rec.channel(Channel::Optical)),
+    ];
+    for (name, values) in columns {
+        let values = values.ok_or_else(|| format!("no {name} in the record"))?;
+        let p = raw.join(format!("{name}.f64"));
+        let f = std::fs::File::create(&p).map_err(|e| format!("{p:?}: {e}"))?;
+        let mut w = BufWriter::with_capacity(1 << 20, f);
+        for v in values {
+            w.write_all(&v.to_le_bytes())
+                .map_err(|e| format!("{p:?}: {e}"))?;
+        }
+        w.flush().map_err(|e| format!("{p:?}: {e}"))?;
+    }
+    let python = std::env::var("PYTHON").unwrap_or_else(|_| "python3".into());
+    let mut cmd = Command::new(python);
+    cmd.arg(tools.join("make_long_v73.py")).arg(&raw).arg(out);
+    if deflate {
+        cmd.arg("--deflate");
+    }
+    let o = cmd.output().map_err(|e| format!("make_long_v73.py: {e}"));
+    let _ = std::fs::remove_dir_all(&raw);
+    let o = o?;
+    if o.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "make_long_v73.py: {}",
+            String::from_utf8_lossy(&o.stderr)
+        ))
+    }
+}
+
+/// `analyze` of a TDMS or MATLAB v7.3 record streamed and read whole
+/// (`--tdms`, `--mat73`; with `--stream-on` streamed only).
+fn run_binary(
+    bin: &Path,
+    tools: &Path,
+    dir: &Path,
+    hours: &[f64],
+    (report, stream): (bool, Option<&str>),
+    kind: Binary,
+) -> Result<(), String> {
+    let (label, ext) = match kind {
+        Binary::Tdms => ("TDMS record", "tdms"),
+        Binary::Mat73 { deflate: false } => ("MATLAB v7.3 record", "mat"),
+        Binary::Mat73 { deflate: true } => ("MATLAB v7.3 record (deflate)", "mat"),
+    };
     println!(
-        "| TDMS record | file | streamed: wall (CPU) | peak RSS | read whole: wall (CPU) | peak RSS |"
+        "| {label} | file | streamed: wall (CPU) | peak RSS | read whole: wall (CPU) | peak RSS |"
     );
     println!("|---|---|---|---|---|---|");
+    let modes: &[&str] = if stream == Some("on") {
+        &["on"]
+    } else {
+        &["on", "off"]
+    };
     for &h in hours {
         let csv = dir.join(format!("rec_{h}h.csv"));
         record(bin, dir, h, &csv)?;
-        let rec = dir.join(format!("rec_{h}h.tdms"));
+        let rec = dir.join(format!("rec_{h}h.{ext}"));
         let whole =
             ballpass::recording::io::load(&csv, &Default::default()).map_err(|e| e.to_string())?;
-        ballpass::recording::io::tdms::write_tdms(&whole, &rec, 1000, false)
-            .map_err(|e| e.to_string())?;
-        drop(whole);
         let _ = std::fs::remove_file(&csv);
+        match kind {
+            Binary::Tdms => ballpass::recording::io::tdms::write_tdms(&whole, &rec, 1000, false)
+                .map_err(|e| e.to_string())?,
+            Binary::Mat73 { deflate } => write_mat73(&whole, tools, &rec, deflate)?,
+        }
+        drop(whole);
         let size = std::fs::metadata(&rec).map_err(|e| e.to_string())?.len();
         let mut runs = Vec::new();
-        for mode in ["on", "off"] {
+        for mode in modes {
             let mut cmd = Command::new(bin);
             cmd.arg("analyze")
                 .arg(&rec)
@@ -220,15 +306,19 @@ fn run_tdms(bin: &Path, dir: &Path, hours: &[f64], report: bool) -> Result<(), S
             let _ = std::fs::remove_dir_all(dir.join("bp"));
         }
         let _ = std::fs::remove_file(&rec);
+        let whole = match runs.get(1) {
+            Some(r) => format!(
+                "{:.1} s ({:.1} s) | {:.0} MB",
+                r.seconds, r.cpu_seconds, r.peak_mb
+            ),
+            None => "not run | -".into(),
+        };
         println!(
-            "| {h} h at 1 kHz | {:.2} GB | {:.1} s ({:.1} s) | {:.0} MB | {:.1} s ({:.1} s) | {:.0} MB |",
+            "| {h} h at 1 kHz | {:.2} GB | {:.1} s ({:.1} s) | {:.0} MB | {whole} |",
             size as f64 / 1e9,
             runs[0].seconds,
             runs[0].cpu_seconds,
             runs[0].peak_mb,
-            runs[1].seconds,
-            runs[1].cpu_seconds,
-            runs[1].peak_mb
         );
     }
     Ok(())

@@ -210,6 +210,13 @@ fn a_streamed_tdms_record_gives_the_in_memory_tables() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
+/// The same for the record as a MATLAB v7.3 file (h5py-written, friction
+/// in deflate chunks of 100 samples).
+#[test]
+fn a_streamed_matlab_v73_record_gives_the_in_memory_tables() {
+    stream_on_equals_off(&library_test_file("data/v73_analyze.mat"), "mat73");
+}
+
 /// `analyze REC --stream on` and `--stream off`: the same correlations and
 /// spectra (module docs of the test above).
 fn stream_on_equals_off(rec: &std::path::Path, tag: &str) {

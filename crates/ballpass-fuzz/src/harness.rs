@@ -38,6 +38,7 @@ use ballpass::campaign::manifest::parse_manifest;
 use ballpass::recording::inspect::{inspect_bytes, InspectSettings};
 use ballpass::recording::io::csv::blocks::check_stream_agrees;
 use ballpass::recording::io::csv::check_fast_path_agrees;
+use ballpass::recording::io::mat::stream::check_stream_agrees as check_mat_stream_agrees;
 use ballpass::recording::io::tdms::stream::check_stream_agrees as check_tdms_stream_agrees;
 use ballpass::recording::io::{contents_of_bytes, load_all_bytes};
 use ballpass::recording::{GapPolicy, LoadOptions, Profile, TimeUnit};
@@ -289,6 +290,7 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
     ));
     let stream_file = stream_dir.join("fuzz.csv");
     let stream_tdms = stream_dir.join("fuzz.tdms");
+    let stream_mat = stream_dir.join("fuzz.mat");
     let have_stream_dir = std::fs::create_dir_all(&stream_dir).is_ok();
     // Seeds by kind, each kind drawn with its weight (so that the many MAT
     // stress files do not crowd out the other formats).
@@ -470,6 +472,21 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
                     call("stream", &|| match check_tdms_stream_agrees(&stream_tdms) {
                         Ok(()) => Ok(()),
                         Err(d) => panic!("streamed and whole-file TDMS readers disagree: {d}"),
+                    });
+                }
+                // The streamed MATLAB v7.3 reader, from disk, on inputs that
+                // still start like a v7.3 file (HDF5 at byte 0 or 512).
+                let v73 = input.starts_with(b"MATLAB 7.3")
+                    || input.get(512..520) == Some(b"\x89HDF\r\n\x1a\n".as_slice())
+                    || input.starts_with(b"\x89HDF\r\n\x1a\n");
+                if kind == Kind::Mat
+                    && v73
+                    && have_stream_dir
+                    && std::fs::write(&stream_mat, &input).is_ok()
+                {
+                    call("stream", &|| match check_mat_stream_agrees(&stream_mat) {
+                        Ok(()) => Ok(()),
+                        Err(d) => panic!("streamed and whole-file v7.3 readers disagree: {d}"),
                     });
                 }
             }

@@ -209,6 +209,16 @@ fn matlab_v73_plain_variables_read_like_v5() {
     }
 }
 
+/// Many chunks (deflate, shuffle, a row vector, int16 counts) read as h5py
+/// reads them.
+#[test]
+fn matlab_v73_chunked_variables_read_as_h5py_reads_them() {
+    let r = load(&data("v73_chunked.mat"), &LoadOptions::default()).unwrap();
+    assert_eq!(r.fs_hz(), 1000.0);
+    assert_eq!(r.len(), 2000);
+    assert_matches("v73_chunked.mat", &r);
+}
+
 #[test]
 fn matlab_v73_controldesk_layout() {
     let mut o = LoadOptions::default();

@@ -234,6 +234,77 @@ pub fn uniform(
     })
 }
 
+/// A time column's steps scanned piece by piece, for [`uniform`]: what a
+/// streamed reader checks without holding the column.
+#[derive(Debug, Clone)]
+pub(crate) struct Steps {
+    /// Stamps seen.
+    pub n: usize,
+    first: f64,
+    prev: f64,
+    dmin: f64,
+    dmax: f64,
+    /// A step not positive, or a stamp not finite.
+    pub broken: bool,
+}
+
+impl Default for Steps {
+    fn default() -> Self {
+        Self {
+            n: 0,
+            first: 0.0,
+            prev: 0.0,
+            dmin: f64::INFINITY,
+            dmax: f64::NEG_INFINITY,
+            broken: false,
+        }
+    }
+}
+
+impl Steps {
+    /// Takes the next stamps (in seconds); stops at the first broken one.
+    pub fn extend(&mut self, times: impl IntoIterator<Item = f64>) {
+        if self.broken {
+            return;
+        }
+        for v in times {
+            if !v.is_finite() {
+                self.broken = true;
+                return;
+            }
+            if self.n > 0 {
+                let d = v - self.prev;
+                if d <= 0.0 {
+                    self.broken = true;
+                    return;
+                }
+                self.dmin = self.dmin.min(d);
+                self.dmax = self.dmax.max(d);
+            } else {
+                self.first = v;
+            }
+            self.prev = v;
+            self.n += 1;
+        }
+    }
+
+    /// The timebase [`derive`] gives the whole column when it is uniform
+    /// (the same to the bit), else `None`.
+    pub fn uniform(&self, resolution: f64, step_tolerance: f64) -> Option<Timebase> {
+        if self.broken {
+            return None;
+        }
+        uniform(
+            self.first,
+            self.prev,
+            self.n,
+            (self.dmin, self.dmax),
+            resolution,
+            step_tolerance,
+        )
+    }
+}
+
 /// Checks a given rate against a uniform time column of `steps` grid steps
 /// (`n - 1` without gaps): over the whole span the two may differ by less
 /// than one sample.

@@ -42,19 +42,6 @@ pub struct CsvSource {
     meta: Metadata,
 }
 
-/// The time column's scan.
-#[derive(Default)]
-struct Steps {
-    n: usize,
-    first: f64,
-    prev: f64,
-    dmin: f64,
-    dmax: f64,
-    /// A step not positive, or a value not finite.
-    broken: bool,
-    resolution: f64,
-}
-
 /// Opens `path` for streaming when it is a plain CSV/TSV the scan takes
 /// (module docs); `Ok(None)` otherwise.
 ///
@@ -80,12 +67,8 @@ pub(crate) fn open_sized(
     if !matches!(format, Format::Csv | Format::Tsv) || !plain_options {
         return Ok(None);
     }
-    let mut steps = Steps {
-        dmin: f64::INFINITY,
-        dmax: f64::NEG_INFINITY,
-        resolution: f64::INFINITY,
-        ..Steps::default()
-    };
+    let mut steps = timebase::Steps::default();
+    let mut resolution = f64::INFINITY;
     let mut finite = true;
     let mut first_piece: Option<(Vec<Channel>, Metadata)> = None;
     let mut has_time = true;
@@ -103,27 +86,8 @@ pub(crate) fn open_sized(
             return Ok(());
         };
         let k = finish::time_unit(path, &t, opts)?.seconds();
-        steps.resolution = steps.resolution.min(time.resolution * k);
-        for &raw in &time.values {
-            let v = raw * k;
-            if !v.is_finite() {
-                steps.broken = true;
-                break;
-            }
-            if steps.n == 0 {
-                steps.first = v;
-            } else {
-                let d = v - steps.prev;
-                if d <= 0.0 {
-                    steps.broken = true;
-                    break;
-                }
-                steps.dmin = steps.dmin.min(d);
-                steps.dmax = steps.dmax.max(d);
-            }
-            steps.prev = v;
-            steps.n += 1;
-        }
+        resolution = resolution.min(time.resolution * k);
+        steps.extend(time.values.iter().map(|&raw| raw * k));
         if first_piece.is_none() {
             // The channels and metadata as the whole-file reader gives them.
             let recs = finish::finish(path, t, &piece_options(opts, 1.0))?;
@@ -138,13 +102,9 @@ pub(crate) fn open_sized(
     else {
         return Ok(None);
     };
-    let Some(base) = timebase::uniform(
-        steps.first,
-        steps.prev,
-        steps.n,
-        (steps.dmin, steps.dmax),
-        if steps.resolution.is_finite() {
-            steps.resolution
+    let Some(base) = steps.uniform(
+        if resolution.is_finite() {
+            resolution
         } else {
             0.0
         },

@@ -33,6 +33,7 @@ use super::{LoadOptions, Locator, RawColumn, RawTable};
 use crate::error::{excerpt, Error, Result};
 use crate::recording::Channel;
 
+pub mod stream;
 mod tree;
 pub(crate) mod v5;
 pub(crate) mod v73;
@@ -65,10 +66,7 @@ enum File<'a> {
 
 impl<'a> File<'a> {
     fn open(path: &Path, bytes: &'a [u8]) -> Result<Self> {
-        if bytes.starts_with(V73_MAGIC)
-            || bytes.get(512..520) == Some(HDF5_MAGIC)
-            || bytes.starts_with(HDF5_MAGIC)
-        {
+        if is_v73(bytes) {
             return V73File::open(bytes)
                 .map(File::V73)
                 .map_err(|r| format_err(path, format!("MATLAB v7.3 (HDF5) MAT-file: {r}")));
@@ -125,6 +123,14 @@ impl<'a> File<'a> {
     }
 }
 
+/// Whether a file starting with `head` (its first 520 bytes or more) is a
+/// v7.3 (HDF5) MAT-file.
+fn is_v73(head: &[u8]) -> bool {
+    head.starts_with(V73_MAGIC)
+        || head.get(512..520) == Some(HDF5_MAGIC)
+        || head.starts_with(HDF5_MAGIC)
+}
+
 /// Why bytes that do not start like a level-5 MAT-file are not one.
 fn not_a_mat_file(bytes: &[u8]) -> String {
     let head = &bytes[..bytes.len().min(256)];
@@ -161,6 +167,29 @@ struct Found<'v> {
 /// Parses a MAT-file held in memory into raw columns.
 pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<RawTable> {
     let file = File::open(path, bytes)?;
+    parse_file(path, &file, opts, &mut |file, n, _| file.numbers(n))
+}
+
+/// What [`parse_file`] reads a vector for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Channel(Channel),
+    Time,
+    Rate,
+}
+
+/// How [`parse_file`] reads the numbers of a vector it found: all of them
+/// ([`File::numbers`]), or, streamed, the first block of a channel or time.
+type ReadNumbers<'r> =
+    dyn FnMut(&File<'_>, &tree::Numeric, Role) -> std::result::Result<Vec<f64>, String> + 'r;
+
+/// [`parse`] of an open file, its numbers read by `read`.
+fn parse_file(
+    path: &Path,
+    file: &File<'_>,
+    opts: &LoadOptions,
+    read: &mut ReadNumbers<'_>,
+) -> Result<RawTable> {
     let err = |r: String| format_err(path, r);
     let names = file.names();
     let wanted: Vec<String> = Channel::ALL
@@ -187,7 +216,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
     }
     let mut plain_hit = false;
     for w in &wanted {
-        if plain(&file, w).map_err(err)?.is_some() {
+        if plain(file, w).map_err(err)?.is_some() {
             plain_hit = true;
         }
     }
@@ -202,11 +231,11 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
         )));
     } else {
         let i = controldesk[0];
-        Layout::ControlDesk(i, controldesk_signals(&file, i).map_err(err)?)
+        Layout::ControlDesk(i, controldesk_signals(file, i).map_err(err)?)
     };
     let lookup = |want: &str| -> Result<Option<Found<'_>>> {
         match &layout {
-            Layout::Plain => plain(&file, want).map_err(err),
+            Layout::Plain => plain(file, want).map_err(err),
             Layout::ControlDesk(_, signals) => {
                 let cands: Vec<Candidate> = signals
                     .iter()
@@ -218,7 +247,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
                         value: signals[k].data,
                         unit: signals[k].unit.clone(),
                     })),
-                    None => plain(&file, want).map_err(err),
+                    None => plain(file, want).map_err(err),
                 }
             }
         }
@@ -227,12 +256,12 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
         Layout::Plain => "variable",
         Layout::ControlDesk(..) => "signal",
     };
-    let has = || listing(&file, &layout);
+    let has = || listing(file, &layout);
 
     let mut channels = Vec::new();
     for (k, &c) in Channel::ALL.iter().enumerate() {
         match lookup(&wanted[k])? {
-            Some(f) => channels.push((c, column(&file, &f).map_err(err)?)),
+            Some(f) => channels.push((c, column(file, &f, Role::Channel(c), read).map_err(err)?)),
             None if opts.source(c).name.is_some() => {
                 return Err(err(format!(
                     "no {what} '{}' for {}; the file has: {}",
@@ -315,7 +344,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
         unit.map(|u| (u, from))
     });
     let time = time
-        .map(|f| column(&file, &Found { unit: None, ..f }))
+        .map(|f| column(file, &Found { unit: None, ..f }, Role::Time, read))
         .transpose()
         .map_err(err)?;
     let stated_rate = match &opts.fs_from {
@@ -328,7 +357,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raw
                     has()
                 ))
             })?;
-            let col = column(&file, &f).map_err(err)?;
+            let col = column(file, &f, Role::Rate, read).map_err(err)?;
             match col.values.as_slice() {
                 [fs] => Some((*fs, format!("variable '{}'", f.label))),
                 v => {
@@ -458,7 +487,12 @@ fn listing(file: &File<'_>, layout: &Layout<'_>) -> String {
 }
 
 /// Converts a found value to a column of `f64`.
-fn column(file: &File<'_>, f: &Found<'_>) -> std::result::Result<RawColumn, String> {
+fn column(
+    file: &File<'_>,
+    f: &Found<'_>,
+    role: Role,
+    read: &mut ReadNumbers<'_>,
+) -> std::result::Result<RawColumn, String> {
     let bad = |what: String| format!("variable '{}' {what}", f.label);
     let n = match f.value {
         Value::Numeric(n) => n,
@@ -486,9 +520,7 @@ fn column(file: &File<'_>, f: &Found<'_>) -> std::result::Result<RawColumn, Stri
             tree::dims_text(&n.dims)
         )));
     }
-    let values = file
-        .numbers(n)
-        .map_err(|r| bad(format!("cannot be read: {r}")))?;
+    let values = read(file, n, role).map_err(|r| bad(format!("cannot be read: {r}")))?;
     Ok(RawColumn {
         name: f.label.clone(),
         values,

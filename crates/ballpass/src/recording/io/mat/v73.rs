@@ -20,15 +20,21 @@
 use std::cell::Cell;
 use std::collections::HashMap;
 
+use std::path::Path;
+use std::sync::Arc;
+
 use hdf5_reader::group::Group;
-use hdf5_reader::{Dataset, Datatype, Hdf5File, OpenOptions};
+use hdf5_reader::storage::FileStorage;
+use hdf5_reader::{Dataset, Datatype, Hdf5File, OpenOptions, SliceInfo, SliceInfoElem};
 
 use super::tree::{count, Data, Numeric, Struct, Value};
 use super::v5::MAX_DEPTH;
 use crate::error::excerpt;
 use crate::recording::io::contain::{contain, detail};
 
-/// A numeric dataset of a v7.3 file, read on request.
+/// A numeric dataset of a v7.3 file, read on request (whole, or a range of
+/// its values when streamed).
+#[derive(Clone)]
 pub(crate) struct H5Data {
     ds: Dataset,
 }
@@ -55,17 +61,40 @@ impl V73File {
     /// # Errors
     /// The reason, in words, for a damaged or unreadable file.
     pub fn open(bytes: &[u8]) -> R<Self> {
-        let len = bytes.len();
+        Self::open_with(bytes.len(), 0, |options| {
+            Hdf5File::from_bytes_with_options(bytes, options)
+        })
+    }
+
+    /// Opens an HDF5 MAT-file on disk, reading only the parts asked for
+    /// (the streamed reader's way), with a chunk cache of `cache_bytes`.
+    ///
+    /// # Errors
+    /// As [`V73File::open`], and the file's read error.
+    pub fn open_path(path: &Path, cache_bytes: usize) -> R<Self> {
+        let storage = h5("cannot be opened", || FileStorage::open(path))?;
+        let len = usize::try_from(hdf5_reader::storage::Storage::len(&storage))
+            .map_err(|_| "file too large".to_string())?;
+        Self::open_with(len, cache_bytes, |options| {
+            Hdf5File::from_storage_with_options(Arc::new(storage), options)
+        })
+    }
+
+    /// The tree of the HDF5 file of `len` bytes that `make` opens with the
+    /// reader's bounds.
+    fn open_with(
+        len: usize,
+        cache_bytes: usize,
+        make: impl FnOnce(OpenOptions) -> hdf5_reader::error::Result<Hdf5File>,
+    ) -> R<Self> {
         // Nothing read can exceed what the file holds, inflated at most 1032:1.
         let can_hold = len.saturating_mul(1032).saturating_add(1 << 20);
         let options = OpenOptions::default()
-            .with_chunk_cache_bytes(0)
+            .with_chunk_cache_bytes(cache_bytes)
             .with_max_read_bytes(can_hold)
             .with_max_chunk_bytes(can_hold.min(64 << 20))
             .with_max_object_header_bytes(len.clamp(4096, 64 << 20));
-        let file = h5("not a readable HDF5 file", || {
-            Hdf5File::from_bytes_with_options(bytes, options)
-        })?;
+        let file = h5("not a readable HDF5 file", || make(options))?;
         let root = h5("no root group", || file.root_group())?;
         let mut b = Builder {
             budget: Cell::new(len / 8 + 64),
@@ -409,18 +438,83 @@ impl H5Data {
     /// # Errors
     /// The reason, for a damaged dataset or a non-numeric type.
     pub fn numbers(&self) -> R<Vec<f64>> {
+        self.numbers_in(None)
+    }
+
+    /// How many numbers the dataset holds.
+    pub fn len(&self) -> R<usize> {
+        count(&matlab_dims(self.ds.shape())?).ok_or_else(|| "dimensions overflow".into())
+    }
+
+    /// Bytes of one chunk of the dataset when it is stored in chunks.
+    pub fn chunk_bytes(&self) -> Option<usize> {
+        let elem = match self.ds.dtype() {
+            Datatype::FloatingPoint { size, .. } | Datatype::FixedPoint { size, .. } => {
+                usize::from(*size)
+            }
+            _ => 8,
+        };
+        let chunks = contain(|| self.ds.chunks()).flatten()?;
+        Some(chunks.iter().fold(elem, |a, &c| {
+            a.saturating_mul(usize::try_from(c).unwrap_or(usize::MAX))
+        }))
+    }
+
+    /// Numbers `at.0..at.1` of a vector (every number for `None`), as
+    /// `f64`: the same conversion whole or in ranges.
+    ///
+    /// # Errors
+    /// The reason, for a damaged dataset, a non-numeric type, or a range
+    /// of a dataset that is not a vector.
+    pub fn numbers_in(&self, at: Option<(usize, usize)>) -> R<Vec<f64>> {
         let ds = &self.ds;
+        let selection = match at {
+            None => None,
+            Some((from, to)) => {
+                let shape = ds.shape();
+                if shape.iter().filter(|&&d| d > 1).count() > 1 {
+                    return Err("a range of a matrix; expected a vector".into());
+                }
+                Some(SliceInfo {
+                    selections: shape
+                        .iter()
+                        .map(|&d| {
+                            if d > 1 {
+                                SliceInfoElem::Slice {
+                                    start: from as u64,
+                                    end: to as u64,
+                                    step: 1,
+                                }
+                            } else {
+                                SliceInfoElem::Slice {
+                                    start: 0,
+                                    end: d,
+                                    step: 1,
+                                }
+                            }
+                        })
+                        .collect(),
+                })
+            }
+        };
+        let sel = selection.as_ref();
+        // The array of the whole dataset or of the range.
+        macro_rules! get {
+            ($t:ty) => {
+                match sel {
+                    None => h5("reading data", || ds.read_array::<$t>())?,
+                    Some(sel) => h5("reading data", || ds.read_slice::<$t>(sel))?,
+                }
+            };
+        }
         macro_rules! read {
             ($t:ty) => {
-                h5("reading data", || ds.read_array::<$t>())?
-                    .iter()
-                    .map(|&x| x as f64)
-                    .collect()
+                get!($t).iter().map(|&x| x as f64).collect()
             };
         }
         Ok(match ds.dtype() {
             Datatype::FloatingPoint { size: 8, .. } => {
-                let a = h5("reading data", || ds.read_array::<f64>())?;
+                let a = get!(f64);
                 if a.is_standard_layout() {
                     // A vector in memory order: the array's buffer as it is.
                     let n = a.len();

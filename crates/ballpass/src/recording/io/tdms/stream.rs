@@ -303,7 +303,7 @@ fn scan_time(
 
 /// Samples in the block starting at 0: `block`, or all when what would be
 /// left is shorter than a recording.
-fn first_block(len: usize, block: usize) -> usize {
+pub(crate) fn first_block(len: usize, block: usize) -> usize {
     if len.saturating_sub(block) < Recording::MIN_SAMPLES {
         len
     } else {
