@@ -267,35 +267,23 @@ fn scan_time(
     // TDMS states no time unit: the option's, else seconds.
     let unit = finish::time_unit(path, &RawTable::default(), opts).ok()?;
     let k = unit.seconds();
-    let (mut first, mut prev, mut n) = (0.0, 0.0, 0usize);
-    let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
-    while n < o.values {
-        let take = block.min(o.values - n);
+    let mut steps = timebase::Steps::default();
+    let mut at = 0;
+    while at < o.values && !steps.broken {
+        let take = block.min(o.values - at);
         let mut col = read_block(path, file, &lane, &mut rd, take).ok()?;
         let (_, col) = col.pop()?;
-        for raw in col.values {
-            let v = if unit == TimeUnit::S { raw } else { raw * k };
-            if !v.is_finite() {
-                return None;
-            }
-            if n == 0 {
-                first = v;
-            } else {
-                let d = v - prev;
-                if d <= 0.0 {
-                    return None;
-                }
-                dmin = dmin.min(d);
-                dmax = dmax.max(d);
-            }
-            prev = v;
-            n += 1;
+        if unit == TimeUnit::S {
+            steps.extend(col.values);
+        } else {
+            steps.extend(col.values.into_iter().map(|v| v * k));
         }
+        at += take;
     }
-    if n < 2 {
+    if steps.n < 2 {
         return None;
     }
-    let base = timebase::uniform(first, prev, n, (dmin, dmax), 0.0, opts.time_step_tolerance)?;
+    let base = steps.uniform(0.0, opts.time_step_tolerance)?;
     let note = (unit != TimeUnit::S)
         .then(|| format!("time '{}' read in {}", excerpt(&o.label()), unit.symbol()));
     Some((base, note))
