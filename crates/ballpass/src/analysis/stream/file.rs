@@ -9,6 +9,7 @@ use crate::analysis::{Analysis, AnalyzeSettings};
 use crate::bearing::Geometry;
 use crate::error::{shown_path, Error, Result};
 use crate::recording::io::csv::blocks::{self, CsvSource};
+use crate::recording::io::mf4::stream::{self as mf4_stream, Mf4Source};
 use crate::recording::io::tdms::stream::{self as tdms_stream, TdmsSource};
 use crate::recording::io::{resolve, Format};
 use crate::recording::stream::{Block, RecordSource};
@@ -46,7 +47,7 @@ impl StreamMode {
 
 /// Files at least this long are streamed under [`StreamMode::Auto`]:
 /// 1 GiB, about 4.5 hours of three channels at 1 kHz as CSV, 12 hours as
-/// float64 TDMS.
+/// float64 TDMS, 9 hours as float64 MF4 (with its time channel).
 pub const STREAM_ABOVE_BYTES: u64 = 1 << 30;
 
 /// How the front end names what the messages ask the user to give.
@@ -65,6 +66,8 @@ pub enum FileSource {
     Csv(CsvSource),
     /// An NI TDMS file (or one group of it).
     Tdms(TdmsSource),
+    /// An ASAM MDF 4 file.
+    Mf4(Mf4Source),
 }
 
 impl FileSource {
@@ -73,6 +76,7 @@ impl FileSource {
         match self {
             FileSource::Csv(s) => s.path(),
             FileSource::Tdms(s) => s.path(),
+            FileSource::Mf4(s) => s.path(),
         }
     }
 
@@ -80,6 +84,7 @@ impl FileSource {
         match self {
             FileSource::Csv(s) => s,
             FileSource::Tdms(s) => s,
+            FileSource::Mf4(s) => s,
         }
     }
 
@@ -87,6 +92,7 @@ impl FileSource {
         match self {
             FileSource::Csv(s) => s,
             FileSource::Tdms(s) => s,
+            FileSource::Mf4(s) => s,
         }
     }
 }
@@ -173,9 +179,10 @@ pub fn choose(
                             .to_string()
                     }),
                 Format::Tdms => tdms_stream::open(path, opts)?.map(FileSource::Tdms),
-                Format::Mat | Format::Mf4 => Err(
-                    "MATLAB and MF4 files are read whole (CSV/TSV and TDMS are streamed)".into(),
-                ),
+                Format::Mf4 => mf4_stream::open(path, opts)?.map(FileSource::Mf4),
+                Format::Mat => {
+                    Err("MATLAB files are read whole (CSV/TSV, TDMS and MF4 are streamed)".into())
+                }
             },
         };
     let why = match src {
