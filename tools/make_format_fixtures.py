@@ -46,6 +46,10 @@ MF4 (asammdf):
                            invalid, position float32, optical uint8 with a
                            linear conversion (records of 15 bytes)
     mf4_blocks_dz.mf4      the same saved with transposed deflate (DZ blocks)
+    mf4_analyze.mf4        (function mf4_analyze) the record of
+                           tests/fixtures/analyze/input.csv (1600 samples
+                           at 200 Hz) as float64 channels with their time
+                           master, in data blocks of about 4 kB
 MATLAB v7.3 (h5py, in MATLAB's layout: 512-byte text header, MATLAB_class):
     v73_plain.mat          plain double vectors (one of them gzip-chunked)
     v73_controldesk.mat    the ControlDesk layout of controldesk.mat: a struct
@@ -419,6 +423,25 @@ def mf4_blocks(s):
                             "optical_V": back.get("optical_V").samples})
 
 
+def mf4_analyze(s):
+    """The analysis fixture as an MF4 file: `analyze --stream on` and
+    `--stream off` compared on it (crates/ballpass-cli/tests/analyze.rs)."""
+    src = os.path.join(OUT, "..", "fixtures", "analyze", "input.csv")
+    cols = np.genfromtxt(src, delimiter=",", names=True)
+    t = cols["time_s"]
+    name = "mf4_analyze.mf4"
+    mdf = MDF(version="4.10")
+    mdf.configure(write_fragment_size=4096)
+    mdf.append([Signal(cols[c], t, name=c, unit=u)
+                for c, u in [("friction_N", "N"), ("position_mm", "mm"), ("optical_V", "V")]],
+               acq_name="bench", comment="ballpass analysis fixture")
+    mdf_save(mdf, name)
+    with MDF(path(name)) as back:
+        for c in ["friction_N", "position_mm", "optical_V"]:
+            assert np.array_equal(back.get(c).samples, cols[c]), c
+            assert np.array_equal(back.get(c).timestamps, t), c
+
+
 # ---------------------------------------------------------------- MATLAB v7.3
 
 MATLAB_73_HEADER = (
@@ -551,7 +574,7 @@ def main():
     os.makedirs(OUT, exist_ok=True)
     s = signals()
     every = [tdms_plain, tdms_scaled, tdms_runs, tdms_interleaved, tdms_bigendian, tdms_daqmx,
-             mf4_fixtures, mf4_blocks, v73_fixtures, struct_v5]
+             mf4_fixtures, mf4_blocks, mf4_analyze, v73_fixtures, struct_v5]
     wanted = sys.argv[1:]
     unknown = [w for w in wanted if w not in {f.__name__ for f in every}]
     if unknown:
