@@ -2,14 +2,17 @@
 //! the SciPy script doing the same steps (`tools/bench_scipy_long.py`).
 //!
 //! ```text
-//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms]
+//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms|--mf4]
 //! ```
 //!
 //! With `--tdms` the record is written as an NI TDMS file instead
 //! (`ballpass::recording::io::tdms::write_tdms`: float64 channels with
 //! waveform timing, segments of 1000 samples, as DAQmx logging writes
 //! them) and `analyze` is measured streamed (`--stream on`) and read whole
-//! (`--stream off`), side by side.
+//! (`--stream off`), side by side. With `--mf4`, the same with an ASAM MDF 4
+//! file written by asammdf (`tools/write_long_mf4.py`: float64 channels on
+//! a float64 time master, 4 MB data blocks), with the Python of
+//! `BALLPASS_FORMATS_PYTHON` (default `python3`; tools/requirements-formats.txt).
 //!
 //! For each duration (default 2 h) it simulates a record at 1 kHz
 //! (`ballpass simulate`, good bearing, 9 mm/s) into a temporary folder,
@@ -133,21 +136,22 @@ fn main() {
     let mut scipy = true;
     let mut report = false;
     let mut stream = None;
-    let mut tdms = false;
+    let mut binary = None;
     for a in std::env::args().skip(1) {
         match a.as_str() {
             "--no-scipy" => scipy = false,
             "--report" => report = true,
             "--stream-on" => stream = Some("on"),
             "--stream-off" => stream = Some("off"),
-            "--tdms" => tdms = true,
+            "--tdms" => binary = Some(Binary::Tdms),
+            "--mf4" => binary = Some(Binary::Mf4),
             "--bench" => {}
             _ => match a.parse::<f64>() {
                 Ok(h) if h > 0.0 => hours.push(h),
                 _ => {
                     eprintln!(
                         "long_record: unknown argument '{a}' (hours, --no-scipy, --report, \
-                         --stream-on, --stream-off, --tdms)"
+                         --stream-on, --stream-off, --tdms, --mf4)"
                     );
                     std::process::exit(2);
                 }
@@ -161,8 +165,8 @@ fn main() {
     let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools");
     let dir = std::env::temp_dir().join(format!("ballpass-long-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temporary folder");
-    let result = if tdms {
-        run_tdms(&bin, &dir, &hours, report)
+    let result = if let Some(format) = binary {
+        run_binary(&bin, &tools, &dir, &hours, report, format)
     } else {
         run_all(&bin, &tools, &dir, &hours, (scipy, report, stream))
     };
@@ -189,21 +193,61 @@ fn record(bin: &Path, dir: &Path, h: f64, rec: &Path) -> Result<(), String> {
     }
 }
 
-/// `analyze` of a TDMS record streamed and read whole (`--tdms`).
-fn run_tdms(bin: &Path, dir: &Path, hours: &[f64], report: bool) -> Result<(), String> {
+/// A binary format the record is written in.
+#[derive(Clone, Copy)]
+enum Binary {
+    /// NI TDMS (`write_tdms`).
+    Tdms,
+    /// ASAM MDF 4 (asammdf, `tools/write_long_mf4.py`).
+    Mf4,
+}
+
+/// `analyze` of a TDMS or MF4 record streamed and read whole (`--tdms`,
+/// `--mf4`).
+fn run_binary(
+    bin: &Path,
+    tools: &Path,
+    dir: &Path,
+    hours: &[f64],
+    report: bool,
+    format: Binary,
+) -> Result<(), String> {
+    let (name, ext) = match format {
+        Binary::Tdms => ("TDMS", "tdms"),
+        Binary::Mf4 => ("MF4", "mf4"),
+    };
     println!(
-        "| TDMS record | file | streamed: wall (CPU) | peak RSS | read whole: wall (CPU) | peak RSS |"
+        "| {name} record | file | streamed: wall (CPU) | peak RSS | read whole: wall (CPU) | peak RSS |"
     );
     println!("|---|---|---|---|---|---|");
     for &h in hours {
         let csv = dir.join(format!("rec_{h}h.csv"));
         record(bin, dir, h, &csv)?;
-        let rec = dir.join(format!("rec_{h}h.tdms"));
-        let whole =
-            ballpass::recording::io::load(&csv, &Default::default()).map_err(|e| e.to_string())?;
-        ballpass::recording::io::tdms::write_tdms(&whole, &rec, 1000, false)
-            .map_err(|e| e.to_string())?;
-        drop(whole);
+        let rec = dir.join(format!("rec_{h}h.{ext}"));
+        match format {
+            Binary::Tdms => {
+                let whole = ballpass::recording::io::load(&csv, &Default::default())
+                    .map_err(|e| e.to_string())?;
+                ballpass::recording::io::tdms::write_tdms(&whole, &rec, 1000, false)
+                    .map_err(|e| e.to_string())?;
+            }
+            Binary::Mf4 => {
+                let python =
+                    std::env::var_os("BALLPASS_FORMATS_PYTHON").unwrap_or_else(|| "python3".into());
+                let o = Command::new(python)
+                    .arg(tools.join("write_long_mf4.py"))
+                    .arg(&csv)
+                    .arg(&rec)
+                    .output()
+                    .map_err(|e| format!("write_long_mf4.py: {e}"))?;
+                if !o.status.success() {
+                    return Err(format!(
+                        "write_long_mf4.py: {}",
+                        String::from_utf8_lossy(&o.stderr)
+                    ));
+                }
+            }
+        }
         let _ = std::fs::remove_file(&csv);
         let size = std::fs::metadata(&rec).map_err(|e| e.to_string())?.len();
         let mut runs = Vec::new();

@@ -296,7 +296,7 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     ``stream`` is the command line's ``--stream``: one record *file* of
     1 GiB or more (``'auto'``), or any size (``'on'``), is read block by
     block in memory that does not grow with its length, if it is a plain
-    CSV/TSV with a uniform time column or a TDMS file; ``'off'`` always
+    CSV/TSV with a uniform time column, a TDMS or an MF4 file; ``'off'`` always
     reads it whole. A streamed record needs a velocity (given or in the
     file); its passages are detected window by window (``to_dict()['stream']``
     says how), its synchronous average and position-domain spectra are the
