@@ -40,6 +40,18 @@ MF4 (asammdf):
     mf4_compressed.mf4     the same saved with transposed deflate (DZ blocks)
     mf4_invalid.mf4        float64 friction with 3 samples marked invalid
     mf4_two_rates.mf4      friction at 1 kHz and optical at 500 Hz
+    mf4_blocks.mf4         (function mf4_blocks) 5000 samples at 1 kHz
+                           written in 9 appends of uneven sizes and saved
+                           in data blocks of about 1000 bytes (a data list
+                           of 81 DT blocks); friction int16 counts
+                           with a linear conversion and 5 samples marked
+                           invalid, position float32, optical uint8 with a
+                           linear conversion (records of 15 bytes)
+    mf4_blocks_dz.mf4      the same saved with transposed deflate (DZ blocks)
+    mf4_analyze.mf4        (function mf4_analyze) the record of
+                           tests/fixtures/analyze/input.csv (1600 samples
+                           at 200 Hz) as float64 channels with their time
+                           master, in data blocks of about 4 kB
 MATLAB v7.3 (h5py, in MATLAB's layout: 512-byte text header, MATLAB_class):
     v73_plain.mat          plain double vectors (one of them gzip-chunked)
     v73_controldesk.mat    the ControlDesk layout of controldesk.mat: a struct
@@ -407,6 +419,63 @@ def mf4_fixtures(s):
     mdf_save(mdf, name)
 
 
+def mf4_blocks(s):
+    """Several data blocks and odd records, for the streamed reader."""
+    n = 5000
+    t = np.arange(n) / FS
+    counts = np.round(2000 * np.sin(2 * np.pi * 5 * t)).astype(np.int16)
+    pos = (9 * t).astype(np.float32)
+    opt = np.round(100 + 80 * np.cos(2 * np.pi * 20 * t)).astype(np.uint8)
+    invalid = np.zeros(n, dtype=bool)
+    invalid[[7, 1999, 2000, 2001, 4990]] = True
+    cuts = [0, 1, 17, 600, 601, 1999, 2500, 3333, 4800, n]
+    for name, comp in [("mf4_blocks.mf4", 0), ("mf4_blocks_dz.mf4", 2)]:
+        mdf = MDF(version="4.10")
+        # Data blocks of at most about 1000 bytes (62 records): a data list.
+        mdf.configure(write_fragment_size=1000)
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            sl = slice(a, b)
+            sigs = [
+                Signal(counts[sl], t[sl], name="friction_N", unit="N", invalidation_bits=invalid[sl],
+                       conversion={"a": 0.00025, "b": 2.0}),
+                Signal(pos[sl], t[sl], name="position_mm", unit="mm"),
+                Signal(opt[sl], t[sl], name="optical_V", unit="V",
+                       conversion={"a": 1.0 / 640, "b": 0.1}),
+            ]
+            if a == 0:
+                mdf.append(sigs, acq_name="bench", comment="ballpass fixture")
+            else:
+                mdf.extend(0, [(t[sl], None)] + [(x.samples, x.invalidation_bits) for x in sigs])
+        mdf_save(mdf, name, comp)
+        with MDF(path(name)) as back:
+            f = back.get("friction_N", ignore_invalidation_bits=True)
+            vals = np.where(np.asarray(f.invalidation_bits), np.nan, f.samples)
+            assert np.isnan(vals).sum() == 5
+            assert len(vals) == n
+            expected(name, {"time_s": f.timestamps, "friction_N": vals,
+                            "position_mm": back.get("position_mm").samples.astype(np.float64),
+                            "optical_V": back.get("optical_V").samples})
+
+
+def mf4_analyze(s):
+    """The analysis fixture as an MF4 file: `analyze --stream on` and
+    `--stream off` compared on it (crates/ballpass-cli/tests/analyze.rs)."""
+    src = os.path.join(OUT, "..", "fixtures", "analyze", "input.csv")
+    cols = np.genfromtxt(src, delimiter=",", names=True)
+    t = cols["time_s"]
+    name = "mf4_analyze.mf4"
+    mdf = MDF(version="4.10")
+    mdf.configure(write_fragment_size=4096)
+    mdf.append([Signal(cols[c], t, name=c, unit=u)
+                for c, u in [("friction_N", "N"), ("position_mm", "mm"), ("optical_V", "V")]],
+               acq_name="bench", comment="ballpass analysis fixture")
+    mdf_save(mdf, name)
+    with MDF(path(name)) as back:
+        for c in ["friction_N", "position_mm", "optical_V"]:
+            assert np.array_equal(back.get(c).samples, cols[c]), c
+            assert np.array_equal(back.get(c).timestamps, t), c
+
+
 # ---------------------------------------------------------------- MATLAB v7.3
 
 MATLAB_73_HEADER = (
@@ -572,7 +641,8 @@ def main():
     os.makedirs(OUT, exist_ok=True)
     s = signals()
     every = [tdms_plain, tdms_scaled, tdms_runs, tdms_timed, tdms_interleaved, tdms_bigendian,
-             tdms_daqmx, mf4_fixtures, v73_fixtures, struct_v5, v73_chunked, v73_analyze]
+             tdms_daqmx, mf4_fixtures, mf4_blocks, mf4_analyze, v73_fixtures, struct_v5,
+             v73_chunked, v73_analyze]
     wanted = sys.argv[1:]
     unknown = [w for w in wanted if w not in {f.__name__ for f in every}]
     if unknown:

@@ -2,7 +2,7 @@
 //! the SciPy script doing the same steps (`tools/bench_scipy_long.py`).
 //!
 //! ```text
-//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms|--mat73|--mat73-deflate]
+//! cargo bench -p ballpass-cli --bench long_record -- [HOURS ...] [--no-scipy] [--report] [--stream-on|--stream-off] [--tdms|--mf4|--mat73|--mat73-deflate]
 //! ```
 //!
 //! With `--tdms` the record is written as an NI TDMS file instead
@@ -16,6 +16,10 @@
 //! (`$PYTHON`, else `python3`, with tools/requirements-formats.txt). With
 //! `--stream-on` these two measure the streamed run alone (a 24-hour
 //! record read whole needs several times its 2.8 GB).
+//! With `--mf4`, the same with an ASAM MDF 4 file written by asammdf
+//! (`tools/write_long_mf4.py`: float64 channels on a float64 time master,
+//! 4 MB data blocks), with the Python of `BALLPASS_FORMATS_PYTHON`
+//! (default `python3`; tools/requirements-formats.txt).
 //!
 //! For each duration (default 2 h) it simulates a record at 1 kHz
 //! (`ballpass simulate`, good bearing, 9 mm/s) into a temporary folder,
@@ -149,13 +153,14 @@ fn main() {
             "--tdms" => binary = Some(Binary::Tdms),
             "--mat73" => binary = Some(Binary::Mat73 { deflate: false }),
             "--mat73-deflate" => binary = Some(Binary::Mat73 { deflate: true }),
+            "--mf4" => binary = Some(Binary::Mf4),
             "--bench" => {}
             _ => match a.parse::<f64>() {
                 Ok(h) if h > 0.0 => hours.push(h),
                 _ => {
                     eprintln!(
                         "long_record: unknown argument '{a}' (hours, --no-scipy, --report, \
-                         --stream-on, --stream-off, --tdms, --mat73, --mat73-deflate)"
+                         --stream-on, --stream-off, --tdms, --mf4, --mat73, --mat73-deflate)"
                     );
                     std::process::exit(2);
                 }
@@ -199,8 +204,32 @@ fn record(bin: &Path, dir: &Path, h: f64, rec: &Path) -> Result<(), String> {
 /// A binary format the record is written in (`--tdms`, `--mat73`).
 #[derive(Debug, Clone, Copy)]
 enum Binary {
+    /// NI TDMS (`write_tdms`).
     Tdms,
+    /// ASAM MDF 4 (asammdf, `tools/write_long_mf4.py`).
+    Mf4,
+    /// MATLAB v7.3 (h5py, `tools/make_long_v73.py`).
     Mat73 { deflate: bool },
+}
+
+/// Writes the record of `csv` as an MF4 file at `out` through
+/// `tools/write_long_mf4.py` (asammdf).
+fn write_mf4(tools: &Path, csv: &Path, out: &Path) -> Result<(), String> {
+    let python = std::env::var_os("BALLPASS_FORMATS_PYTHON").unwrap_or_else(|| "python3".into());
+    let o = Command::new(python)
+        .arg(tools.join("write_long_mf4.py"))
+        .arg(csv)
+        .arg(out)
+        .output()
+        .map_err(|e| format!("write_long_mf4.py: {e}"))?;
+    if o.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "write_long_mf4.py: {}",
+            String::from_utf8_lossy(&o.stderr)
+        ))
+    }
 }
 
 /// Writes `rec` as a MATLAB v7.3 file at `out` through
@@ -254,8 +283,8 @@ fn write_mat73(
     }
 }
 
-/// `analyze` of a TDMS or MATLAB v7.3 record streamed and read whole
-/// (`--tdms`, `--mat73`; with `--stream-on` streamed only).
+/// `analyze` of a TDMS, MF4 or MATLAB v7.3 record streamed and read whole
+/// (`--tdms`, `--mf4`, `--mat73`; with `--stream-on` streamed only).
 fn run_binary(
     bin: &Path,
     tools: &Path,
@@ -266,6 +295,7 @@ fn run_binary(
 ) -> Result<(), String> {
     let (label, ext) = match kind {
         Binary::Tdms => ("TDMS record", "tdms"),
+        Binary::Mf4 => ("MF4 record", "mf4"),
         Binary::Mat73 { deflate: false } => ("MATLAB v7.3 record", "mat"),
         Binary::Mat73 { deflate: true } => ("MATLAB v7.3 record (deflate)", "mat"),
     };
@@ -284,12 +314,13 @@ fn run_binary(
         let rec = dir.join(format!("rec_{h}h.{ext}"));
         let whole =
             ballpass::recording::io::load(&csv, &Default::default()).map_err(|e| e.to_string())?;
-        let _ = std::fs::remove_file(&csv);
         match kind {
             Binary::Tdms => ballpass::recording::io::tdms::write_tdms(&whole, &rec, 1000, false)
                 .map_err(|e| e.to_string())?,
+            Binary::Mf4 => write_mf4(tools, &csv, &rec)?,
             Binary::Mat73 { deflate } => write_mat73(&whole, tools, &rec, deflate)?,
         }
+        let _ = std::fs::remove_file(&csv);
         drop(whole);
         let size = std::fs::metadata(&rec).map_err(|e| e.to_string())?.len();
         let mut runs = Vec::new();

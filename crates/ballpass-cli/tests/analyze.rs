@@ -217,6 +217,13 @@ fn a_streamed_matlab_v73_record_gives_the_in_memory_tables() {
     stream_on_equals_off(&library_test_file("data/v73_analyze.mat"), "mat73");
 }
 
+/// The same for the record as an MF4 file (written by asammdf, 13 data
+/// blocks: tools/make_format_fixtures.py).
+#[test]
+fn a_streamed_mf4_record_gives_the_in_memory_tables() {
+    stream_on_equals_off(&library_test_file("data/mf4_analyze.mf4"), "mf4");
+}
+
 /// `analyze REC --stream on` and `--stream off`: the same correlations and
 /// spectra (module docs of the test above).
 fn stream_on_equals_off(rec: &std::path::Path, tag: &str) {

@@ -20,7 +20,8 @@
 //!   (`panicked`, `unwrap`, `binrw`);
 //! - **disagreement**: the CSV fast path read a file differently from the
 //!   general reader, or the streamed reader (`analyze --stream`, the file
-//!   read in 1 kB pieces) differently from the whole-file reader.
+//!   read in 1 kB pieces; a TDMS or MF4 file in blocks of 16 samples)
+//!   differently from the whole-file reader.
 //!
 //! An abort (stack overflow, refused allocation above
 //! [`crate::alloc::HARD_CAP`]) ends the process: the run's exit status
@@ -39,6 +40,7 @@ use ballpass::recording::inspect::{inspect_bytes, InspectSettings};
 use ballpass::recording::io::csv::blocks::check_stream_agrees;
 use ballpass::recording::io::csv::check_fast_path_agrees;
 use ballpass::recording::io::mat::stream::check_stream_agrees as check_mat_stream_agrees;
+use ballpass::recording::io::mf4::stream::check_stream_agrees as check_mf4_stream_agrees;
 use ballpass::recording::io::tdms::stream::check_stream_agrees as check_tdms_stream_agrees;
 use ballpass::recording::io::{contents_of_bytes, load_all_bytes};
 use ballpass::recording::{GapPolicy, LoadOptions, Profile, TimeUnit};
@@ -291,6 +293,7 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
     let stream_file = stream_dir.join("fuzz.csv");
     let stream_tdms = stream_dir.join("fuzz.tdms");
     let stream_mat = stream_dir.join("fuzz.mat");
+    let stream_mf4 = stream_dir.join("fuzz.mf4");
     let have_stream_dir = std::fs::create_dir_all(&stream_dir).is_ok();
     // Seeds by kind, each kind drawn with its weight (so that the many MAT
     // stress files do not crowd out the other formats).
@@ -487,6 +490,16 @@ pub fn run(seeds: &[Seed], config: &Config) -> Report {
                     call("stream", &|| match check_mat_stream_agrees(&stream_mat) {
                         Ok(()) => Ok(()),
                         Err(d) => panic!("streamed and whole-file v7.3 readers disagree: {d}"),
+                    });
+                }
+                // The streamed MF4 reader, from disk as well.
+                if kind == Kind::Mf4
+                    && have_stream_dir
+                    && std::fs::write(&stream_mf4, &input).is_ok()
+                {
+                    call("stream", &|| match check_mf4_stream_agrees(&stream_mf4) {
+                        Ok(()) => Ok(()),
+                        Err(d) => panic!("streamed and whole-file MF4 readers disagree: {d}"),
                     });
                 }
             }

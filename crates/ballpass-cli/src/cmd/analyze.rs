@@ -136,7 +136,7 @@ pub struct AnalyzeArgs {
     check: CheckArgs,
     #[command(flatten)]
     segment: SegmentArgs,
-    /// Read a long CSV/TSV, TDMS or MATLAB v7.3 record block by block in bounded memory
+    /// Read a long CSV/TSV, TDMS, MF4 or MATLAB v7.3 record block by block in bounded memory
     /// (`auto`, the default: files of 1 GiB and more, about 4.5 hours at
     /// 1 kHz as CSV), or always (`on`), or never (`off`: the whole record in
     /// memory, with every output). A streamed record gives no passages,

@@ -296,7 +296,7 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     ``stream`` is the command line's ``--stream``: one record *file* of
     1 GiB or more (``'auto'``), or any size (``'on'``), is read block by
     block in memory that does not grow with its length, if it is a plain
-    CSV/TSV with a uniform time column, a TDMS file or a MATLAB v7.3
+    CSV/TSV with a uniform time column, a TDMS, an MF4 or a MATLAB v7.3
     file; ``'off'`` always
     reads it whole. A streamed record needs a velocity (given or in the
     file); its passages are detected window by window (``to_dict()['stream']``

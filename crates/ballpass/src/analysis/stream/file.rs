@@ -10,6 +10,7 @@ use crate::bearing::Geometry;
 use crate::error::{shown_path, Error, Result};
 use crate::recording::io::csv::blocks::{self, CsvSource};
 use crate::recording::io::mat::stream::{self as mat_stream, MatSource};
+use crate::recording::io::mf4::stream::{self as mf4_stream, Mf4Source};
 use crate::recording::io::tdms::stream::{self as tdms_stream, TdmsSource};
 use crate::recording::io::{resolve, Format};
 use crate::recording::stream::{Block, RecordSource};
@@ -47,7 +48,8 @@ impl StreamMode {
 
 /// Files at least this long are streamed under [`StreamMode::Auto`]:
 /// 1 GiB, about 4.5 hours of three channels at 1 kHz as CSV, 12 hours as
-/// float64 TDMS, 9 hours as MATLAB v7.3 doubles with a time vector.
+/// float64 TDMS, 9 hours as float64 MF4 (with its time channel) or as
+/// MATLAB v7.3 doubles with a time vector.
 pub const STREAM_ABOVE_BYTES: u64 = 1 << 30;
 
 /// How the front end names what the messages ask the user to give.
@@ -68,6 +70,8 @@ pub enum FileSource {
     Tdms(TdmsSource),
     /// A MATLAB v7.3 (HDF5) MAT-file.
     Mat(MatSource),
+    /// An ASAM MDF 4 file.
+    Mf4(Mf4Source),
 }
 
 impl FileSource {
@@ -77,6 +81,7 @@ impl FileSource {
             FileSource::Csv(s) => s.path(),
             FileSource::Tdms(s) => s.path(),
             FileSource::Mat(s) => s.path(),
+            FileSource::Mf4(s) => s.path(),
         }
     }
 
@@ -85,6 +90,7 @@ impl FileSource {
             FileSource::Csv(s) => s,
             FileSource::Tdms(s) => s,
             FileSource::Mat(s) => s,
+            FileSource::Mf4(s) => s,
         }
     }
 
@@ -93,6 +99,7 @@ impl FileSource {
             FileSource::Csv(s) => s,
             FileSource::Tdms(s) => s,
             FileSource::Mat(s) => s,
+            FileSource::Mf4(s) => s,
         }
     }
 }
@@ -180,9 +187,7 @@ pub fn choose(
                     }),
                 Format::Tdms => tdms_stream::open(path, opts)?.map(FileSource::Tdms),
                 Format::Mat => mat_stream::open(path, opts)?.map(FileSource::Mat),
-                Format::Mf4 => Err(
-                    "MF4 files are read whole (CSV/TSV, TDMS and MATLAB v7.3 are streamed)".into(),
-                ),
+                Format::Mf4 => mf4_stream::open(path, opts)?.map(FileSource::Mf4),
             },
         };
     let why = match src {

@@ -36,7 +36,7 @@ pub(crate) mod contain;
 pub mod csv;
 mod finish;
 pub mod mat;
-mod mf4;
+pub mod mf4;
 pub(crate) mod names;
 mod options;
 pub mod tdms;
