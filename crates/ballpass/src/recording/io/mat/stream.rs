@@ -25,6 +25,12 @@
 //! beside a time variable, vectors of different lengths (the whole-file
 //! reader's error), a vector stored in chunks larger than
 //! [`MAX_CHUNK_BYTES`] (each range would inflate a whole chunk again).
+//!
+//! A chunked vector's chunk index is checked whole at [`open`], as the
+//! whole-file reader checks it (a range read sees only its own chunks);
+//! `hdf5-reader` lists chunks only with their data, so this inflates each
+//! chunk once more (found by the fuzz harness: a damaged index entry
+//! outside every range read was refused whole and read streamed).
 
 use std::fmt;
 use std::io::Read;
@@ -183,6 +189,14 @@ pub(crate) fn open_sized(
                 bytes as f64 / 1e6
             )));
         }
+        // A damaged entry of the chunk index outside every range read
+        // would go unseen: the whole-file reader's error instead.
+        d.check_chunk_index().map_err(|r| {
+            format_err(
+                &file_path,
+                format!("variable '{}' cannot be read: {r}", name_of(*role)),
+            )
+        })?;
     }
     let time = if opts.ignore_time {
         None

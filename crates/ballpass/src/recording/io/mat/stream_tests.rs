@@ -181,3 +181,18 @@ fn changed_and_truncated_files_are_errors() {
         assert_eq!(check_stream_agrees(&p), Ok(()), "cut at {cut}");
     }
 }
+
+/// A chunk index entry damaged outside every range read (found by the fuzz
+/// harness, seed 73, execution 43362, a mutation of v73_plain.mat): the
+/// whole-file reader refuses the file, and so does the streamed one.
+#[test]
+fn a_damaged_chunk_index_is_refused_as_whole() {
+    let p = data("fuzzed_v73_chunk_index.mat");
+    let whole = load(&p, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(whole.contains("optical_V"), "{whole}");
+    let e = open_sized(&p, &LoadOptions::default(), 16)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("optical_V") && e.contains("chunk"), "{e}");
+    assert_eq!(check_stream_agrees(&p), Ok(()));
+}

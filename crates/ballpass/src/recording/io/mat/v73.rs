@@ -460,6 +460,52 @@ impl H5Data {
         }))
     }
 
+    /// The whole-file read's checks of a chunked dataset's chunk index,
+    /// which a read of a range makes only for the chunks in its range:
+    /// every chunk inside the dataset, on the chunk grid, and listed once.
+    /// Each chunk is inflated on the way (one at a time; `hdf5-reader`
+    /// lists chunks only with their data).
+    ///
+    /// # Errors
+    /// The reason, for a chunk out of place or a damaged index or chunk.
+    pub fn check_chunk_index(&self) -> R<()> {
+        let ds = &self.ds;
+        let Some(grid) = contain(|| ds.chunks()).flatten() else {
+            return Ok(());
+        };
+        let shape = ds.shape();
+        let walked = contain(|| -> R<()> {
+            let mut seen: Vec<Vec<u64>> = Vec::new();
+            for chunk in ds.iter_chunks().map_err(|e| detail(&e))? {
+                let chunk = chunk.map_err(|e| detail(&e))?;
+                let at = chunk.offsets();
+                let placed = at.len() == shape.len()
+                    && grid.len() == shape.len()
+                    && at
+                        .iter()
+                        .zip(shape)
+                        .zip(&grid)
+                        .all(|((&o, &n), &c)| o < n && c > 0 && o % u64::from(c) == 0);
+                if !placed {
+                    return Err(format!(
+                        "a chunk at offsets {at:?} outside the dataset's {shape:?} in chunks of \
+                         {grid:?}"
+                    ));
+                }
+                seen.push(at.to_vec());
+            }
+            seen.sort_unstable();
+            if let Some(w) = seen.windows(2).find(|w| w[0] == w[1]) {
+                return Err(format!("two chunks at offsets {:?}", w[0]));
+            }
+            Ok(())
+        });
+        match walked {
+            Some(r) => r.map_err(|r| format!("chunk index: {r}")),
+            None => Err("chunk index: it could not be decoded".into()),
+        }
+    }
+
     /// Numbers `at.0..at.1` of a vector (every number for `None`), as
     /// `f64`: the same conversion whole or in ranges.
     ///
