@@ -126,26 +126,10 @@ fn fundamental_spread(band: &[f64]) -> f64 {
 /// Bench `s` with `table` applied, keyed on the passages: the fundamental
 /// of its velocity error's synchronous average and its low-passed std.
 fn run(s: &SimSettings, table: &[f64], pred: &Prediction) -> Result<(C1, f64)> {
-    let mut s1 = s.clone();
-    s1.feedforward = Some(Feedforward {
+    let ff = Feedforward {
         force_n: table.to_vec(),
         key: FeedforwardKey::OpticalPassage,
-    });
-    let sim = simulate(&s1)?;
-    let rec = &sim.recording;
-    let a = analyze(std::slice::from_ref(rec), pred, &AnalyzeSettings::default())?;
-    let w = a
-        .sync
-        .as_ref()
-        .and_then(|y| y.waveform(Signal::VelocityError))
-        .ok_or_else(|| Error::InvalidRecording {
-            source_name: rec.source_name(),
-            reason: "no synchronous average of the run".into(),
-        })?;
-    Ok((
-        coefficient(&w.mean, 1),
-        a.velocity_error
-            .as_ref()
-            .map_or(f64::NAN, |v| v.lowpassed_std_um_s),
-    ))
+    };
+    let (r, mean) = super::compensation_stall::run(s, Some(ff), pred)?;
+    Ok((coefficient(&mean, 1), r.std_um_s))
 }
