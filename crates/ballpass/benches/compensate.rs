@@ -64,6 +64,10 @@ fn main() {
         stall();
         return;
     }
+    if std::env::args().any(|a| a == "--trace") {
+        trace();
+        return;
+    }
     let (n, seed) = n_and_seed(7_000_000);
     println!(
         "v_mm_s,condition,stage,fc_before_um_s,fc_after_um_s,fc_pred_um_s,reduction,std_before_um_s,std_after_um_s,std_pred_um_s,fc_pred_err,std_pred_err"
@@ -246,7 +250,7 @@ fn n_and_seed(default_seed: u64) -> (u64, u64) {
 fn variants() {
     let (n, seed) = n_and_seed(7_600_000);
     println!(
-        "v_mm_s,condition,std_over_v,fc_before_um_s,std_before_um_s,fc_after_um_s,std_after_um_s,fc_pred_um_s,std_pred_um_s,fc_sync_table_um_s,std_sync_table_um_s,fc_model_err_um_s"
+        "v_mm_s,condition,std_over_v,fc_before_um_s,std_before_um_s,fc_after_um_s,std_after_um_s,fc_pred_um_s,std_pred_um_s,fc_sync_table_um_s,std_sync_table_um_s,fc_model_err_um_s,fc_pred_low_um_s,fc_pred_high_um_s,warn_goal,warn_worse"
     );
     for i in 0..n {
         let s = bench(seed, i);
@@ -254,7 +258,7 @@ fn variants() {
             Ok(c) => {
                 let p = &c.product;
                 println!(
-                    "{:.3},{},{:.3},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1},{:.1}",
+                    "{:.3},{},{:.3},{:.1},{:.1},{:.2},{:.1},{:.2},{:.1},{:.1},{:.1},{:.2},{:.2},{:.2},{},{}",
                     p.velocity_mm_s,
                     p.condition.name(),
                     p.std_before_um_s * 1e-3 / p.velocity_mm_s,
@@ -267,6 +271,10 @@ fn variants() {
                     c.sync_table_um_s.0,
                     c.sync_table_um_s.1,
                     c.f_c_model_error_um_s,
+                    p.f_c_predicted_interval_um_s.0,
+                    p.f_c_predicted_interval_um_s.1,
+                    u8::from(p.warned_goal),
+                    u8::from(p.warned_worse),
                 );
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
@@ -385,6 +393,58 @@ fn stall() {
                 );
             }
             Ok(None) => {}
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+}
+
+/// The `--trace` measurement (session 11,
+/// [`ballpass::validate::compensation_fc`]): each bench's fundamentals of
+/// the velocity error recorded, replayed and simulated with the tables
+/// before and after the fundamental's correction. With `--sticking`, only
+/// the sticking benches below 6 mm/s.
+fn trace() {
+    let (n, seed) = n_and_seed(11_000_000);
+    let sticking = std::env::args().any(|a| a == "--sticking");
+    println!(
+        "i,v_mm_s,std_over_v,stage,fn_used,zeta_used,fn_true,zeta_true,g_ratio_re,g_ratio_im,std0,meas_re,meas_im,bare_re,bare_im,rfix_re,rfix_im,rfin_re,rfin_im,tfix_re,tfix_im,tfin_re,tfin_im,std_fix,std_fin,std_rep,ufix_re,ufix_im,ufin_re,ufin_im,periods,band"
+    );
+    for i in 0..n {
+        let s = bench(seed, i);
+        if sticking && (s.condition != ballpass::sim::Condition::Sticking || s.velocity_mm_s > 6.0)
+        {
+            continue;
+        }
+        match ballpass::validate::compensation_fc::trace(&s) {
+            Ok(t) => {
+                let c = |x: (f64, f64)| format!("{:.3},{:.3}", x.0, x.1);
+                println!(
+                    "{i},{:.3},{:.3},{:?},{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.1},{},{},{},{},{},{},{:.1},{:.1},{:.1},{},{},{},{:.3}",
+                    t.velocity_mm_s,
+                    t.std_over_v,
+                    t.stage_source,
+                    t.stage_f_n_zeta.0 .0,
+                    t.stage_f_n_zeta.0 .1,
+                    t.stage_f_n_zeta.1 .0,
+                    t.stage_f_n_zeta.1 .1,
+                    t.g_ratio.0,
+                    t.g_ratio.1,
+                    t.std_before_um_s,
+                    c(t.measured),
+                    c(t.replay_bare),
+                    c(t.replay_fixed),
+                    c(t.replay_final),
+                    c(t.truth_fixed),
+                    c(t.truth_final),
+                    t.std_after_um_s.0,
+                    t.std_after_um_s.1,
+                    t.std_after_um_s.2,
+                    c(t.table_fixed),
+                    c(t.table_final),
+                    t.periods,
+                    t.measured_band_um_s,
+                );
+            }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
         }
     }

@@ -108,6 +108,14 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
             "predicted: f_c component {:.2} -> {:.2} µm/s, velocity-error std (low-passed) {:.1} -> {:.1} µm/s",
             p.f_c_before_um_s, p.f_c_after_um_s, p.std_before_um_s, p.std_after_um_s
         )?;
+        if let (Some(lo), Some(hi)) = (p.f_c_after_low_um_s, p.f_c_after_high_um_s) {
+            writeln!(
+                so,
+                "f_c component after: 80 % of simulated tables left {lo:.2}-{hi:.2} µm/s at this \
+                 replay error ({:.2} µm/s)",
+                p.f_c_model_error_um_s
+            )?;
+        }
         writeln!(so, "wrote {}", text::path(&dir))?;
     }
     so.flush()?;

@@ -31,6 +31,14 @@ pub struct CompensationCheck {
     pub f_c_after_um_s: f64,
     /// The same with the table, predicted, µm/s.
     pub f_c_predicted_um_s: f64,
+    /// The predicted interval of it (10th–90th percentile on the design
+    /// benches), µm/s (NaN without a replay).
+    pub f_c_predicted_interval_um_s: (f64, f64),
+    /// Whether `compensate` warned that the f_c component may be reduced
+    /// by less than the goal.
+    pub warned_goal: bool,
+    /// Whether it warned that the replay predicts a worse velocity error.
+    pub warned_worse: bool,
     /// Low-passed velocity-error std without the table, µm/s.
     pub std_before_um_s: f64,
     /// The same with the table, simulated, µm/s.
@@ -117,6 +125,18 @@ fn check_table(
         f_c_before_um_s: p.f_c_before_um_s,
         f_c_after_um_s: f_c_after,
         f_c_predicted_um_s: p.f_c_after_um_s,
+        f_c_predicted_interval_um_s: (
+            p.f_c_after_low_um_s.unwrap_or(f64::NAN),
+            p.f_c_after_high_um_s.unwrap_or(f64::NAN),
+        ),
+        warned_goal: comp
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("the f_c component may be reduced by less")),
+        warned_worse: comp
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("the replay predicts that the table makes")),
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: std_after,
         std_predicted_um_s: p.std_after_um_s,

@@ -176,7 +176,11 @@ fn learn(table: &mut [f64], r: &[f64], stage: &PdLoop, w_c: f64, harmonics: usiz
 
 /// Bench `s` with `ff` applied (none: as it is): its figures and the
 /// synchronous average of its velocity error, µm/s.
-fn run(s: &SimSettings, ff: Option<Feedforward>, pred: &Prediction) -> Result<(Run, Vec<f64>)> {
+pub(crate) fn run(
+    s: &SimSettings,
+    ff: Option<Feedforward>,
+    pred: &Prediction,
+) -> Result<(Run, Vec<f64>)> {
     let mut s1 = s.clone();
     s1.feedforward = ff;
     let sim = simulate(&s1)?;

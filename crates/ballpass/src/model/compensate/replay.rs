@@ -39,6 +39,22 @@ pub(crate) struct Design {
     /// how far the replay is from the stage it stands for, at the f_c
     /// component.
     pub f_c_model_error_um_s: f64,
+    /// How the design went, for the validation's look inside.
+    pub trace: Trace,
+}
+
+/// The steps of [`design`], for the validation.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Trace {
+    /// The table after the fixed-point rounds, before the fundamental's
+    /// correction.
+    pub fixed_point: Vec<f64>,
+    /// The replay with it.
+    pub fixed_point_after: Replayed,
+    /// The replay without a table.
+    pub bare: Replayed,
+    /// Fundamental of the records' velocity error (coefficient, µm/s).
+    pub measured_v1: Option<(f64, f64)>,
 }
 
 /// The table of `bins` bins the compensated stage meets: starting from the
@@ -82,6 +98,7 @@ pub(crate) fn design(
             .ok_or("the replay did not reach the passages")?;
     }
     let mut after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+    let (fixed_point, fixed_point_after) = (table.clone(), after.clone());
     let measured = a
         .sync
         .as_ref()
@@ -105,6 +122,12 @@ pub(crate) fn design(
         after,
         levels,
         f_c_model_error_um_s,
+        trace: Trace {
+            fixed_point,
+            fixed_point_after,
+            bare,
+            measured_v1: measured,
+        },
     })
 }
 

@@ -221,3 +221,27 @@ fn the_friction_level_is_fitted_to_the_records_velocity_error() {
         truth.std_um_s
     );
 }
+
+#[test]
+fn the_f_c_interval_is_ordered_scaled_by_regime_and_keeps_the_replay_s_residual() {
+    use super::STALL_FRACTION;
+    use super::{f_c_after_interval, F_C_AFTER_OVER_MODEL_ERROR, SEVERE_STALL_FRACTION};
+    // Replay residual 0: the bounds are the calibrated ratios times the
+    // model error, in the regime of the std over the velocity (exact).
+    for (stall, row) in [
+        (0.01, 0),
+        (STALL_FRACTION, 0),
+        (0.3, 1),
+        (SEVERE_STALL_FRACTION, 1),
+        (SEVERE_STALL_FRACTION + 0.01, 2),
+    ] {
+        let got = f_c_after_interval(0.0, 10.0, stall);
+        let want = F_C_AFTER_OVER_MODEL_ERROR[row].map(|k| 10.0 * k);
+        assert_eq!(got, want, "stall {stall}");
+        assert!(got[0] <= got[1] && got[1] <= got[2]);
+    }
+    // A replay that itself predicts a large residual keeps it as the floor
+    // of every bound (hypot).
+    let got = f_c_after_interval(300.0, 4.0, 0.7);
+    assert!(got.iter().all(|&x| (300.0..300.1).contains(&x)), "{got:?}");
+}
