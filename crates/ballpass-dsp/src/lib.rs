@@ -11,8 +11,10 @@ pub mod filtfilt_stream;
 pub mod fir;
 pub mod gradient;
 pub mod iir;
+pub mod lfilter_fast;
 pub mod lsq;
 pub mod lti;
+pub mod lti_fast;
 mod npcomplex;
 pub mod peaks;
 pub mod segment_power;
@@ -40,11 +42,13 @@ pub use iir::{
     butter, butter_zpk, cheby1, cheby1_zpk, zpk2sos, ButterSettings, Cheby1Settings, FilterBand,
     Zpk,
 };
+pub use lfilter_fast::lfilter_fast;
 pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
 pub use lti::{
     bode, freqs, freqs_values, freqz, freqz_values, sosfreqz, sosfreqz_values, unwrap,
     AnalogResponse, Bode, DigitalResponse,
 };
+pub use lti_fast::freqs_values_fast;
 pub use peaks::{
     find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
     FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,

@@ -37,7 +37,7 @@ pub struct DigitalResponse {
     pub h: Vec<Complex64>,
 }
 
-fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
+pub(crate) fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
     check_finite(what, p)?;
     if p.iter().all(|v| *v == 0.0) {
         return Err(invalid(what, "polynomial is identically zero"));
@@ -92,12 +92,15 @@ pub fn freqs_values(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Vec<Complex
 /// other), each lane with exactly the arithmetic of a point on its own.
 /// 16: two or more independent chains per register width, so that the
 /// Horner steps' latency is hidden.
-const LANES: usize = 16;
+pub(crate) const LANES: usize = 16;
 
 /// `eval` on the points `x` in blocks of [`LANES`] (the last block padded
 /// with zeros, its extra results dropped): one result per point.
 #[inline(always)]
-fn by_blocks(x: &[f64], mut eval: impl FnMut(&[f64; LANES], &mut [Complex64])) -> Vec<Complex64> {
+pub(crate) fn by_blocks(
+    x: &[f64],
+    mut eval: impl FnMut(&[f64; LANES], &mut [Complex64]),
+) -> Vec<Complex64> {
     let mut h = vec![Complex64::new(0.0, 0.0); x.len()];
     for (xs, hs) in x.chunks(LANES).zip(h.chunks_mut(LANES)) {
         let mut block = [0.0; LANES];
@@ -111,7 +114,7 @@ fn by_blocks(x: &[f64], mut eval: impl FnMut(&[f64; LANES], &mut [Complex64])) -
 /// imaginary parts, with `polyval`'s operations (`y s` as the complex
 /// product with `s.re = 0`, then `+ (c, 0)`).
 #[inline(always)]
-fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+pub(crate) fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
     let (mut yr, mut yi) = ([0.0; LANES], [0.0; LANES]);
     for &c in p {
         for k in 0..LANES {
@@ -221,7 +224,7 @@ fn unit_delays(f: &[f64; LANES], fs_hz: f64) -> ([f64; LANES], [f64; LANES]) {
 /// Smith division, bit for bit) written as selects instead of branches, so
 /// the lanes run in SIMD.
 #[inline(always)]
-fn div_lanes(
+pub(crate) fn div_lanes(
     (ar, ai): ([f64; LANES], [f64; LANES]),
     (br, bi): ([f64; LANES], [f64; LANES]),
     h: &mut [Complex64],
