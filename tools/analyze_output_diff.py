@@ -8,7 +8,10 @@ repeats, seeds 1-2), every output table and every number of `to_dict()`.
 
 `compare` prints, per output table (and for the JSON's numbers), the largest
 relative difference |a - b| / max(|a|, |b|) over the 16 analyses (0 where
-both are 0), and whether every verdict, warning list and non-numeric field
+both are 0); for the tables also the largest difference relative to its
+column's largest magnitude (an element near zero, a cross spectrum's
+imaginary part at a bin where it changes sign, has a large relative
+difference from a change at the column's rounding level); and whether every verdict, warning list and non-numeric field
 is equal. Pinned versions: tools/requirements-py.txt.
 """
 import pickle
@@ -64,6 +67,7 @@ def rel(a, b):
 def compare(pa, pb):
     a, b = (pickle.load(open(p, "rb")) for p in (pa, pb))
     worst = {}
+    colscaled = {}
     other = []
     verdicts_equal = True
     for key in a:
@@ -100,9 +104,17 @@ def compare(pa, pb):
                 if r > worst.get(name, (0.0,))[0]:
                     worst[name] = (r, key, col)
                 worst.setdefault(name, (0.0, key, col))
+                if x.shape == y.shape and np.all(np.isfinite(x)) and np.all(np.isfinite(y)):
+                    scale = max(np.abs(x).max(), np.abs(y).max(), 1e-300)
+                    c = float(np.abs(x - y).max() / scale)
+                    if c > colscaled.get(name, (0.0,))[0]:
+                        colscaled[name] = (c, key, col)
+                    colscaled.setdefault(name, (0.0, key, col))
     print(f"verdicts equal on all {len(a)} analyses: {verdicts_equal}")
     for name, (r, key, where) in sorted(worst.items()):
         print(f"{name:28s} max relative difference {r:.3e}  ({key}, {where})")
+    for name, (r, key, where) in sorted(colscaled.items()):
+        print(f"{name:28s} max difference / column's largest magnitude {r:.3e}  ({key}, {where})")
     print(f"non-numeric differences: {len(other)}")
     for o in other[:20]:
         print("  ", o)
