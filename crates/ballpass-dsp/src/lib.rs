@@ -14,7 +14,6 @@ pub mod iir;
 pub mod lfilter_fast;
 pub mod lsq;
 pub mod lti;
-pub mod lti_fast;
 mod npcomplex;
 pub mod peaks;
 pub mod segment_power;
@@ -48,7 +47,6 @@ pub use lti::{
     bode, freqs, freqs_values, freqz, freqz_values, sosfreqz, sosfreqz_values, unwrap,
     AnalogResponse, Bode, DigitalResponse,
 };
-pub use lti_fast::freqs_values_fast;
 pub use peaks::{
     find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,
     FindPeaksSettings, PeakProperties, PeakWidthsSettings, Peaks, Prominences, Widths,

@@ -37,7 +37,7 @@ pub struct DigitalResponse {
     pub h: Vec<Complex64>,
 }
 
-pub(crate) fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
+fn check_poly(what: &'static str, p: &[f64]) -> Result<()> {
     check_finite(what, p)?;
     if p.iter().all(|v| *v == 0.0) {
         return Err(invalid(what, "polynomial is identically zero"));
@@ -92,15 +92,12 @@ pub fn freqs_values(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Vec<Complex
 /// other), each lane with exactly the arithmetic of a point on its own.
 /// 16: two or more independent chains per register width, so that the
 /// Horner steps' latency is hidden.
-pub(crate) const LANES: usize = 16;
+const LANES: usize = 16;
 
 /// `eval` on the points `x` in blocks of [`LANES`] (the last block padded
 /// with zeros, its extra results dropped): one result per point.
 #[inline(always)]
-pub(crate) fn by_blocks(
-    x: &[f64],
-    mut eval: impl FnMut(&[f64; LANES], &mut [Complex64]),
-) -> Vec<Complex64> {
+fn by_blocks(x: &[f64], mut eval: impl FnMut(&[f64; LANES], &mut [Complex64])) -> Vec<Complex64> {
     let mut h = vec![Complex64::new(0.0, 0.0); x.len()];
     for (xs, hs) in x.chunks(LANES).zip(h.chunks_mut(LANES)) {
         let mut block = [0.0; LANES];
@@ -114,7 +111,7 @@ pub(crate) fn by_blocks(
 /// imaginary parts, with `polyval`'s operations (`y s` as the complex
 /// product with `s.re = 0`, then `+ (c, 0)`).
 #[inline(always)]
-pub(crate) fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
     let (mut yr, mut yi) = ([0.0; LANES], [0.0; LANES]);
     for &c in p {
         for k in 0..LANES {
@@ -224,7 +221,7 @@ fn unit_delays(f: &[f64; LANES], fs_hz: f64) -> ([f64; LANES], [f64; LANES]) {
 /// Smith division, bit for bit) written as selects instead of branches, so
 /// the lanes run in SIMD.
 #[inline(always)]
-pub(crate) fn div_lanes(
+fn div_lanes(
     (ar, ai): ([f64; LANES], [f64; LANES]),
     (br, bi): ([f64; LANES], [f64; LANES]),
     h: &mut [Complex64],

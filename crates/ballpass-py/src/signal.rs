@@ -746,8 +746,7 @@ fn complex(py: Python<'_>, h: Vec<dsp::Complex64>) -> CArr1<'_> {
     h.into_pyarray(py)
 }
 
-/// `scipy.signal.freqs(b, a, worN=w)`: `H(j w)` (by
-/// `ballpass_dsp::freqs_values_fast`: SciPy's numbers, not its rounding).
+/// `scipy.signal.freqs(b, a, worN=w)`: `H(j w)`.
 #[pyfunction]
 fn freqs<'py>(
     py: Python<'py>,
@@ -757,7 +756,7 @@ fn freqs<'py>(
 ) -> PyResult<CArr1<'py>> {
     let (b, a, w) = (slice1(&b)?, slice1(&a)?, slice1(&w)?);
     let h = py
-        .detach(|| dsp::freqs_values_fast(b, a, w))
+        .detach(|| dsp::freqs_values(b, a, w))
         .map_err(errors::dsp)?;
     Ok(complex(py, h))
 }
