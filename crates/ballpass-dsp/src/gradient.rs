@@ -231,14 +231,10 @@ mod tests {
         // carries one more rounding of 1/(2h): the two differ by at most
         // 2 ulp relative (bound 4.5e-16), on steps that are not powers of two.
         for h in [1e-3, 1.0 / 3.0, 0.7, 1.0 / 4096.0, 123.456] {
-            let mut s = 1u64;
-            let f: Vec<f64> = (0..1000)
-                .map(|i| {
-                    s = s
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    (i as f64 * 0.01).sin() + ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
-                })
+            let f: Vec<f64> = crate::test_noise::noise(1000, 1)
+                .into_iter()
+                .enumerate()
+                .map(|(i, v)| (i as f64 * 0.01).sin() + v)
                 .collect();
             let g = gradient(&f, Spacing::Uniform(h)).unwrap();
             for i in 1..f.len() - 1 {

@@ -269,15 +269,13 @@ mod tests {
     use super::*;
     use crate::{butter, cheby1, FilterBand};
 
+    /// Test noise plus a slow sine on an offset (a filter's slow poles
+    /// see a step at the start).
     fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut s = seed;
-        (0..n)
-            .map(|i| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5 + (i as f64 * 0.01).sin() + 3.0
-            })
+        crate::test_noise::noise(n, seed)
+            .into_iter()
+            .enumerate()
+            .map(|(i, v)| v + (i as f64 * 0.01).sin() + 3.0)
             .collect()
     }
 
