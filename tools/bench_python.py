@@ -3,14 +3,19 @@
 same arrays (call overhead included on both sides).
 
 1. ``ballpass.analyze`` on one 30 s three-channel record (1 kHz, simulated at
-   9 mm/s) against the SciPy pipeline doing the same numeric steps
-   (``tools/reference_analyze.py``'s ``analyze``: gradient, Butterworth
+   9 mm/s) against the SciPy pipeline doing the same steps:
+   ``tools/reference_stages.py``'s ``pipeline`` = the load-cell correction,
+   ``tools/reference_analyze.py``'s numeric core (gradient, Butterworth
    sosfiltfilt + detrend of three channels, six full correlations, Welch
-   auto/cross spectra and coherence, decimate + high-resolution spectra).
-   ballpass also measures the period, phases, harmonics with their
-   significance and the optical passages, which the SciPy side does not, so
-   the ratio is conservative. The ballpass side starts from the numpy arrays
-   (it builds the Recording inside the timing).
+   auto/cross spectra and coherence with their chi-square bands, decimate +
+   high-resolution spectra, the unfiltered spectra), the stage
+   identification, the optical passages, the measured period, phases and
+   harmonic tests, the synchronous average and the position-domain spectra
+   (each stage is listed there with the ballpass module it mirrors). The
+   numeric core alone is timed too (``analyze, numeric core only``: the
+   figure earlier releases compared against). The ballpass side starts from
+   the numpy arrays (it builds the Recording inside the timing).
+   ``--stages`` also prints the SciPy pipeline's time per stage.
 2. Each ``ballpass.signal`` function on 30 000 samples against the same
    ``scipy.signal`` (``numpy.gradient``) call.
 
@@ -55,6 +60,7 @@ from ballpass import signal as bs  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import reference_analyze as ref  # noqa: E402
+import reference_stages as stages  # noqa: E402
 from bench_scipy_analyze import ref_namespace  # noqa: E402
 
 
@@ -81,6 +87,7 @@ def pair(ours, theirs, repeat):
 
 
 def analyze_case(repeat):
+    """(ballpass, SciPy's whole pipeline, SciPy's numeric core) per call, s."""
     rec, _ = ballpass.simulate(9.0, seed=1)  # 30 s at 1 kHz, three channels
     fs = rec.fs_hz
     fr, pos, opt = rec.friction_n, rec.position_mm, rec.optical_v
@@ -91,11 +98,29 @@ def analyze_case(repeat):
         return ballpass.analyze(r)
 
     def theirs():
+        return stages.pipeline(fs, fr, pos, opt, args)
+
+    def core():
         return ref.analyze(fs, fr, pos, opt, args)
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return pair(ours, theirs, repeat)
+        t_bp, t_sp = pair(ours, theirs, repeat)
+        t_core = best(core, repeat)
+        return t_bp, t_sp, t_core
+
+
+def scipy_stages(repeat):
+    """Best CPU time of each stage of the SciPy pipeline, s."""
+    rec, _ = ballpass.simulate(9.0, seed=1)
+    args = ref_namespace(9.0, "unused")
+    got = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(repeat):
+            stages.pipeline(rec.fs_hz, rec.friction_n, rec.position_mm, rec.optical_v, args,
+                            timer=lambda n, t: got.__setitem__(n, min(got.get(n, float("inf")), t)))
+    return got
 
 
 def kernel_cases():
@@ -144,6 +169,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--json", default=None)
     ap.add_argument("--cpu", action="store_true", help="time CPU, not the wall clock")
+    ap.add_argument("--stages", action="store_true", help="the SciPy pipeline's CPU time per stage")
     a = ap.parse_args()
     global TIMER
     if a.cpu:
@@ -153,10 +179,18 @@ def main():
           f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}, "
           f"RAYON_NUM_THREADS={os.environ.get('RAYON_NUM_THREADS', 'unset')}")
     out = {}
-    t_bp, t_sp = analyze_case(a.repeat)
-    out["analyze_30s"] = {"ballpass_s": t_bp, "scipy_s": t_sp, "speedup": t_sp / t_bp}
+    t_bp, t_sp, t_core = analyze_case(a.repeat)
+    out["analyze_30s"] = {"ballpass_s": t_bp, "scipy_s": t_sp, "speedup": t_sp / t_bp,
+                          "scipy_numeric_core_s": t_core}
     print(f"{'analyze, one 30 s 3-channel record':38s} ballpass {t_bp * 1e3:9.2f} ms   "
           f"scipy {t_sp * 1e3:9.2f} ms   {t_sp / t_bp:6.1f}x")
+    print(f"{'analyze, numeric core only':38s} ballpass {t_bp * 1e3:9.2f} ms   "
+          f"scipy {t_core * 1e3:9.2f} ms   {t_core / t_bp:6.1f}x")
+    if a.stages:
+        per = scipy_stages(a.repeat)
+        out["scipy_stages_s"] = per
+        for name, t in per.items():
+            print(f"  scipy stage: {name:50s} {t * 1e3:8.2f} ms (CPU)")
     for name, call in kernel_cases():
         t_bp, t_sp = pair(lambda: call(bs), lambda: call(ss), a.repeat)
         out[name] = {"ballpass_us": t_bp * 1e6, "scipy_us": t_sp * 1e6, "speedup": t_sp / t_bp}

@@ -11,6 +11,7 @@ pub mod filtfilt_stream;
 pub mod fir;
 pub mod gradient;
 pub mod iir;
+pub mod lfilter_fast;
 pub mod lsq;
 pub mod lti;
 mod npcomplex;
@@ -40,6 +41,7 @@ pub use iir::{
     butter, butter_zpk, cheby1, cheby1_zpk, zpk2sos, ButterSettings, Cheby1Settings, FilterBand,
     Zpk,
 };
+pub use lfilter_fast::lfilter_fast;
 pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
 pub use lti::{
     bode, freqs, freqs_values, freqz, freqz_values, sosfreqz, sosfreqz_values, unwrap,

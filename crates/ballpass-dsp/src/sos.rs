@@ -536,7 +536,7 @@ pub struct LfilterOutput {
     pub zf: Vec<f64>,
 }
 
-fn check_ba(b: &[f64], a: &[f64]) -> Result<()> {
+pub(crate) fn check_ba(b: &[f64], a: &[f64]) -> Result<()> {
     check_finite("b", b)?;
     check_finite("a", a)?;
     if a[0] == 0.0 {

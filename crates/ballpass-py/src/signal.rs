@@ -493,8 +493,11 @@ fn sosfiltfilt<'py>(
     stack(py, flat, m, width)
 }
 
-/// `scipy.signal.lfilter(b, a, x)` on each row; with `zi` of shape `(rows,
-/// K)` the final states too.
+/// `scipy.signal.lfilter(b, a, x)` on each row (long rows of a
+/// well-conditioned filter split into chunks run side by side,
+/// `ballpass_dsp::lfilter_fast`: SciPy's numbers to ~1e-10, not its
+/// rounding); with `zi` of shape `(rows, K)` the final states too (SciPy's
+/// loop: the final state needs the whole run).
 #[pyfunction]
 #[pyo3(signature = (b, a, x, zi=None))]
 fn lfilter<'py>(
@@ -507,7 +510,7 @@ fn lfilter<'py>(
     let (b, a) = (slice1(&b)?, slice1(&a)?);
     let (xs, m, n) = rows(&x)?;
     let Some(zi) = zi else {
-        let (flat, width) = map_rows(py, xs, m, n, |r| dsp::lfilter(b, a, r))?;
+        let (flat, width) = map_rows(py, xs, m, n, |r| dsp::lfilter_fast(b, a, r))?;
         return Ok((stack(py, flat, m, width)?, None));
     };
     let (zs, mz, k) = rows(&zi)?;

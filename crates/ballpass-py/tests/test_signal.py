@@ -324,6 +324,31 @@ def test_lfilter(i):
     assert_close_norm(zf, zfs)
 
 
+def test_lfilter_long_signals_in_chunks():
+    # Long signals run in chunks side by side (ballpass_dsp::lfilter_fast)
+    # when the filter's recurrence amplifies rounding little; the others
+    # run SciPy's loop. Either way SciPy's numbers to 1e-9 norm-wise
+    # (the chunked path is built for ~1e-10). Designs in b, a form from
+    # order 1 to 8, cutoffs 2-300 Hz at 1 kHz, with and without a
+    # remainder of the 8 chunks; 2-D along both axes.
+    rng = np.random.default_rng(7)
+    for n in (2048, 2051, 30_000):
+        x = rng.uniform(-0.5, 0.5, n) + np.sin(2 * np.pi * 1.1 * np.arange(n) / 1000.0) + 3.0
+        for order in range(1, 9):
+            for fc in (2.0, 20.0, 50.0, 300.0):
+                b, a = ss.butter(order, fc, fs=1000.0)
+                y, ys = both("lfilter", b, a, x)
+                assert_close_norm(y, ys, what=f"butter({order}, {fc}) n={n}")
+        b, a = ss.cheby1(4, 0.5, 40.0, fs=1000.0)
+        y, ys = both("lfilter", b, a, x)
+        assert_close_norm(y, ys, what=f"cheby1 n={n}")
+    b, a = ss.butter(5, 20.0, fs=1000.0)
+    x2 = rng.standard_normal((3, 4000))
+    for axis, arr in ((-1, x2), (0, x2.T.copy())):
+        y, ys = both("lfilter", b, a, arr, axis=axis)
+        assert_close_norm(y, ys, what=f"2-D axis {axis}")
+
+
 # ---------------------------------------------------------------- responses
 
 

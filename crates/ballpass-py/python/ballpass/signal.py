@@ -596,7 +596,11 @@ def lfilter(b, a, x, axis=-1, zi=None):
     """Filters ``x`` with the transfer function ``b(z) / a(z)``
     (``scipy.signal.lfilter``, direct form II transposed). With ``zi``
     (``x``'s shape with ``axis`` of length ``max(len(a), len(b)) - 1``)
-    returns ``(y, zf)``."""
+    returns ``(y, zf)``. Without ``zi``, a long signal (2 048 samples or
+    more) through a filter whose recurrence does not amplify rounding much
+    is cut into 8 chunks filtered side by side, each corrected by the
+    free response of the state it inherits: SciPy's numbers to ~1e-10 of
+    the output's scale, not its rounding, several times faster."""
     b = np.atleast_1d(np.asarray(b))
     a = np.atleast_1d(np.asarray(a))
     if not (b.ndim == 1 and b.size > 0):
