@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3] [N] [--list]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4] [N] [--list]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -11,7 +11,10 @@
 //! were first frozen), `fresh2` seeds 8_000_001..=8_000_000+N (never looked
 //! at before the edge search and the AC-coupling step of the second
 //! revision were frozen), `fresh3` seeds 11_000_001..=11_000_000+N (never
-//! looked at before the AC coupling's plausibility check was frozen). Prints the Markdown tables of the report; `--list` also
+//! looked at before the AC coupling's plausibility check was frozen),
+//! `fresh4` seeds 14_000_001..=14_000_000+N (never looked at before the
+//! gap-following baseline and the overlap flag were frozen). Prints the
+//! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %.
 
@@ -33,8 +36,9 @@ fn main() {
         "fresh" => 1_000_001,
         "fresh2" => 8_000_001,
         "fresh3" => 11_000_001,
+        "fresh4" => 14_000_001,
         other => {
-            eprintln!("unknown set {other}: train, fresh, fresh2 or fresh3");
+            eprintln!("unknown set {other}: train, fresh, fresh2, fresh3 or fresh4");
             std::process::exit(2);
         }
     };

@@ -94,6 +94,9 @@
 //!   interference with a coherent source (thesis Fig. 32, §5.2).
 //! - [`ConditionKind::MissedPassages`]: gaps longer than 1.6 τ_c.
 //! - [`ConditionKind::PeriodMismatch`]: measured `τ_c` far from the prediction.
+//! - [`ConditionKind::OverlappingPulses`]: the light never returns to dark
+//!   between pulses, so the widths are lower bounds, possibly short by more
+//!   than [`LOWER_BOUND_SHORTFALL`] ([`PulseOverlap`]).
 //!
 //! How often each is right on benches it was never tuned on is measured by
 //! [`crate::validate::passages`].
@@ -110,6 +113,7 @@ mod conditions;
 mod fits;
 mod lsq;
 mod measure;
+mod overlap;
 mod pulse_fit;
 mod scan;
 mod settings;
@@ -118,6 +122,7 @@ mod template;
 #[cfg(test)]
 mod tests;
 
+pub use overlap::{PulseOverlap, LOWER_BOUND_SHORTFALL};
 pub use settings::PassageSettings;
 use signal::{gaussian_smooth, median, noise_sigma, rms_difference_sigma, running_percentile};
 
@@ -194,6 +199,9 @@ pub enum ConditionKind {
     MissedPassages,
     /// The measured period is far from the predicted one.
     PeriodMismatch,
+    /// The pulses overlap so much that the light never returns to dark
+    /// between them: the widths are lower bounds.
+    OverlappingPulses,
 }
 
 impl ConditionKind {
@@ -205,6 +213,7 @@ impl ConditionKind {
             ConditionKind::InvertedPulses => "inverted_pulses",
             ConditionKind::MissedPassages => "missed_passages",
             ConditionKind::PeriodMismatch => "period_mismatch",
+            ConditionKind::OverlappingPulses => "overlapping_pulses",
         }
     }
 }
@@ -365,6 +374,10 @@ pub struct PassageAnalysis {
     /// Full width at half maximum of the record's mean pulse (the template), s.
     #[serde(default)]
     pub template_fwhm_s: f64,
+    /// How much the pulses overlap and how far low that can leave the
+    /// widths (`None` when the mean pulse gives no answer).
+    #[serde(default)]
+    pub overlap: Option<PulseOverlap>,
     /// Passages found (both polarities).
     pub count: usize,
     /// Of which inverted.
@@ -619,6 +632,13 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         f_c,
         f_c_predicted,
     });
+    // Overlap of pulses one median period apart (the template's units are
+    // blocks, its stretch the pulses' mean).
+    let overlap = PulseOverlap::of(&m.template, &m.shape, med_tau * fs / q);
+    let mut conditions = conditions;
+    if let Some(c) = overlap.and_then(|o| o.condition()) {
+        conditions.push(c);
+    }
     let rel_err = f_c_predicted.map(|p| (f_c - p) / p);
 
     let d_avg_implied = velocity.map(|v| v * tau_c_stats.mean / 2.0);
@@ -696,6 +716,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         false_detections_per_record: alpha,
         ac_time_constant_s: ac.map(|a| a.0),
         template_fwhm_s: fwhm_s,
+        overlap,
         count: passages.len(),
         count_inverted: inverted,
         tau_c_s: tau_c_stats,

@@ -191,6 +191,13 @@ pub struct PassageScore {
     pub width_error_stated: Option<f64>,
     /// Passages whose width entered the mean.
     pub widths_used: Option<usize>,
+    /// The analysis reported its widths as lower bounds (overlapping
+    /// pulses, [`crate::analysis::passage::PulseOverlap`]).
+    #[serde(default)]
+    pub width_lower_bound: bool,
+    /// The analysis' possible width shortfall from the overlap (a fraction).
+    #[serde(default)]
+    pub width_shortfall: Option<f64>,
     /// Largest `|t_detected − t_true|` of the matched required passages, in `τ_c`.
     pub worst_timing_tau_c: Option<f64>,
     /// Mean `t_detected − t_true` of the matched required passages, in `τ_c`.
@@ -374,6 +381,8 @@ pub fn score_with(
                 width_error: None,
                 width_error_stated: None,
                 widths_used: None,
+                width_lower_bound: false,
+                width_shortfall: None,
                 worst_timing_tau_c: None,
                 mean_timing_tau_c: None,
                 timing_tau_c: Vec::new(),
@@ -443,6 +452,8 @@ pub fn score_with(
         width_error: width.map(|w| w / true_width_s - 1.0),
         width_error_stated: width.map(|w| w / fwhm - 1.0),
         widths_used: Some(a.tau_p_s.n),
+        width_lower_bound: a.overlap.is_some_and(|o| o.widths_lower_bound),
+        width_shortfall: a.overlap.map(|o| o.width_shortfall),
         worst_timing_tau_c: timing.iter().map(|e| e.abs()).reduce(f64::max),
         mean_timing_tau_c: (!timing.is_empty())
             .then(|| timing.iter().sum::<f64>() / timing.len() as f64),

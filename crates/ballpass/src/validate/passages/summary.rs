@@ -106,6 +106,16 @@ pub struct Headline {
     pub width_within_3pct_snr10: Rate,
     /// Signed mean width error (the bias), at SNR ≥ 10.
     pub width_bias_snr10: f64,
+    /// Records at SNR ≥ 10 whose widths the analysis reported as lower
+    /// bounds (overlapping pulses).
+    pub width_lower_bound_snr10: Rate,
+    /// Of those, the ones whose bound held: the width not above the truth
+    /// by more than 3 %, nor below it by more than the stated shortfall
+    /// and 3 %.
+    pub width_bound_held_snr10: Rate,
+    /// Records at SNR ≥ 10 whose width is within 3 %, or reported as a
+    /// lower bound that held.
+    pub width_within_3pct_or_bound_snr10: Rate,
 }
 
 impl Headline {
@@ -143,7 +153,29 @@ impl Headline {
             .filter(|r| r.bench.snr >= 10.0)
             .filter_map(|r| r.width_error)
             .collect();
+        let snr10_rows: Vec<&&PassageScore> = s.iter().filter(|r| r.bench.snr >= 10.0).collect();
+        let held = |r: &PassageScore| {
+            r.width_error
+                .is_some_and(|e| e <= 0.03 && e >= -(r.width_shortfall.unwrap_or(0.0) + 0.03))
+        };
+        let bound: Vec<&&&PassageScore> =
+            snr10_rows.iter().filter(|r| r.width_lower_bound).collect();
         Self {
+            width_lower_bound_snr10: Rate::of(bound.len(), snr10_rows.len()),
+            width_bound_held_snr10: Rate::of(bound.iter().filter(|r| held(r)).count(), bound.len()),
+            width_within_3pct_or_bound_snr10: Rate::of(
+                snr10_rows
+                    .iter()
+                    .filter(|r| {
+                        if r.width_lower_bound {
+                            held(r)
+                        } else {
+                            r.width_error.is_some_and(|e| e.abs() <= 0.03)
+                        }
+                    })
+                    .count(),
+                snr10_rows.len(),
+            ),
             records: s.len(),
             detection: Rate::of(required - missed, required),
             false_passages: Rate::of(spurious, detected),
@@ -519,6 +551,18 @@ impl PassageSummary {
             (
                 "width within 3 % at SNR ≥ 10",
                 rate(&h.width_within_3pct_snr10),
+            ),
+            (
+                "widths reported as lower bounds at SNR ≥ 10",
+                rate(&h.width_lower_bound_snr10),
+            ),
+            (
+                "of those, the bound held (≤ +3 %, ≥ −(shortfall + 3 %))",
+                rate(&h.width_bound_held_snr10),
+            ),
+            (
+                "width within 3 %, or a lower bound that held, at SNR ≥ 10",
+                rate(&h.width_within_3pct_or_bound_snr10),
             ),
             ("width bias at SNR ≥ 10, %", pct(h.width_bias_snr10)),
         ];
