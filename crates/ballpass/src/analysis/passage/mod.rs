@@ -95,8 +95,8 @@
 //! - [`ConditionKind::MissedPassages`]: gaps longer than 1.6 τ_c.
 //! - [`ConditionKind::PeriodMismatch`]: measured `τ_c` far from the prediction.
 //! - [`ConditionKind::OverlappingPulses`]: the light never returns to dark
-//!   between pulses, so the widths are lower bounds, possibly short by more
-//!   than [`LOWER_BOUND_SHORTFALL`] ([`PulseOverlap`]).
+//!   between pulses, so the widths may read low, by an estimated more
+//!   than [`REPORTED_SHORTFALL`] ([`PulseOverlap`]).
 //!
 //! How often each is right on benches it was never tuned on is measured by
 //! [`crate::validate::passages`].
@@ -122,7 +122,7 @@ mod template;
 #[cfg(test)]
 mod tests;
 
-pub use overlap::{PulseOverlap, LOWER_BOUND_SHORTFALL};
+pub use overlap::{PulseOverlap, REPORTED_SHORTFALL};
 pub use settings::PassageSettings;
 use signal::{gaussian_smooth, median, noise_sigma, rms_difference_sigma, running_percentile};
 
@@ -200,7 +200,7 @@ pub enum ConditionKind {
     /// The measured period is far from the predicted one.
     PeriodMismatch,
     /// The pulses overlap so much that the light never returns to dark
-    /// between them: the widths are lower bounds.
+    /// between them: the widths may read low.
     OverlappingPulses,
 }
 

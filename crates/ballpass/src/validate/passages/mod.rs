@@ -191,7 +191,7 @@ pub struct PassageScore {
     pub width_error_stated: Option<f64>,
     /// Passages whose width entered the mean.
     pub widths_used: Option<usize>,
-    /// The analysis reported its widths as lower bounds (overlapping
+    /// The analysis reported that its widths may read low (overlapping
     /// pulses, [`crate::analysis::passage::PulseOverlap`]).
     #[serde(default)]
     pub width_lower_bound: bool,
@@ -452,7 +452,7 @@ pub fn score_with(
         width_error: width.map(|w| w / true_width_s - 1.0),
         width_error_stated: width.map(|w| w / fwhm - 1.0),
         widths_used: Some(a.tau_p_s.n),
-        width_lower_bound: a.overlap.is_some_and(|o| o.widths_lower_bound),
+        width_lower_bound: a.overlap.is_some_and(|o| o.widths_may_read_low),
         width_shortfall: a.overlap.map(|o| o.width_shortfall),
         worst_timing_tau_c: timing.iter().map(|e| e.abs()).reduce(f64::max),
         mean_timing_tau_c: (!timing.is_empty())

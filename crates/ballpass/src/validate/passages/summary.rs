@@ -553,15 +553,15 @@ impl PassageSummary {
                 rate(&h.width_within_3pct_snr10),
             ),
             (
-                "widths reported as lower bounds at SNR ≥ 10",
+                "widths reported as possibly low (overlapping pulses) at SNR ≥ 10",
                 rate(&h.width_lower_bound_snr10),
             ),
             (
-                "of those, the bound held (≤ +3 %, ≥ −(shortfall + 3 %))",
+                "of those, within the stated range (≤ +3 %, ≥ −(shortfall + 3 %))",
                 rate(&h.width_bound_held_snr10),
             ),
             (
-                "width within 3 %, or a lower bound that held, at SNR ≥ 10",
+                "width within 3 %, or within the stated range when reported, at SNR ≥ 10",
                 rate(&h.width_within_3pct_or_bound_snr10),
             ),
             ("width bias at SNR ≥ 10, %", pct(h.width_bias_snr10)),
