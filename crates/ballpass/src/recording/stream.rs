@@ -7,8 +7,10 @@
 //! and hands the samples over in consecutive [`Block`]s, from the start,
 //! each time [`RecordSource::pass`] is called.
 
+use std::path::Path;
+
 use super::{Channel, Metadata, Recording};
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Consecutive samples of every channel of a record (equal lengths).
 #[derive(Debug, Clone, Copy, Default)]
@@ -123,6 +125,30 @@ impl RecordSource for RecordingSource<'_> {
         }
         Ok(())
     }
+}
+
+/// The I/O error of reading `path` (the stream sources' reads).
+pub(crate) fn io_error(path: &Path, source: std::io::Error) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Errors unless the file at `path` is still `size` bytes long, as when a
+/// stream source opened it: a source reads its file again on every pass,
+/// and a file changed in between would give a record of two files.
+pub(crate) fn check_unchanged(path: &Path, size: u64) -> Result<()> {
+    let now = std::fs::metadata(path)
+        .map_err(|e| io_error(path, e))?
+        .len();
+    if now == size {
+        return Ok(());
+    }
+    Err(Error::Format {
+        path: path.to_path_buf(),
+        reason: format!("the file changed while it was read ({now} bytes, {size} when opened)"),
+    })
 }
 
 /// The samples of one [`RecordSource::pass`], one series per channel of

@@ -39,10 +39,10 @@ use std::path::{Path, PathBuf};
 use super::tree::Data;
 use super::v73::{H5Data, V73File};
 use super::{format_err, is_v73, parse_file, File, Role};
-use crate::error::{excerpt, Error, Result};
+use crate::error::{excerpt, Result};
 use crate::recording::io::tdms::stream::first_block;
 use crate::recording::io::{finish, resolve, timebase, LoadOptions, Locator, RawColumn, RawTable};
-use crate::recording::stream::{Block, RecordSource};
+use crate::recording::stream::{check_unchanged, io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
 /// Samples per block handed to the analysis (and per range read).
@@ -102,19 +102,12 @@ pub fn open(path: &Path, opts: &LoadOptions) -> Result<std::result::Result<MatSo
     open_sized(path, opts, BLOCK_SAMPLES)
 }
 
-fn io(path: &Path, source: std::io::Error) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// The first bytes of `path`, up to where a v7.3 file's HDF5 signature is.
 fn head(path: &Path) -> Result<Vec<u8>> {
     let mut head = Vec::with_capacity(520);
     std::fs::File::open(path)
         .and_then(|f| f.take(520).read_to_end(&mut head))
-        .map_err(|e| io(path, e))?;
+        .map_err(|e| io_error(path, e))?;
     Ok(head)
 }
 
@@ -134,7 +127,7 @@ pub(crate) fn open_sized(
     }
     let block = block.max(Recording::MIN_SAMPLES);
     let size = std::fs::metadata(&file_path)
-        .map_err(|e| io(&file_path, e))?
+        .map_err(|e| io_error(&file_path, e))?
         .len();
     if !is_v73(&head(&file_path)?) {
         return Ok(Err(
@@ -316,16 +309,7 @@ impl RecordSource for MatSource {
 
     fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
         let path = &self.path;
-        let size = std::fs::metadata(path).map_err(|e| io(path, e))?.len();
-        if size != self.size {
-            return Err(format_err(
-                path,
-                format!(
-                    "the file changed while it was read ({size} bytes, {} when opened)",
-                    self.size
-                ),
-            ));
-        }
+        check_unchanged(path, self.size)?;
         let mut at = 0;
         while at < self.len {
             let n = first_block(self.len - at, self.block);

@@ -43,7 +43,7 @@ use crate::recording::io::timebase::{self, TimeError};
 use crate::recording::io::{
     finish, name_record, resolve, LoadOptions, Locator, RawColumn, RawTable, TimeUnit,
 };
-use crate::recording::stream::{Block, RecordSource};
+use crate::recording::stream::{check_unchanged, io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
 /// Samples per block handed to the analysis (and per window of records).
@@ -97,22 +97,17 @@ pub fn open(path: &Path, opts: &LoadOptions) -> Result<std::result::Result<Mf4So
     open_sized(path, opts, BLOCK_SAMPLES)
 }
 
-fn io(path: &Path, source: std::io::Error) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// The file opened for reads of what is asked for only, and its length.
 fn open_file(path: &Path) -> Result<(Mf4File, u64)> {
     use std::io::Read;
     let mut head = Vec::with_capacity(8);
     std::fs::File::open(path)
         .and_then(|f| f.take(8).read_to_end(&mut head))
-        .map_err(|e| io(path, e))?;
+        .map_err(|e| io_error(path, e))?;
     check_magic(path, &head)?;
-    let size = std::fs::metadata(path).map_err(|e| io(path, e))?.len();
+    let size = std::fs::metadata(path)
+        .map_err(|e| io_error(path, e))?
+        .len();
     let len = usize::try_from(size).map_err(|_| format_err(path, "file too large"))?;
     let source = BufferedSource::open(path).map_err(|e| format_err(path, e.to_string()))?;
     let file = mdf("damaged MDF file", || {
@@ -502,16 +497,7 @@ impl RecordSource for Mf4Source {
 
     fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
         let path = &self.path;
-        let size = std::fs::metadata(path).map_err(|e| io(path, e))?.len();
-        if size != self.size {
-            return Err(format_err(
-                path,
-                format!(
-                    "the file changed while it was read ({size} bytes, {} when opened)",
-                    self.size
-                ),
-            ));
-        }
+        check_unchanged(path, self.size)?;
         let mut chunks = Chunks::new(&self.file, &self.read, self.block, self.len)
             .map_err(|r| format_err(path, r))?;
         let mut at = 0;

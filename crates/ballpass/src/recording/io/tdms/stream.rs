@@ -33,11 +33,11 @@ use super::segments::{Bytes, Object, Run, R, TY_DAQMX};
 use super::values::{check_run, decode, scaled, scaling, Scaling};
 use super::{channel_err, column, format_err, plan};
 use crate::error::excerpt;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::recording::io::{
     finish, name_record, resolve, timebase, LoadOptions, Locator, RawTable, TimeUnit,
 };
-use crate::recording::stream::{Block, RecordSource};
+use crate::recording::stream::{check_unchanged, io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
 /// Samples per block handed to the analysis.
@@ -101,13 +101,6 @@ fn read_at(file: &mut File, at: usize, buf: &mut [u8]) -> R<()> {
         .map_err(|e| format!("reading {} bytes at byte {at}: {e}", buf.len()))
 }
 
-fn io(path: &Path, source: std::io::Error) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// [`open`] with the block and window sizes given (the tests use small ones).
 pub(crate) fn open_sized(
     path: &Path,
@@ -123,8 +116,8 @@ pub(crate) fn open_sized(
         ));
     }
     let sizes = (sizes.0.max(Recording::MIN_SAMPLES), sizes.1.max(64));
-    let mut file = File::open(&file_path).map_err(|e| io(&file_path, e))?;
-    let size = file.metadata().map_err(|e| io(&file_path, e))?.len();
+    let mut file = File::open(&file_path).map_err(|e| io_error(&file_path, e))?;
+    let size = file.metadata().map_err(|e| io_error(&file_path, e))?.len();
     let size = usize::try_from(size).map_err(|_| format_err(&file_path, "file too large"))?;
     let t = super::read(
         &file_path,
@@ -262,6 +255,7 @@ fn scan_time(
     size: usize,
     opts: &LoadOptions,
 ) -> Option<(timebase::Timebase, Option<String>)> {
+    // One lane of the readers' kind; its channel label is not used here.
     let lane = [(Channel::Position, o.clone())];
     let mut rd = readers(path, &lane, (cap, size)).ok()?;
     // TDMS states no time unit: the option's, else seconds.
@@ -462,17 +456,8 @@ impl RecordSource for TdmsSource {
 
     fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
         let path = &self.path;
-        let mut file = File::open(path).map_err(|e| io(path, e))?;
-        let size = file.metadata().map_err(|e| io(path, e))?.len();
-        if size != self.size as u64 {
-            return Err(format_err(
-                path,
-                format!(
-                    "the file changed while it was read ({size} bytes, {} when scanned)",
-                    self.size
-                ),
-            ));
-        }
+        check_unchanged(path, self.size as u64)?;
+        let mut file = File::open(path).map_err(|e| io_error(path, e))?;
         let mut readers = readers(path, &self.lanes, (self.sizes.1, self.size))?;
         let mut at = 0;
         while at < self.len {
