@@ -24,6 +24,15 @@ pub struct Block<'a> {
 }
 
 impl<'a> Block<'a> {
+    /// Every sample of `rec`, as one block.
+    pub fn of(rec: &'a Recording) -> Self {
+        Block {
+            friction_n: rec.channel(Channel::Friction),
+            position_mm: rec.channel(Channel::Position),
+            optical_v: rec.channel(Channel::Optical),
+        }
+    }
+
     /// The block of one channel, if the record has it.
     pub fn channel(&self, c: Channel) -> Option<&'a [f64]> {
         match c {
@@ -218,4 +227,23 @@ pub fn check_agrees<S: RecordSource>(
         }
     }
     Ok(())
+}
+
+/// The stream sources' tests' check: `src` has `whole`'s rate, length,
+/// channels and metadata, and (twice, pass after pass) every sample of it
+/// to the bit.
+#[cfg(test)]
+pub(crate) fn assert_streams_as(src: &mut dyn RecordSource, whole: &Recording, label: &str) {
+    assert_eq!(src.fs_hz().to_bits(), whole.fs_hz().to_bits(), "{label}");
+    assert_eq!(src.len(), whole.len(), "{label}");
+    assert_eq!(src.channels(), whole.channels(), "{label}");
+    assert_eq!(src.meta(), &whole.meta, "{label}");
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for _ in 0..2 {
+        let got = collect(src).unwrap();
+        for (g, c) in got.iter().zip(Channel::ALL) {
+            let w = whole.channel(c).unwrap_or(&[]);
+            assert!(bits(g) == bits(w), "{label} {c:?}");
+        }
+    }
 }

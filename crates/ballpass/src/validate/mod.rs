@@ -12,6 +12,7 @@ pub mod fleets;
 pub mod passages;
 pub mod score;
 pub mod suite;
+pub mod thesis_batch;
 
 pub use bench::{BearingDraw, Bench, Domain, Range, Sticking};
 pub use estimate::{estimate_domain, DomainEstimate};

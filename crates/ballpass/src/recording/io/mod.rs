@@ -39,6 +39,7 @@ pub mod mat;
 pub mod mf4;
 pub(crate) mod names;
 mod options;
+pub(crate) mod scanned;
 pub mod tdms;
 pub mod timebase;
 pub(crate) mod units;

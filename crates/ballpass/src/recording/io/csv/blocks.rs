@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use super::stream::{for_each_piece, HEAD_BYTES, PIECE_BYTES};
 use super::{table, Header, Plan};
 use crate::error::{Error, Result};
+use crate::recording::io::scanned::piece_options;
 use crate::recording::io::{finish, timebase, Format, LoadOptions};
 use crate::recording::stream::{Block, RecordSource};
 use crate::recording::{Channel, Metadata};
@@ -126,18 +127,6 @@ pub(crate) fn open_sized(
     }))
 }
 
-/// The options a piece is finished with: the rate given, its time column
-/// (checked by the scan) not read again, no period check (the whole
-/// record's is the analysis').
-fn piece_options(opts: &LoadOptions, fs_hz: f64) -> LoadOptions {
-    LoadOptions {
-        fs_hz: Some(fs_hz),
-        ignore_time: true,
-        velocity_mm_s: None,
-        ..opts.clone()
-    }
-}
-
 impl CsvSource {
     /// The file read.
     pub fn path(&self) -> &Path {
@@ -177,11 +166,7 @@ impl RecordSource for CsvSource {
                 }
                 let t = table(&path, header, plan, rows, opts)?;
                 for rec in finish::finish(&path, t, opts)? {
-                    f(Block {
-                        friction_n: rec.channel(Channel::Friction),
-                        position_mm: rec.channel(Channel::Position),
-                        optical_v: rec.channel(Channel::Optical),
-                    })?;
+                    f(Block::of(&rec))?;
                 }
                 Ok(())
             },

@@ -34,15 +34,15 @@
 
 use std::fmt;
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::tree::Data;
 use super::v73::{H5Data, V73File};
 use super::{format_err, is_v73, parse_file, File, Role};
 use crate::error::{excerpt, Result};
-use crate::recording::io::tdms::stream::first_block;
-use crate::recording::io::{finish, resolve, timebase, LoadOptions, Locator, RawColumn, RawTable};
-use crate::recording::stream::{check_unchanged, io_error, Block, RecordSource};
+use crate::recording::io::scanned::{first_block, piece_options, scanned_getters, Scanned};
+use crate::recording::io::{finish, resolve, timebase, LoadOptions, RawColumn};
+use crate::recording::stream::{io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
 /// Samples per block handed to the analysis (and per range read).
@@ -66,28 +66,16 @@ struct Lane {
 
 /// A MATLAB v7.3 record read in ranges ([`open`]).
 pub struct MatSource {
-    path: PathBuf,
-    /// The file's length when it was opened.
-    size: u64,
+    scan: Scanned,
     /// Samples per block.
     block: usize,
     lanes: Vec<Lane>,
-    /// The options each block is finished with (the record's rate given).
-    piece_opts: LoadOptions,
-    start_time_s: f64,
-    fs_hz: f64,
-    len: usize,
-    channels: Vec<Channel>,
-    meta: Metadata,
 }
 
 impl fmt::Debug for MatSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("MatSource")
-            .field("path", &self.path)
-            .field("fs_hz", &self.fs_hz)
-            .field("len", &self.len)
-            .field("channels", &self.channels)
+            .field("scan", &self.scan)
             .finish_non_exhaustive()
     }
 }
@@ -264,87 +252,61 @@ pub(crate) fn open_sized(
     let mut meta = rec.meta.clone();
     meta.velocity_mm_s = opts.velocity_mm_s;
     Ok(Ok(MatSource {
-        path: file_path,
-        size,
+        scan: Scanned {
+            path: file_path,
+            size,
+            piece_opts: LoadOptions {
+                fs_from: None,
+                ..piece_options(opts, fs_hz)
+            },
+            start_time_s: meta.start_time_s,
+            fs_hz,
+            len,
+            channels: rec.channels(),
+            meta,
+        },
         block,
         lanes,
-        piece_opts: LoadOptions {
-            fs_hz: Some(fs_hz),
-            fs_from: None,
-            ignore_time: true,
-            velocity_mm_s: None,
-            ..opts.clone()
-        },
-        start_time_s: meta.start_time_s,
-        fs_hz,
-        len,
-        channels: rec.channels(),
-        meta,
     }))
 }
 
 impl MatSource {
     /// The file read.
     pub fn path(&self) -> &Path {
-        &self.path
+        self.scan.path()
     }
 }
 
 impl RecordSource for MatSource {
-    fn fs_hz(&self) -> f64 {
-        self.fs_hz
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    fn channels(&self) -> Vec<Channel> {
-        self.channels.clone()
-    }
-
-    fn meta(&self) -> &Metadata {
-        &self.meta
-    }
+    scanned_getters!();
 
     fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
-        let path = &self.path;
-        check_unchanged(path, self.size)?;
-        let mut at = 0;
-        while at < self.len {
-            let n = first_block(self.len - at, self.block);
-            let mut channels = Vec::with_capacity(self.lanes.len());
-            for lane in &self.lanes {
-                let values = lane.data.numbers_in(Some((at, at + n))).map_err(|r| {
-                    format_err(
-                        path,
-                        format!("variable '{}' cannot be read: {r}", lane.column.name),
-                    )
-                })?;
-                channels.push((
-                    lane.channel,
-                    RawColumn {
-                        values,
-                        ..lane.column.clone()
-                    },
-                ));
-            }
-            let table = RawTable {
-                channels,
-                locator: Locator::SamplesFrom(at),
-                start_time_s: Some(self.start_time_s + at as f64 / self.fs_hz),
-                ..RawTable::default()
-            };
-            for rec in finish::finish(path, table, &self.piece_opts)? {
-                f(Block {
-                    friction_n: rec.channel(Channel::Friction),
-                    position_mm: rec.channel(Channel::Position),
-                    optical_v: rec.channel(Channel::Optical),
-                })?;
-            }
-            at += n;
-        }
-        Ok(())
+        self.scan.unchanged()?;
+        let (scan, lanes) = (&self.scan, &self.lanes);
+        scan.blocks(
+            self.block,
+            &mut |at, n| {
+                lanes
+                    .iter()
+                    .map(|lane| {
+                        let values = lane.data.numbers_in(Some((at, at + n))).map_err(|r| {
+                            format_err(
+                                &scan.path,
+                                format!("variable '{}' cannot be read: {r}", lane.column.name),
+                            )
+                        })?;
+                        Ok((
+                            lane.channel,
+                            RawColumn {
+                                values,
+                                ..lane.column.clone()
+                            },
+                        ))
+                    })
+                    .collect()
+            },
+            f,
+        )
     }
 }
 

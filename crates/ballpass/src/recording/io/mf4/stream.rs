@@ -29,7 +29,7 @@
 //! window's records), and compressed data blocks that inflate past
 //! [`MAX_INFLATED_BYTES`].
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use falcon_mdf::blocks::ChannelType;
@@ -39,11 +39,12 @@ use falcon_mdf::Mf4File;
 
 use super::{check_magic, format_err, mdf, open_options, time_unit, values, Mapping, R};
 use crate::error::{excerpt, shown_path, Error, Result};
+use crate::recording::io::scanned::{first_block, piece_options, scanned_getters, Scanned};
 use crate::recording::io::timebase::{self, TimeError};
 use crate::recording::io::{
     finish, name_record, resolve, LoadOptions, Locator, RawColumn, RawTable, TimeUnit,
 };
-use crate::recording::stream::{check_unchanged, io_error, Block, RecordSource};
+use crate::recording::stream::{io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
 /// Samples per block handed to the analysis (and per window of records).
@@ -54,9 +55,7 @@ pub const MAX_INFLATED_BYTES: u64 = 64 << 20;
 
 /// An MF4 record read in pieces ([`open`]).
 pub struct Mf4Source {
-    path: PathBuf,
-    /// The file's length when it was opened.
-    size: u64,
+    scan: Scanned,
     /// The file's metadata and handle (boxed: it is large).
     file: Box<Mf4File>,
     /// Samples per block.
@@ -66,22 +65,12 @@ pub struct Mf4Source {
     /// Each channel of the record, the index in `read` of the file's
     /// channel it is read from, and that column's name and unit.
     lanes: Vec<(Channel, usize, RawColumn)>,
-    /// The options each block is finished with (the record's rate given).
-    piece_opts: LoadOptions,
-    start_time_s: f64,
-    fs_hz: f64,
-    len: usize,
-    channels: Vec<Channel>,
-    meta: Metadata,
 }
 
 impl std::fmt::Debug for Mf4Source {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Mf4Source")
-            .field("path", &self.path)
-            .field("fs_hz", &self.fs_hz)
-            .field("len", &self.len)
-            .field("channels", &self.channels)
+            .field("scan", &self.scan)
             .finish_non_exhaustive()
     }
 }
@@ -326,41 +315,21 @@ pub(crate) fn open_sized(
     name_record(path, &mut meta, opts);
     let fs_hz = rec.fs_hz();
     Ok(Ok(Mf4Source {
-        path: file_path.clone(),
-        size,
+        scan: Scanned {
+            path: file_path.clone(),
+            size,
+            piece_opts: piece_options(opts, fs_hz),
+            start_time_s: meta.start_time_s,
+            fs_hz,
+            len,
+            channels: rec.channels(),
+            meta,
+        },
         file: Box::new(file),
         block,
         read,
         lanes,
-        piece_opts: piece_options(opts, fs_hz),
-        start_time_s: meta.start_time_s,
-        fs_hz,
-        len,
-        channels: rec.channels(),
-        meta,
     }))
-}
-
-/// The options a block is finished with: the record's rate given, the
-/// time column (checked by the scan) not read again, no period check (the
-/// whole record's is the analysis').
-fn piece_options(opts: &LoadOptions, fs_hz: f64) -> LoadOptions {
-    LoadOptions {
-        fs_hz: Some(fs_hz),
-        ignore_time: true,
-        velocity_mm_s: None,
-        ..opts.clone()
-    }
-}
-
-/// Samples in the block starting at 0: `block`, or all when what would be
-/// left is shorter than a recording.
-fn first_block(len: usize, block: usize) -> usize {
-    if len.saturating_sub(block) < Recording::MIN_SAMPLES {
-        len
-    } else {
-        block
-    }
 }
 
 /// Reads the time channel in windows: its steps, in seconds (each value
@@ -474,52 +443,27 @@ fn columns(
 impl Mf4Source {
     /// The file read.
     pub fn path(&self) -> &Path {
-        &self.path
+        self.scan.path()
     }
 }
 
 impl RecordSource for Mf4Source {
-    fn fs_hz(&self) -> f64 {
-        self.fs_hz
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    fn channels(&self) -> Vec<Channel> {
-        self.channels.clone()
-    }
-
-    fn meta(&self) -> &Metadata {
-        &self.meta
-    }
+    scanned_getters!();
 
     fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
-        let path = &self.path;
-        check_unchanged(path, self.size)?;
-        let mut chunks = Chunks::new(&self.file, &self.read, self.block, self.len)
-            .map_err(|r| format_err(path, r))?;
-        let mut at = 0;
-        while at < self.len {
-            let n = first_block(self.len - at, self.block);
-            let values = chunks.next(n).map_err(|r| format_err(path, r))?;
-            let table = RawTable {
-                channels: columns(&self.lanes, values),
-                locator: Locator::SamplesFrom(at),
-                start_time_s: Some(self.start_time_s + at as f64 / self.fs_hz),
-                ..RawTable::default()
-            };
-            for rec in finish::finish(path, table, &self.piece_opts)? {
-                f(Block {
-                    friction_n: rec.channel(Channel::Friction),
-                    position_mm: rec.channel(Channel::Position),
-                    optical_v: rec.channel(Channel::Optical),
-                })?;
-            }
-            at += n;
-        }
-        Ok(())
+        self.scan.unchanged()?;
+        let scan = &self.scan;
+        let mut chunks = Chunks::new(&self.file, &self.read, self.block, scan.len)
+            .map_err(|r| format_err(&scan.path, r))?;
+        let lanes = &self.lanes;
+        scan.blocks(
+            self.block,
+            &mut |_, n| {
+                let values = chunks.next(n).map_err(|r| format_err(&scan.path, r))?;
+                Ok(columns(lanes, values))
+            },
+            f,
+        )
     }
 }
 

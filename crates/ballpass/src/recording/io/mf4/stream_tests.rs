@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use super::*;
 use crate::recording::io::{load, GapPolicy};
-use crate::recording::stream::collect;
+use crate::recording::stream::{assert_streams_as, collect};
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -20,10 +20,6 @@ fn scratch(test: &str) -> crate::test_scratch::Scratch {
     crate::test_scratch::scratch_in("mf4", test)
 }
 
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|x| x.to_bits()).collect()
-}
-
 /// Streams `path` under `opts` in blocks of `block` samples and asserts
 /// rate, length, channels, metadata and (twice, pass after pass) every
 /// sample equal to the whole-file read's bits.
@@ -32,17 +28,7 @@ fn same_as_whole(path: &Path, opts: &LoadOptions, block: usize) {
     let mut src = open_sized(path, opts, block)
         .unwrap()
         .unwrap_or_else(|why| panic!("{}: declined: {why}", path.display()));
-    assert_eq!(src.fs_hz().to_bits(), whole.fs_hz().to_bits());
-    assert_eq!(src.len(), whole.len());
-    assert_eq!(src.channels(), whole.channels());
-    assert_eq!(src.meta(), &whole.meta);
-    for _ in 0..2 {
-        let got = collect(&mut src).unwrap();
-        for (g, c) in got.iter().zip(Channel::ALL) {
-            let w = whole.channel(c).unwrap_or(&[]);
-            assert!(bits(g) == bits(w), "{} {c:?}", path.display());
-        }
-    }
+    assert_streams_as(&mut src, &whole, &path.display().to_string());
 }
 
 #[test]

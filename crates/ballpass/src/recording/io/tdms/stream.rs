@@ -27,17 +27,18 @@
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::segments::{Bytes, Object, Run, R, TY_DAQMX};
 use super::values::{check_run, decode, scaled, scaling, Scaling};
 use super::{channel_err, column, format_err, plan};
 use crate::error::excerpt;
 use crate::error::Result;
+use crate::recording::io::scanned::{first_block, piece_options, scanned_getters, Scanned};
 use crate::recording::io::{
     finish, name_record, resolve, timebase, LoadOptions, Locator, RawTable, TimeUnit,
 };
-use crate::recording::stream::{check_unchanged, io_error, Block, RecordSource};
+use crate::recording::stream::{io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
 /// Samples per block handed to the analysis.
@@ -48,20 +49,11 @@ pub const WINDOW_BYTES: usize = 16 << 20;
 /// A TDMS record read in pieces ([`open`]).
 #[derive(Debug)]
 pub struct TdmsSource {
-    path: PathBuf,
-    /// The file's length when it was scanned.
-    size: usize,
+    scan: Scanned,
     /// Samples per block, bytes per read window.
     sizes: (usize, usize),
     /// Each channel and the object it is read from.
     lanes: Vec<(Channel, Object)>,
-    /// The options each block is finished with (the record's rate given).
-    piece_opts: LoadOptions,
-    start_time_s: f64,
-    fs_hz: f64,
-    len: usize,
-    channels: Vec<Channel>,
-    meta: Metadata,
 }
 
 /// Opens `path` (a TDMS file, or `FILE#GROUP`) for streaming: `Ok(Err(why))`
@@ -221,21 +213,18 @@ pub(crate) fn open_sized(
     }
     name_record(path, &mut meta, opts);
     Ok(Ok(TdmsSource {
-        path: file_path,
-        size,
+        scan: Scanned {
+            path: file_path,
+            size: size as u64,
+            piece_opts: piece_options(opts, rec.fs_hz()),
+            start_time_s: meta.start_time_s,
+            fs_hz: rec.fs_hz(),
+            len,
+            channels: rec.channels(),
+            meta,
+        },
         sizes,
         lanes,
-        piece_opts: LoadOptions {
-            fs_hz: Some(rec.fs_hz()),
-            ignore_time: true,
-            velocity_mm_s: None,
-            ..opts.clone()
-        },
-        start_time_s: meta.start_time_s,
-        fs_hz: rec.fs_hz(),
-        len,
-        channels: rec.channels(),
-        meta,
     }))
 }
 
@@ -281,16 +270,6 @@ fn scan_time(
     let note = (unit != TimeUnit::S)
         .then(|| format!("time '{}' read in {}", excerpt(&o.label()), unit.symbol()));
     Some((base, note))
-}
-
-/// Samples in the block starting at 0: `block`, or all when what would be
-/// left is shorter than a recording.
-pub(crate) fn first_block(len: usize, block: usize) -> usize {
-    if len.saturating_sub(block) < Recording::MIN_SAMPLES {
-        len
-    } else {
-        block
-    }
 }
 
 /// Where one series (a channel's values, or a DAQmx scaler's) is read.
@@ -433,52 +412,25 @@ fn read_block(
 impl TdmsSource {
     /// The file read.
     pub fn path(&self) -> &Path {
-        &self.path
+        self.scan.path()
     }
 }
 
 impl RecordSource for TdmsSource {
-    fn fs_hz(&self) -> f64 {
-        self.fs_hz
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    fn channels(&self) -> Vec<Channel> {
-        self.channels.clone()
-    }
-
-    fn meta(&self) -> &Metadata {
-        &self.meta
-    }
+    scanned_getters!();
 
     fn pass(&mut self, f: &mut dyn FnMut(Block<'_>) -> Result<()>) -> Result<()> {
-        let path = &self.path;
-        check_unchanged(path, self.size as u64)?;
+        self.scan.unchanged()?;
+        let (scan, lanes) = (&self.scan, &self.lanes);
+        let path = scan.path();
         let mut file = File::open(path).map_err(|e| io_error(path, e))?;
-        let mut readers = readers(path, &self.lanes, (self.sizes.1, self.size))?;
-        let mut at = 0;
-        while at < self.len {
-            let n = first_block(self.len - at, self.sizes.0);
-            let columns = read_block(path, &mut file, &self.lanes, &mut readers, n)?;
-            let table = RawTable {
-                channels: columns,
-                locator: Locator::SamplesFrom(at),
-                start_time_s: Some(self.start_time_s + at as f64 / self.fs_hz),
-                ..RawTable::default()
-            };
-            for rec in finish::finish(path, table, &self.piece_opts)? {
-                f(Block {
-                    friction_n: rec.channel(Channel::Friction),
-                    position_mm: rec.channel(Channel::Position),
-                    optical_v: rec.channel(Channel::Optical),
-                })?;
-            }
-            at += n;
-        }
-        Ok(())
+        let window = (self.sizes.1, scan.size as usize);
+        let mut readers = readers(path, lanes, window)?;
+        scan.blocks(
+            self.sizes.0,
+            &mut |_, n| read_block(path, &mut file, lanes, &mut readers, n),
+            f,
+        )
     }
 }
 
