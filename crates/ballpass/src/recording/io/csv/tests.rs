@@ -1,5 +1,6 @@
 //! The text reader's fast path against the general reader, and the dialects.
 
+use super::header::sniff_delimiter;
 use super::*;
 
 /// Rows of `text` by the fast path (`None` if it declines) and by the
