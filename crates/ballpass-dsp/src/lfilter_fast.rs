@@ -58,9 +58,9 @@ const SETTLED: f64 = 8.470_329_472_543_003e-22;
 /// As [`lfilter`].
 pub fn lfilter_fast(b: &[f64], a: &[f64], x: &[f64]) -> Result<Vec<f64>> {
     check_ba(b, a)?;
-    check_finite("x", x)?;
     let n = b.len().max(a.len());
     if a.len() == 1 || !(2..=10).contains(&n) || x.len() < LANES * MIN_CHUNK {
+        check_finite("x", x)?;
         return lfilter(b, a, x);
     }
     let mut bn = [0.0; 10];
@@ -72,9 +72,15 @@ pub fn lfilter_fast(b: &[f64], a: &[f64], x: &[f64]) -> Result<Vec<f64>> {
         *d = s / a[0];
     }
     if amplification(&an[..n]) > MAX_AMPLIFICATION {
+        check_finite("x", x)?;
         return lfilter(b, a, x);
     }
-    Ok(match n {
+    // `x` is checked through the filtering from rest: a NaN or infinity
+    // at `x[i]` makes `b0 x[i]` and so `y[i]` NaN or infinite (`0 inf` is
+    // NaN), and adding the free responses keeps it so. Only then is `x`
+    // scanned (a finite `x` whose output overflows is returned as is, as
+    // SciPy does).
+    let (y, finite) = match n {
         2 => chunked::<2>(&bn, &an, x),
         3 => chunked::<3>(&bn, &an, x),
         4 => chunked::<4>(&bn, &an, x),
@@ -84,7 +90,11 @@ pub fn lfilter_fast(b: &[f64], a: &[f64], x: &[f64]) -> Result<Vec<f64>> {
         8 => chunked::<8>(&bn, &an, x),
         9 => chunked::<9>(&bn, &an, x),
         _ => chunked::<10>(&bn, &an, x),
-    })
+    };
+    if !finite {
+        check_finite("x", x)?;
+    }
+    Ok(y)
 }
 
 /// Largest [`amplification`] run in chunks. Measured on Butterworth and
@@ -107,25 +117,47 @@ const MAX_AMPLIFICATION: f64 = 5e-10;
 /// gives SciPy's numbers.
 fn amplification(a: &[f64]) -> f64 {
     let sum: f64 = a.iter().map(|v| v.abs()).sum();
-    let mut min_mag = f64::INFINITY;
-    for i in 0..=256 {
-        let w = std::f64::consts::PI * i as f64 / 256.0;
-        let (s, c) = w.sin_cos();
-        // A(e^{-iw}) by Horner in z^{-1} = (c, -s).
-        let (mut re, mut im) = (0.0, 0.0);
-        for &ak in a.iter().rev() {
-            (re, im) = (re * c + im * s + ak, im * c - re * s);
-        }
-        min_mag = min_mag.min(re.hypot(im));
+    // e^{iw} stepped by a rotation of pi / 256 (an estimate: the drift of
+    // 256 steps, ~1e-14, does not matter), |A|^2 without square roots;
+    // the exact form if the squares leave the normal range.
+    let (ds, dc) = (std::f64::consts::PI / 256.0).sin_cos();
+    let (mut c, mut s) = (1.0, 0.0);
+    let mut min_sq = f64::INFINITY;
+    for _ in 0..=256 {
+        let (re, im) = eval_conj(a, c, s);
+        min_sq = min_sq.min(re * re + im * im);
+        (c, s) = (c * dc - s * ds, s * dc + c * ds);
     }
+    let min_mag = if min_sq.is_normal() {
+        min_sq.sqrt()
+    } else {
+        (0..=256)
+            .map(|i| {
+                let (s, c) = (std::f64::consts::PI * i as f64 / 256.0).sin_cos();
+                let (re, im) = eval_conj(a, c, s);
+                re.hypot(im)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
     f64::EPSILON * sum / min_mag
+}
+
+/// `A(e^{-iw})` by Horner in `z^{-1} = (c, -s)`, `(c, s) = (cos w, sin w)`.
+fn eval_conj(a: &[f64], c: f64, s: f64) -> (f64, f64) {
+    let (mut re, mut im) = (0.0, 0.0);
+    for &ak in a.iter().rev() {
+        (re, im) = (re * c + im * s + ak, im * c - re * s);
+    }
+    (re, im)
 }
 
 /// DF-II-T state of every lane: `z[j][k]` is state `j` of lane `k` (state
 /// `N - 1` stays zero, so that the update is one loop).
 type State<const N: usize> = [[f64; LANES]; N];
 
-fn chunked<const N: usize>(b: &[f64; 10], a: &[f64; 10], x: &[f64]) -> Vec<f64> {
+/// The filter of [`lfilter_fast`] by chunks, and whether every output
+/// filtered from rest was finite.
+fn chunked<const N: usize>(b: &[f64; 10], a: &[f64; 10], x: &[f64]) -> (Vec<f64>, bool) {
     let b: [f64; N] = std::array::from_fn(|j| b[j]);
     let a: [f64; N] = std::array::from_fn(|j| a[j]);
     let n = x.len();
@@ -135,7 +167,7 @@ fn chunked<const N: usize>(b: &[f64; 10], a: &[f64; 10], x: &[f64]) -> Vec<f64> 
     // hide in the wait on the previous output).
     let mut y = x.to_vec();
     let mut z: State<N> = [[0.0; LANES]; N];
-    crate::simd::widest(
+    let mut finite = crate::simd::widest(
         #[inline(always)]
         || from_rest(&b, &a, &mut y[..LANES * len], len, &mut z),
     );
@@ -148,6 +180,7 @@ fn chunked<const N: usize>(b: &[f64; 10], a: &[f64; 10], x: &[f64]) -> Vec<f64> 
             last[j] = last[j + 1] + xn * b[j + 1] - yn * a[j + 1];
         }
         *v = yn;
+        finite &= yn.is_finite();
     }
     // carry[k]: state at the start of chunk k not yet accounted for.
     let mut carry: State<N> = [[0.0; LANES]; N];
@@ -203,11 +236,12 @@ fn chunked<const N: usize>(b: &[f64; 10], a: &[f64; 10], x: &[f64]) -> Vec<f64> 
         }
         *out += yn;
     }
-    y
+    (y, finite)
 }
 
 /// Every lane filtered from rest through its chunk of `y` (`LANES` chunks
-/// of `len`), in place, in lock step.
+/// of `len`), in place, in lock step; whether every output was finite
+/// (`0 y` summed per lane, off the recurrence's path).
 #[inline(always)]
 fn from_rest<const N: usize>(
     b: &[f64; N],
@@ -215,7 +249,12 @@ fn from_rest<const N: usize>(
     y: &mut [f64],
     len: usize,
     z: &mut State<N>,
-) {
+) -> bool {
+    // The state in a local (registers), not behind `z`, which every step
+    // would otherwise store and load again on the recurrence's path.
+    let mut st = *z;
+    let mut acc = [0.0; LANES];
+    let y = &mut y[..LANES * len];
     for i in 0..len {
         let mut xs = [0.0; LANES];
         for k in 0..LANES {
@@ -223,17 +262,20 @@ fn from_rest<const N: usize>(
         }
         let mut yn = [0.0; LANES];
         for k in 0..LANES {
-            yn[k] = z[0][k] + b[0] * xs[k];
+            yn[k] = st[0][k] + b[0] * xs[k];
         }
         for j in 0..N - 1 {
             for k in 0..LANES {
-                z[j][k] = z[j + 1][k] + xs[k] * b[j + 1] - yn[k] * a[j + 1];
+                st[j][k] = st[j + 1][k] + xs[k] * b[j + 1] - yn[k] * a[j + 1];
             }
         }
         for k in 0..LANES {
             y[k * len + i] = yn[k];
+            acc[k] += 0.0 * yn[k];
         }
     }
+    *z = st;
+    acc.iter().all(|&v| v == 0.0)
 }
 
 /// The free responses of states `w` added to the lanes' chunks of `y`, in
@@ -248,20 +290,24 @@ fn free<const N: usize>(
     len: usize,
     limit: &[f64; LANES],
 ) {
+    // In a local, as in `from_rest`.
+    let mut st = *w;
+    let y = &mut y[..LANES * len];
     for i in 0..len {
-        if i % 32 == 0 && (0..LANES).all(|k| w.iter().all(|r| r[k].abs() <= limit[k])) {
-            return;
+        if i % 32 == 0 && (0..LANES).all(|k| st.iter().all(|r| r[k].abs() <= limit[k])) {
+            break;
         }
-        let yn = w[0];
+        let yn = st[0];
         for j in 0..N - 1 {
             for k in 0..LANES {
-                w[j][k] = w[j + 1][k] - yn[k] * a[j + 1];
+                st[j][k] = st[j + 1][k] - yn[k] * a[j + 1];
             }
         }
         for k in 0..LANES {
             y[k * len + i] += yn[k];
         }
     }
+    *w = st;
 }
 
 #[cfg(test)]
@@ -364,6 +410,32 @@ mod tests {
         let mut bad = long.clone();
         bad[4000] = f64::NAN;
         assert!(lfilter_fast(&b, &a, &bad).is_err());
+        // The chunked path checks `x` through its output: a NaN or an
+        // infinity anywhere (chunk starts and ends, the remainder, the
+        // last sample; b0 = 0 too) is reported with its index.
+        let long = noise(5003, 6);
+        let len = 5003 / LANES;
+        for (b, a) in [([0.2, 0.3], [1.0, -0.5]), ([0.0, 0.3], [1.0, -0.5])] {
+            for i in [
+                0,
+                1,
+                len - 1,
+                len,
+                3 * len + 7,
+                LANES * len - 1,
+                LANES * len,
+                5002,
+            ] {
+                for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    let mut bad = long.clone();
+                    bad[i] = v;
+                    match lfilter_fast(&b, &a, &bad) {
+                        Err(crate::DspError::NonFinite { index, .. }) => assert_eq!(index, i),
+                        other => panic!("b {b:?} i {i} {v}: {other:?}"),
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -76,14 +76,62 @@ pub fn freqs_values(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Vec<Complex
     check_poly("b", b)?;
     check_poly("a", a)?;
     check_finite("w_rad_s", w_rad_s)?;
+    // A coefficient -0.0 is the one case where dropping the zero products
+    // could change a sign of zero (see `polyval_jw_short`).
+    let short = !b.iter().chain(a).any(|c| *c == 0.0 && c.is_sign_negative());
     Ok(crate::simd::widest(
         #[inline(always)]
         || {
             by_blocks(w_rad_s, |w: &[f64; LANES], h: &mut [Complex64]| {
+                if short {
+                    let (nb, na) = (polyval_jw_short(b, w), polyval_jw_short(a, w));
+                    if all_finite_lanes(&[&nb.0, &nb.1, &na.0, &na.1]) {
+                        return div_lanes(nb, na, h);
+                    }
+                }
                 div_lanes(polyval_jw(b, w), polyval_jw(a, w), h);
             })
         },
     ))
+}
+
+/// [`polyval_jw`] without the products by `s.re = 0`: `(c - i w, r w + 0)`
+/// per step, half the operations and the same bits whenever every value
+/// stays finite and no coefficient is `-0.0`. NumPy's step is
+/// `((r 0 - i w) + c, (r w + i 0) + 0)`. With `i w` nonzero, `r 0 - i w`
+/// is `-(i w)` exactly, so the real part is `c - i w` rounded once, as
+/// here; with `i w` zero both give `c` for `c != 0` and `+0` for
+/// `c = +0` (every sum of zeros with `+0` is `+0`, as is `+0 - (±0)`).
+/// The imaginary part is `r w` when nonzero, and `+0` when `r w` is a
+/// zero (`±0 + ±0 + 0 = +0`) in both. A NaN or infinity is not handled
+/// (`i 0` is NaN for `i` infinite): once one appears it stays in `(r, i)`
+/// (an infinity times a nonzero `w` is infinite, times zero NaN), so the
+/// caller checks the results and evaluates NumPy's way when one is not
+/// finite.
+#[inline(always)]
+fn polyval_jw_short(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+    let (mut yr, mut yi) = ([0.0; LANES], [0.0; LANES]);
+    for &c in p {
+        for k in 0..LANES {
+            let (r, i) = (yr[k], yi[k]);
+            yr[k] = c - i * w[k];
+            yi[k] = r * w[k] + 0.0;
+        }
+    }
+    (yr, yi)
+}
+
+/// Whether every value of the lane arrays is finite (`0 x` sums to `0`
+/// iff so), branch-free.
+#[inline(always)]
+fn all_finite_lanes(v: &[&[f64; LANES]; 4]) -> bool {
+    let mut acc = [0.0; LANES];
+    for a in v {
+        for k in 0..LANES {
+            acc[k] += 0.0 * a[k];
+        }
+    }
+    acc.iter().fold(true, |ok, &s| ok & (s == 0.0))
 }
 
 /// Points evaluated in lock step: the responses at different frequencies
@@ -98,11 +146,15 @@ const LANES: usize = 16;
 /// with zeros, its extra results dropped): one result per point.
 #[inline(always)]
 fn by_blocks(x: &[f64], mut eval: impl FnMut(&[f64; LANES], &mut [Complex64])) -> Vec<Complex64> {
-    let mut h = vec![Complex64::new(0.0, 0.0); x.len()];
-    for (xs, hs) in x.chunks(LANES).zip(h.chunks_mut(LANES)) {
+    // Grown block by block (zeroed while the block is in L1, not the whole
+    // output up front).
+    let mut h = Vec::with_capacity(x.len());
+    for xs in x.chunks(LANES) {
         let mut block = [0.0; LANES];
         block[..xs.len()].copy_from_slice(xs);
-        eval(&block, hs);
+        let start = h.len();
+        h.resize(start + xs.len(), Complex64::new(0.0, 0.0));
+        eval(&block, &mut h[start..]);
     }
     h
 }
@@ -406,6 +458,45 @@ mod tests {
                     acc * freqz_at(&s[..3], &s[3..], f[i], 1000.0)
                 });
             assert_eq!(hsos[i], want, "sosfreqz {i}");
+        }
+    }
+
+    /// `freqs` without the zero products is NumPy's `polyval` bit for bit:
+    /// zero and signed-zero coefficients, `w = 0` and `-0.0`, negative
+    /// frequencies, and values that overflow (infinities and NaN, where
+    /// the kernel evaluates NumPy's way).
+    #[test]
+    fn short_horner_equals_numpys_polyval_bitwise() {
+        let bits = |h: Complex64| (h.re.to_bits(), h.im.to_bits());
+        let w: Vec<f64> = [
+            0.0, -0.0, 1.0, -2.5, 1e-300, 3.0, 1e100, 1e200, 1e300, -1e160,
+        ]
+        .into_iter()
+        .chain((0..40).map(|i| (i as f64 - 20.0) * 0.37))
+        .collect();
+        let polys: [&[f64]; 7] = [
+            &[0.2, -0.1, 0.05, 0.3],
+            &[1.0, 0.0, 0.0, 1.0],
+            &[0.0, 0.0, 2.0],
+            &[1.0, -0.0, 3.0],
+            &[-0.0, 1.0, -0.0],
+            &[1e300, 1e300, 1.0],
+            &[1.0, 4.0, 6.0, 4.0, 1.0],
+        ];
+        for b in polys {
+            for a in polys {
+                let h = freqs(b, a, &w).unwrap().h;
+                for (i, &wi) in w.iter().enumerate() {
+                    let s = Complex64::new(0.0, wi);
+                    let want = nc::div(polyval(b, s), polyval(a, s));
+                    assert_eq!(
+                        bits(h[i]),
+                        bits(want),
+                        "b {b:?} a {a:?} w {wi}: {} vs {want}",
+                        h[i]
+                    );
+                }
+            }
         }
     }
 

@@ -869,6 +869,14 @@ pub fn find_peaks(x: &[f64], settings: &FindPeaksSettings) -> Result<Peaks> {
         apply(&mut peaks, &mut props, &keep);
     }
 
+    if let Some(min) = settings.prominence.and_then(|b| b.min) {
+        // Most maxima of a noisy signal end their base search within a few
+        // samples on one side, too shallow for `min`: dropped before the
+        // (branchy) exact search, as the criterion would drop them.
+        let keep = may_be_prominent(x, &peaks, half, min);
+        apply(&mut peaks, &mut props, &keep);
+    }
+
     if settings.prominence.is_some() || settings.width.is_some() {
         let prom = prominences_unchecked(x, &peaks, half);
         props.prominences = Some(prom.prominences);
@@ -902,6 +910,93 @@ pub fn find_peaks(x: &[f64], settings: &FindPeaksSettings) -> Result<Peaks> {
         indices: peaks,
         properties: props,
     })
+}
+
+/// Samples read on each side of a peak by [`may_be_prominent`].
+const NEAR: usize = 8;
+
+/// Whether a side of a peak of height `v` rules out a prominence of
+/// `min`: `c` holds the [`NEAR`] samples next to the peak on that side,
+/// nearest first, all inside the window. If one of them is higher than the
+/// peak, SciPy's base search on that side stops there and its minimum is
+/// the lowest of `v` and the samples before the stop: exactly known. The
+/// prominence, `v` less the higher of the two sides' minima, is then at
+/// most `v` less this side's minimum (rounding is monotonic), so
+/// `v - side_min < min` means the prominence criterion removes the peak.
+#[inline(always)]
+fn side_rules_out(c: &[f64; NEAR], v: f64, min: f64) -> bool {
+    let mut higher = 0u32;
+    for (k, &y) in c.iter().enumerate() {
+        higher |= u32::from(y > v) << k;
+    }
+    let stop = higher.trailing_zeros() as usize; // 32 when none is higher
+                                                 // The samples before the stop (+inf after it), then their minimum by
+                                                 // halves (exact: any order gives the same value).
+    let mut m: [f64; NEAR] = std::array::from_fn(|k| if k < stop { c[k] } else { f64::INFINITY });
+    let mut half = NEAR / 2;
+    while half > 0 {
+        for k in 0..half {
+            m[k] = if m[k + half] < m[k] {
+                m[k + half]
+            } else {
+                m[k]
+            };
+        }
+        half /= 2;
+    }
+    let side_min = if m[0] < v { m[0] } else { v };
+    stop < NEAR && v - side_min < min
+}
+
+/// Mask of the `peaks` that may reach a prominence of `min` (window of
+/// half width `half`, see [`peak_prominences`]): `false` only for peaks
+/// whose prominence is certainly below `min` (`x[p]` less the signal's
+/// lowest sample is below `min`, or [`side_rules_out`] on either side),
+/// which the prominence criterion would remove. Branch-free
+/// per peak (a noise maximum's short searches are what makes SciPy's scan,
+/// and the exact search here, slow: their ends are unpredictable), compiled
+/// through `crate::simd::widest`. Peaks nearer than [`NEAR`] samples to the
+/// signal's ends, or all peaks when the window is shorter than that, are
+/// tested against the lowest sample only.
+fn may_be_prominent(x: &[f64], peaks: &[usize], half: Option<usize>, min: f64) -> Vec<bool> {
+    let n = x.len();
+    crate::simd::widest(
+        #[inline(always)]
+        || {
+            // No side's minimum is below the signal's: `v - lowest < min`
+            // rules a peak out as a side's minimum does.
+            let mut lanes = [f64::INFINITY; NEAR];
+            for c in x.chunks_exact(NEAR) {
+                for (m, &y) in lanes.iter_mut().zip(c) {
+                    *m = if y < *m { y } else { *m };
+                }
+            }
+            let lowest = x
+                .chunks_exact(NEAR)
+                .remainder()
+                .iter()
+                .chain(&lanes)
+                .fold(f64::INFINITY, |a, &y| if y < a { y } else { a });
+            let near = half.is_none_or(|h| h >= NEAR);
+            peaks
+                .iter()
+                .map(|&p| {
+                    let v = x[p];
+                    if v - lowest < min {
+                        return false;
+                    }
+                    if !near || p < NEAR || p + NEAR >= n {
+                        return true;
+                    }
+                    let before: &[f64; NEAR] = x[p - NEAR..p].try_into().expect("NEAR samples");
+                    let after: &[f64; NEAR] =
+                        x[p + 1..p + 1 + NEAR].try_into().expect("NEAR samples");
+                    let left: [f64; NEAR] = std::array::from_fn(|k| before[NEAR - 1 - k]);
+                    !(side_rules_out(&left, v, min) | side_rules_out(after, v, min))
+                })
+                .collect()
+        },
+    )
 }
 
 fn apply(peaks: &mut Vec<usize>, props: &mut PeakProperties, keep: &[bool]) {
@@ -1929,6 +2024,62 @@ mod tests {
             _ => {}
         }
         x
+    }
+
+    #[test]
+    fn prominence_prefilter_keeps_every_peak_the_criterion_keeps() {
+        // find_peaks with a prominence bound (which drops the shallow
+        // maxima before the exact search) against every local maximum's
+        // prominence by SciPy's scan, filtered afterwards: the same peaks,
+        // prominences and bases, on noise, pulse trains with noise, ties
+        // and plateaus, windows shorter and longer than the prefilter's
+        // reach, bounds at and around the prominences that occur.
+        let mut next = lcg(777u64);
+        for len in [3, 9, 17, 40, 300, 3000] {
+            for kind in 0..5u64 {
+                let x: Vec<f64> = match kind {
+                    0..=3 => tricky_signal(len, kind, (0.7, -0.2), true, &mut next),
+                    _ => (0..len)
+                        .map(|i| {
+                            let d = (i % 50) as f64 - 25.0;
+                            (-0.5 * d * d / 16.0).exp() + 0.02 * (next(1000) as f64 - 500.0) / 500.0
+                        })
+                        .collect(),
+                };
+                let (maxima, _) = local_maxima(&x);
+                for half in [None, Some(3), Some(8), Some(20)] {
+                    let all = naive(&x, &maxima, half.unwrap_or(len));
+                    let mut proms = all.prominences.clone();
+                    proms.sort_by(f64::total_cmp);
+                    let picks = [0.0, 0.05, 0.5, 1.0]
+                        .into_iter()
+                        .chain(proms.iter().copied().step_by(1 + proms.len() / 5));
+                    for min in picks {
+                        for min in [min, min * (1.0 + 1e-15), min * (1.0 - 1e-15)] {
+                            let settings = FindPeaksSettings {
+                                prominence: Some(Bound::at_least(min)),
+                                wlen: half.map(|h| (2 * h + 1) as f64),
+                                ..Default::default()
+                            };
+                            let got = find_peaks(&x, &settings).unwrap();
+                            let keep: Vec<usize> = (0..maxima.len())
+                                .filter(|&i| all.prominences[i] >= min)
+                                .collect();
+                            let want: Vec<usize> = keep.iter().map(|&i| maxima[i]).collect();
+                            let ctx = format!("len {len} kind {kind} half {half:?} min {min}");
+                            assert_eq!(got.indices, want, "{ctx}");
+                            let p = got.properties;
+                            let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<_>>();
+                            let picku =
+                                |v: &[usize]| keep.iter().map(|&i| v[i]).collect::<Vec<_>>();
+                            assert_eq!(p.prominences.unwrap(), pick(&all.prominences), "{ctx}");
+                            assert_eq!(p.left_bases.unwrap(), picku(&all.left_bases), "{ctx}");
+                            assert_eq!(p.right_bases.unwrap(), picku(&all.right_bases), "{ctx}");
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -536,6 +536,22 @@ fn lfilter<'py>(
     Ok((stack(py, y, m, n)?, Some(stack(py, zf, m, k)?)))
 }
 
+/// `lfilter(b, a, x)` of one 1-D signal from rest: the common call, its
+/// output made straight from the kernel's (no rows to stack).
+#[pyfunction]
+fn lfilter1<'py>(
+    py: Python<'py>,
+    b: PyReadonlyArray1<'py, f64>,
+    a: PyReadonlyArray1<'py, f64>,
+    x: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Arr1<'py>> {
+    let (b, a, x) = (slice1(&b)?, slice1(&a)?, slice1(&x)?);
+    let y = py
+        .detach(|| dsp::lfilter_fast(b, a, x))
+        .map_err(errors::dsp)?;
+    Ok(y.into_pyarray(py))
+}
+
 /// `scipy.signal.detrend(x, type=type)` on each row.
 #[pyfunction]
 fn detrend<'py>(py: Python<'py>, x: PyReadonlyArray2<'py, f64>, kind: &str) -> PyResult<Arr2<'py>> {
@@ -824,6 +840,36 @@ fn gradient<'py>(
     stack(py, flat, m, width)
 }
 
+/// `numpy.gradient(f, h, edge_order=edge_order)` of one 1-D signal with a
+/// uniform step: the common call, without the rows' plumbing. A short
+/// signal is differentiated without releasing the GIL (a few microseconds
+/// of work, less than the release and the wait to take it back).
+#[pyfunction]
+fn gradient1<'py>(
+    py: Python<'py>,
+    f: PyReadonlyArray1<'py, f64>,
+    h: f64,
+    edge_order: usize,
+) -> PyResult<Arr1<'py>> {
+    let edge = match edge_order {
+        1 => dsp::EdgeOrder::First,
+        2 => dsp::EdgeOrder::Second,
+        _ => return Err(errors::value("'edge_order' greater than 2 not supported")),
+    };
+    let f = slice1(&f)?;
+    let run = || dsp::gradient_with_edge_order(f, Spacing::Uniform(h), edge);
+    let g = if f.len() <= SMALL_WORK {
+        run()
+    } else {
+        py.detach(run)
+    }
+    .map_err(errors::dsp)?;
+    Ok(g.into_pyarray(py))
+}
+
+/// Samples below which a one-pass kernel keeps the GIL.
+const SMALL_WORK: usize = 4096;
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(welch, m)?)?;
     m.add_function(wrap_pyfunction!(csd, m)?)?;
@@ -837,6 +883,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sosfilt_zi, m)?)?;
     m.add_function(wrap_pyfunction!(sosfiltfilt, m)?)?;
     m.add_function(wrap_pyfunction!(lfilter, m)?)?;
+    m.add_function(wrap_pyfunction!(lfilter1, m)?)?;
     m.add_function(wrap_pyfunction!(detrend, m)?)?;
     m.add_function(wrap_pyfunction!(decimate, m)?)?;
     m.add_function(wrap_pyfunction!(find_peaks, m)?)?;
@@ -846,5 +893,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(freqz, m)?)?;
     m.add_function(wrap_pyfunction!(sosfreqz, m)?)?;
     m.add_function(wrap_pyfunction!(gradient, m)?)?;
+    m.add_function(wrap_pyfunction!(gradient1, m)?)?;
     Ok(())
 }

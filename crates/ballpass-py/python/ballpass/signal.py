@@ -385,6 +385,10 @@ def correlate(in1, in2, mode="full", method="auto"):
 def correlation_lags(in1_len, in2_len, mode="full"):
     """Lags (samples) of ``correlate(in1, in2, mode)``
     (``scipy.signal.correlation_lags``)."""
+    if mode == "full" and type(in1_len) is int and type(in2_len) is int and in1_len > 0 \
+            and in2_len > 0:
+        # The common call: straight to the kernel, which writes the range.
+        return _native.correlation_lags(in1_len, in2_len)
     if mode not in ("full", "same", "valid"):
         raise ValueError(f"Mode {mode} is invalid")
     n1, n2 = operator.index(in1_len), operator.index(in2_len)
@@ -601,6 +605,14 @@ def lfilter(b, a, x, axis=-1, zi=None):
     is cut into 8 chunks filtered side by side, each corrected by the
     free response of the state it inherits: SciPy's numbers to ~1e-10 of
     the output's scale, not its rounding, several times faster."""
+    if (zi is None and type(x) is np.ndarray and type(b) is np.ndarray and type(a) is np.ndarray
+            and x.ndim == 1 and b.ndim == 1 and a.ndim == 1 and axis in (-1, 0)
+            and x.dtype == np.float64 and b.dtype == np.float64 and a.dtype == np.float64
+            and x.size > 0 and b.size > 0 and a.size > 0 and a[0] != 0
+            and x.flags.c_contiguous and b.flags.c_contiguous and a.flags.c_contiguous):
+        # The common call, one float64 signal from rest: straight to the
+        # kernel (it checks the samples; the checks below all pass).
+        return _native.lfilter1(b, a, x)
     b = np.atleast_1d(np.asarray(b))
     a = np.atleast_1d(np.asarray(a))
     if not (b.ndim == 1 and b.size > 0):
@@ -919,8 +931,8 @@ def gradient(f, *varargs, axis=None, edge_order=1):
                 "at least (edge_order + 1) elements are required."
             )
         h = float(varargs[0]) if varargs else 1.0
-        rows = f.reshape(1, -1) if f.flags.c_contiguous else np.ascontiguousarray(f).reshape(1, -1)
-        return _native.gradient(rows, h, None, edge_order).reshape(-1)
+        return _native.gradient1(f if f.flags.c_contiguous else np.ascontiguousarray(f), h,
+                                 edge_order)
     f = real_float64(f, "f")
     n = f.ndim
     if axis is None:
