@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4] [N] [--list]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6] [N] [--list] [--json] [--clean] [--fwhm R]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -13,10 +13,17 @@
 //! revision were frozen), `fresh3` seeds 11_000_001..=11_000_000+N (never
 //! looked at before the AC coupling's plausibility check was frozen),
 //! `fresh4` seeds 14_000_001..=14_000_000+N (never looked at before the
-//! gap-following baseline and the overlap flag were frozen). Prints the
+//! gap-following baseline and the overlap flag were frozen), `fresh5` seeds
+//! 15_000_001..=15_000_000+N (never looked at before session 12's passage
+//! rule was frozen; `fresh6`, 15_100_001+, kept for a rule changed after
+//! that). Prints the
 //! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
-//! more than 3 %.
+//! more than 3 %; `--json` prints every record's score instead of the
+//! tables. `--clean` scores the same benches without noise, drift, AC
+//! coupling or interference, `--fwhm R` with every pulse `R τ_c` wide
+//! (what the detector does where nothing but the pulses' shape and
+//! overlap is in the way).
 
 use ballpass::validate::passages::{score, summarize, PassageScore};
 use ballpass::validate::Domain;
@@ -37,17 +44,40 @@ fn main() {
         "fresh2" => 8_000_001,
         "fresh3" => 11_000_001,
         "fresh4" => 14_000_001,
+        "fresh5" => 15_000_001,
+        "fresh6" => 15_100_001,
         other => {
-            eprintln!("unknown set {other}: train, fresh, fresh2, fresh3 or fresh4");
+            eprintln!(
+                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5 or fresh6"
+            );
             std::process::exit(2);
         }
     };
+    // `--clean`: the same benches without noise (pulse SNR 10⁵), drift,
+    // AC coupling or interference; `--fwhm R`: every pulse R τ_c wide.
+    let clean = args.iter().any(|a| a == "--clean");
+    let fwhm: Option<f64> = args
+        .iter()
+        .position(|a| a == "--fwhm")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|a| a.parse().ok());
     let domain = Domain::default();
     let t0 = std::time::Instant::now();
     let scores: Vec<PassageScore> = (first..first + n)
         .into_par_iter()
         .map(|seed| {
-            score(&domain.draw(seed), seed).expect("the default domain draws valid benches")
+            let mut bench = domain.draw(seed);
+            if clean {
+                let o = &mut bench.optical;
+                o.noise_v = 1e-5 * o.pulse_amplitude_v;
+                o.ac_coupling = false;
+                o.baseline_drift_v = 0.0;
+                o.interference_drift = false;
+            }
+            if let Some(r) = fwhm {
+                bench.optical.width_ratio = r;
+            }
+            score(&bench, seed).expect("the default domain draws valid benches")
         })
         .collect();
     let elapsed = t0.elapsed().as_secs_f64();

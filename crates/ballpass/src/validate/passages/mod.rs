@@ -83,6 +83,10 @@ pub struct ConditionTruth {
     pub ac_dip: f64,
     /// The DC level wandered (baseline drift), peak in pulse heights (0: none).
     pub drift_fraction: f64,
+    /// Period of the drift's slower component, in `τ_c` (when it drifts):
+    /// the faster one is 0.37 of it.
+    #[serde(default)]
+    pub drift_period_tau_c: Option<f64>,
     /// Coherent-light interference (pulses fade and invert).
     pub interference: bool,
     /// Required passages with the fringe inverting them (`sin θ > 0.5`).
@@ -323,6 +327,8 @@ pub fn score_with(
             0.0
         },
         drift_fraction: o.baseline_drift_v / o.pulse_amplitude_v,
+        drift_period_tau_c: (o.baseline_drift_v > 0.0)
+            .then_some(o.baseline_drift_period_s / t.tau_c_s),
         interference: o.interference_drift,
         inverted_required: truths
             .iter()
