@@ -94,9 +94,6 @@
 //!   interference with a coherent source (thesis Fig. 32, §5.2).
 //! - [`ConditionKind::MissedPassages`]: gaps longer than 1.6 τ_c.
 //! - [`ConditionKind::PeriodMismatch`]: measured `τ_c` far from the prediction.
-//! - [`ConditionKind::OverlappingPulses`]: the light never returns to dark
-//!   between pulses, so the widths may read low, by an estimated more
-//!   than [`REPORTED_SHORTFALL`] ([`PulseOverlap`]).
 //!
 //! How often each is right on benches it was never tuned on is measured by
 //! [`crate::validate::passages`].
@@ -122,7 +119,7 @@ mod template;
 #[cfg(test)]
 mod tests;
 
-pub use overlap::{PulseOverlap, REPORTED_SHORTFALL};
+pub use overlap::PulseOverlap;
 pub use settings::PassageSettings;
 use signal::{gaussian_smooth, median, noise_sigma, rms_difference_sigma, running_percentile};
 
@@ -199,9 +196,6 @@ pub enum ConditionKind {
     MissedPassages,
     /// The measured period is far from the predicted one.
     PeriodMismatch,
-    /// The pulses overlap so much that the light never returns to dark
-    /// between them: the widths may read low.
-    OverlappingPulses,
 }
 
 impl ConditionKind {
@@ -213,7 +207,6 @@ impl ConditionKind {
             ConditionKind::InvertedPulses => "inverted_pulses",
             ConditionKind::MissedPassages => "missed_passages",
             ConditionKind::PeriodMismatch => "period_mismatch",
-            ConditionKind::OverlappingPulses => "overlapping_pulses",
         }
     }
 }
@@ -635,10 +628,6 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
     // Overlap of pulses one median period apart (the template's units are
     // blocks, its stretch the pulses' mean).
     let overlap = PulseOverlap::of(&m.template, &m.shape, med_tau * fs / q);
-    let mut conditions = conditions;
-    if let Some(c) = overlap.and_then(|o| o.condition()) {
-        conditions.push(c);
-    }
     let rel_err = f_c_predicted.map(|p| (f_c - p) / p);
 
     let d_avg_implied = velocity.map(|v| v * tau_c_stats.mean / 2.0);

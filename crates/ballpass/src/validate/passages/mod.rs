@@ -67,6 +67,11 @@ pub const MATCH_TAU_C: f64 = 0.25;
 /// Centres closer than this many FWHM to a record end are optional.
 pub const EDGE_FWHM: f64 = 0.5;
 
+/// Overlap width-shortfall estimate above which a record is counted as
+/// flagged ([`crate::analysis::passage::PulseOverlap::width_shortfall`];
+/// the threshold of the withdrawn `overlapping_pulses` caution).
+pub const FLAGGED_SHORTFALL: f64 = 0.01;
+
 /// Under interference, pulses scaled below this fraction are optional.
 pub const FADED_FRACTION: f64 = 0.5;
 
@@ -195,8 +200,8 @@ pub struct PassageScore {
     pub width_error_stated: Option<f64>,
     /// Passages whose width entered the mean.
     pub widths_used: Option<usize>,
-    /// The analysis reported that its widths may read low (overlapping
-    /// pulses, [`crate::analysis::passage::PulseOverlap`]).
+    /// The analysis' overlap estimate is above [`FLAGGED_SHORTFALL`]
+    /// (where session 11 raised a caution; kept to score the estimate).
     #[serde(default)]
     pub width_lower_bound: bool,
     /// The analysis' possible width shortfall from the overlap (a fraction).
@@ -458,7 +463,9 @@ pub fn score_with(
         width_error: width.map(|w| w / true_width_s - 1.0),
         width_error_stated: width.map(|w| w / fwhm - 1.0),
         widths_used: Some(a.tau_p_s.n),
-        width_lower_bound: a.overlap.is_some_and(|o| o.widths_may_read_low),
+        width_lower_bound: a
+            .overlap
+            .is_some_and(|o| o.width_shortfall > FLAGGED_SHORTFALL),
         width_shortfall: a.overlap.map(|o| o.width_shortfall),
         worst_timing_tau_c: timing.iter().map(|e| e.abs()).reduce(f64::max),
         mean_timing_tau_c: (!timing.is_empty())
