@@ -28,8 +28,11 @@ default pool (analyze parallelises over channels; the signal kernels run
 in the calling thread).
 
 Usage: python3 tools/bench_python.py [--repeat 7] [--json out.json] [--cpu]
-(``RAYON_NUM_THREADS=1`` in the environment times analyze on one core, as
-SciPy runs. ``--cpu`` times the process's CPU time instead of the wall
+[--threads N] (``--threads 1``, or ``RAYON_NUM_THREADS=1`` in the
+environment, times analyze on one core, as SciPy runs; ``--threads N``
+passes a ``ballpass.ThreadPool(N)`` made once, outside the timing; without
+either, analyze runs in rayon's default pool, one thread per core. The
+first line says which. ``--cpu`` times the process's CPU time instead of the wall
 clock: on a loaded machine the wall clock mostly measures the waits for
 a core, which CPU time leaves out.) Pinned versions:
 tools/requirements-py.txt.
@@ -86,8 +89,9 @@ def pair(ours, theirs, repeat):
     return bo, bt
 
 
-def analyze_case(repeat):
-    """(ballpass, SciPy's whole pipeline, SciPy's numeric core) per call, s."""
+def analyze_case(repeat, pool=None):
+    """(ballpass, SciPy's whole pipeline, SciPy's numeric core) per call, s;
+    ballpass in `pool` (a ThreadPool; None: the default pool)."""
     rec, _ = ballpass.simulate(9.0, seed=1)  # 30 s at 1 kHz, three channels
     fs = rec.fs_hz
     fr, pos, opt = rec.friction_n, rec.position_mm, rec.optical_v
@@ -95,7 +99,7 @@ def analyze_case(repeat):
 
     def ours():
         r = ballpass.Recording(fs, fr, pos, opt, velocity_mm_s=9.0)
-        return ballpass.analyze(r)
+        return ballpass.analyze(r, threads=pool)
 
     def theirs():
         return stages.pipeline(fs, fr, pos, opt, args)
@@ -170,6 +174,8 @@ def main():
     ap.add_argument("--json", default=None)
     ap.add_argument("--cpu", action="store_true", help="time CPU, not the wall clock")
     ap.add_argument("--stages", action="store_true", help="the SciPy pipeline's CPU time per stage")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="analyze in a ThreadPool of this many threads (default: rayon's default pool)")
     a = ap.parse_args()
     global TIMER
     if a.cpu:
@@ -178,8 +184,16 @@ def main():
           f"{'CPU time' if a.cpu else 'wall time'}, "
           f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}, "
           f"RAYON_NUM_THREADS={os.environ.get('RAYON_NUM_THREADS', 'unset')}")
-    out = {}
-    t_bp, t_sp, t_core = analyze_case(a.repeat)
+    pool = None if a.threads is None else ballpass.ThreadPool(a.threads)
+    if pool is not None:
+        threads = f"{a.threads} (ThreadPool)"
+    elif "RAYON_NUM_THREADS" in os.environ:
+        threads = f"{os.environ['RAYON_NUM_THREADS']} (RAYON_NUM_THREADS, default pool)"
+    else:
+        threads = f"{len(os.sched_getaffinity(0))} (default pool, one per core)"
+    print(f"analyze threads: {threads}; SciPy: one thread")
+    out = {"analyze_threads": threads}
+    t_bp, t_sp, t_core = analyze_case(a.repeat, pool)
     out["analyze_30s"] = {"ballpass_s": t_bp, "scipy_s": t_sp, "speedup": t_sp / t_bp,
                           "scipy_numeric_core_s": t_core}
     print(f"{'analyze, one 30 s 3-channel record':38s} ballpass {t_bp * 1e3:9.2f} ms   "

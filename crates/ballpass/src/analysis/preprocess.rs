@@ -219,19 +219,26 @@ pub(crate) fn raw_signals<'a>(
     Ok(out)
 }
 
+/// Signals as low-passed, before the detrend ([`prepare_raw_keeping`]).
+pub(crate) type Kept = Vec<(Signal, Vec<f64>)>;
+
 /// Step 2 of one record's step-1 signals ([`raw_signals`]), each dropped
 /// as soon as it is filtered (an owned one's memory is free before the
-/// next signal is filtered).
+/// next signal is filtered); with a copy of each signal of `keep` as
+/// low-passed, before its detrend (for the position-domain spectra, which
+/// low-pass the same samples with the same filter).
 ///
 /// # Errors
 /// [`Error::Dsp`] for a kernel failure (named with the record).
-pub(crate) fn prepare_raw(
+pub(crate) fn prepare_raw_keeping(
     rec: &Recording,
     raw: Vec<(Signal, Cow<'_, [f64]>)>,
     settings: &AnalyzeSettings,
     filter: Option<&ZeroPhaseFilter>,
     (trim, n_keep): (usize, usize),
-) -> Result<Prepared> {
+    keep: &[Signal],
+) -> Result<(Prepared, Kept)> {
+    let mut kept = Vec::new();
     let fs = rec.fs_hz();
     let name = rec.source_name();
     let ctx = |what: &str| format!("{name}: {what}");
@@ -260,17 +267,23 @@ pub(crate) fn prepare_raw(
             });
         }
         drop(raw);
+        if keep.contains(&s) {
+            kept.push((s, y.clone()));
+        }
         detrend_in_place(&mut y, settings.detrend.to_dsp())
             .map_err(|e| Error::dsp(ctx(&format!("detrend of {}", s.name())), e))?;
         signals.push((s, y));
     }
-    Ok(Prepared {
-        fs_hz: fs,
-        n: n_keep,
-        signals,
-        velocity_error,
-        trimmed_samples: trim,
-    })
+    Ok((
+        Prepared {
+            fs_hz: fs,
+            n: n_keep,
+            signals,
+            velocity_error,
+            trimmed_samples: trim,
+        },
+        kept,
+    ))
 }
 
 #[cfg(test)]
@@ -295,7 +308,7 @@ mod tests {
         let s = AnalyzeSettings::default();
         let f = lowpass_filter(&s, fs).unwrap();
         let raw = raw_signals(&rec, v, (0, 2000), None, &Signal::ALL).unwrap();
-        let p = prepare_raw(&rec, raw, &s, f.as_ref(), (0, 2000)).unwrap();
+        let (p, _) = prepare_raw_keeping(&rec, raw, &s, f.as_ref(), (0, 2000), &[]).unwrap();
         let st = p.velocity_error.unwrap();
         // A ramp differentiates exactly up to rounding of i/fs * 9 (~1e-15 mm
         // relative), amplified by 1/(2 T_s) = 500: far below 1e-6 µm/s.

@@ -70,8 +70,16 @@ fn identify_stage(
 }
 
 /// One record's preparation, correlations, and full, high-resolution and
-/// unfiltered spectra.
-type PerRecord = (Prepared, Correlations, Spectra, Spectra, Spectra);
+/// unfiltered spectra, and the signals of [`RecordJob::keep`] as
+/// low-passed (before the detrend).
+type PerRecord = (
+    Prepared,
+    Correlations,
+    Spectra,
+    Spectra,
+    Spectra,
+    preprocess::Kept,
+);
 
 /// What every record's preparation, correlations and spectra share.
 struct RecordJob<'s> {
@@ -83,6 +91,9 @@ struct RecordJob<'s> {
     trim_n: (usize, usize),
     signals: &'s [Signal],
     max_lag: usize,
+    /// Signals whose low-passed samples are kept (for the position-domain
+    /// spectra, which then do not filter them again).
+    keep: &'s [Signal],
 }
 
 impl RecordJob<'_> {
@@ -104,7 +115,14 @@ impl RecordJob<'_> {
             // velocity error, and an owned friction, are record-length
             // buffers).
             let u = spectra::full_of(&raw, r.fs_hz(), n, settings)?;
-            let p = preprocess::prepare_raw(r, raw, settings, self.filter, (trim, n))?;
+            let (p, kept) = preprocess::prepare_raw_keeping(
+                r,
+                raw,
+                settings,
+                self.filter,
+                (trim, n),
+                self.keep,
+            )?;
             let (c, (f, h)) = rayon::join(
                 || {
                     with_correlator(
@@ -122,7 +140,7 @@ impl RecordJob<'_> {
                     )
                 },
             );
-            Ok((p, c?, f?, h?, u))
+            Ok((p, c?, f?, h?, u, kept))
         };
         recs.par_iter()
             .zip(frictions.into_par_iter())
@@ -294,13 +312,25 @@ pub(crate) fn run_staged_above(
         }
     };
     let wants_position = with_passages && signals.contains(&Signal::VelocityError);
-    let position_of = |restored: &[super::Restored<'_>], filter: Option<&ZeroPhaseFilter>| {
+    // `lowpassed[i]`: record i's friction and optical as the analysis
+    // low-passed them (empty: filtered here).
+    let position_of = |restored: &[super::Restored<'_>],
+                       filter: Option<&ZeroPhaseFilter>,
+                       lowpassed: &[Option<&super::position::Lowpassed>]| {
         let parts: Vec<super::position::RecordPart<'_>> = recs
             .iter()
             .zip(restored)
             .map(|(r, fr)| (r, fr.as_ref().map(|(f, _)| f.as_ref()), trim..trim + n))
             .collect();
-        super::position::compute(&parts, settings, filter, pred.d_avg_mm)
+        super::position::compute_lowpassed(&parts, lowpassed, settings, filter, pred.d_avg_mm)
+    };
+    // The non-staged run hands the position-domain spectra the friction and
+    // optical its own preparation low-passed (the same filter on the same
+    // samples: the same values), instead of filtering them twice.
+    let keep: &[Signal] = if wants_position && !staged {
+        &[Signal::Friction, Signal::Optical]
+    } else {
+        &[]
     };
     let job = match (&filter, &plan) {
         (Ok(filter), Ok(plan)) => Some(RecordJob {
@@ -311,6 +341,7 @@ pub(crate) fn run_staged_above(
             trim_n: (trim, n),
             signals: &signals,
             max_lag,
+            keep,
         }),
         _ => None,
     };
@@ -320,7 +351,7 @@ pub(crate) fn run_staged_above(
         let main = restore_all(restored, recs, fs, pred, settings).map(|mut restored| {
             let stage = identify_stage(recs, &restored, fs, pred);
             if let (true, Ok(filter)) = (wants_position, &filter) {
-                early_position = Some(position_of(&restored, filter.as_ref()));
+                early_position = Some(position_of(&restored, filter.as_ref(), &[]));
             }
             let frictions: Vec<_> = restored
                 .iter_mut()
@@ -334,27 +365,32 @@ pub(crate) fn run_staged_above(
         });
         (main, Some(passages), early_position)
     } else {
-        // The position-domain spectra read the corrected friction only, so
-        // they run beside the stage identification and the per-record step.
+        // The position-domain spectra read the corrected friction and the
+        // per-record step's low-passed friction and optical, so they run
+        // after that step, beside the stage identification.
         let (main, passages) = rayon::join(
             || {
                 let restored = restore_all(restored, recs, fs, pred, settings)?;
-                let ((stage, per_record), position) = rayon::join(
+                let (stage, (per_record, position)) = rayon::join(
+                    || identify_stage(recs, &restored, fs, pred),
                     || {
-                        rayon::join(
-                            || identify_stage(recs, &restored, fs, pred),
-                            || {
-                                let frictions = restored
-                                    .iter()
-                                    .map(|fr| fr.as_ref().map(|(f, _)| Cow::Borrowed(f.as_ref())))
-                                    .collect();
-                                job.as_ref().map(|j| j.run(recs, frictions))
-                            },
-                        )
-                    },
-                    || match (wants_position, &filter) {
-                        (true, Ok(filter)) => Some(position_of(&restored, filter.as_ref())),
-                        _ => None,
+                        let frictions = restored
+                            .iter()
+                            .map(|fr| fr.as_ref().map(|(f, _)| Cow::Borrowed(f.as_ref())))
+                            .collect();
+                        let per_record = job.as_ref().map(|j| j.run(recs, frictions));
+                        let position = match (wants_position, &filter, &per_record) {
+                            (true, Ok(filter), Some(Ok(per))) => {
+                                let lowpassed: Vec<Option<&super::position::Lowpassed>> =
+                                    per.iter().map(|(.., kept)| Some(kept.as_slice())).collect();
+                                Some(position_of(&restored, filter.as_ref(), &lowpassed))
+                            }
+                            // Otherwise the per-record step failed, or was
+                            // not run (the filter or the plan failed): that
+                            // error is what the analysis reports.
+                            _ => None,
+                        };
+                        (per_record, position)
                     },
                 );
                 Ok::<_, Error>((restored, stage, per_record, position))
@@ -392,7 +428,7 @@ pub(crate) fn run_staged_above(
     let mut fulls = Vec::with_capacity(recs.len());
     let mut hires = Vec::with_capacity(recs.len());
     let mut unfiltered = Vec::with_capacity(recs.len());
-    for (p, c, f, h, u) in per_record? {
+    for (p, c, f, h, u, _) in per_record? {
         prepared.push(p);
         corrs.push(c);
         fulls.push(f);
@@ -492,7 +528,7 @@ pub(crate) fn run_staged_above(
     // themselves, `with_passages` false) do not use them and skip their
     // cost.
     let position = if wants_position {
-        match early_position.unwrap_or_else(|| position_of(&restored, filter.as_ref())) {
+        match early_position.unwrap_or_else(|| position_of(&restored, filter.as_ref(), &[])) {
             Ok(p) => {
                 notes.push(super::position::note(&p));
                 Some(p)

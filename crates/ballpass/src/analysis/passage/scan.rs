@@ -271,6 +271,35 @@ pub(super) struct Scan {
     pub amplitude_noise: f64,
 }
 
+thread_local! {
+    /// The correlator (raw sums, as `ballpass_dsp::correlate`) this thread
+    /// used last for [`filter`]: its FFT plan and buffers, which a new one
+    /// would make and zero again on every call (the statistic is filtered
+    /// twice per round of the measurement loop, every round of every
+    /// record). Same plan, same sums: the values are a new one's.
+    static CORRELATOR: std::cell::Cell<Option<ballpass_dsp::Correlator>> =
+        const { std::cell::Cell::new(None) };
+}
+
+/// Runs `f` with this thread's kept correlator (a new one the first time)
+/// on a record of `n` samples, and keeps it afterwards when `n` is at most
+/// [`KEEP_MAX_SAMPLES`].
+fn with_correlator<R>(n: usize, f: impl FnOnce(&mut ballpass_dsp::Correlator) -> R) -> R {
+    let mut c = CORRELATOR.take().unwrap_or_else(|| {
+        ballpass_dsp::Correlator::new(ballpass_dsp::CorrelateSettings::default())
+    });
+    let out = f(&mut c);
+    if n <= KEEP_MAX_SAMPLES {
+        CORRELATOR.set(Some(c));
+    }
+    out
+}
+
+/// Longest record whose correlator a thread keeps (its plan's buffers,
+/// four of a quarter of the transform length in complex values, hold
+/// ~17 MB at 2^18 samples; a longer record's would stay with the thread).
+const KEEP_MAX_SAMPLES: usize = 1 << 18;
+
 /// `Σ_j h_j x[n + off + j]` for `n = 0..x.len()`, zero outside `x`.
 fn filter(x: &[f64], taps: &[f64], off: isize) -> Vec<f64> {
     let n = x.len();
@@ -305,7 +334,7 @@ fn filter(x: &[f64], taps: &[f64], off: isize) -> Vec<f64> {
         }
     }
     if m > FFT_TAPS && n > m {
-        if let Ok(c) = ballpass_dsp::correlate(x, taps, ballpass_dsp::Normalization::None) {
+        if let Ok(c) = with_correlator(n, |c| c.correlate(x, taps)) {
             // c.values[idx] is lag idx − (m − 1): Σ_j x[j + lag] taps[j].
             return (0..n)
                 .map(|i| {

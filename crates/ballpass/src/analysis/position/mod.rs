@@ -53,9 +53,11 @@ use crate::recording::{Channel, Recording};
 use crate::stats::{median, welch_dof};
 
 mod lines;
+mod walk;
 
 use lines::lines;
 pub(crate) use lines::LineScan;
+use walk::{resample, Walk, SHARED_WALK_MAX_SAMPLES};
 
 /// Grid points per ball-pass period of travel (`2 d_avg`).
 pub const POINTS_PER_PERIOD: usize = 64;
@@ -256,34 +258,6 @@ fn direction_runs(v: &[f64], v_stop: f64) -> Vec<(usize, usize, bool)> {
     out
 }
 
-/// Values of `y` where the running maximum of `sign · p` (a non-decreasing
-/// travel axis) first reaches each grid point `x0 + j dx`, `j = 0..m`
-/// (linear interpolation between samples). The running maximum is taken
-/// as the walk goes, never stored.
-fn resample(p: &[f64], sign: f64, y: &[f64], x0: f64, dx: f64, m: usize) -> Vec<f64> {
-    let mut out = Vec::with_capacity(m);
-    // The running maximum at samples i - 1 and i.
-    let mut prev = f64::NEG_INFINITY.max(sign * p[0]);
-    let mut cur = prev.max(sign * p[1]);
-    let mut i = 1;
-    for j in 0..m {
-        let x = x0 + j as f64 * dx;
-        while i + 1 < p.len() && cur < x {
-            i += 1;
-            prev = cur;
-            cur = cur.max(sign * p[i]);
-        }
-        let (a, b) = (prev, cur);
-        let t = if b > a {
-            ((x - a) / (b - a)).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
-        out.push(y[i - 1] + t * (y[i] - y[i - 1]));
-    }
-    out
-}
-
 /// Centred moving average over `w` points (odd); the ends, where the
 /// window is not full, are dropped: the output is `len − w + 1` long.
 fn moving_average_valid(x: &[f64], w: usize) -> Vec<f64> {
@@ -427,12 +401,21 @@ pub(crate) fn grid_step(
 /// SciPy's `padlen` of an order-8 Chebyshev in 4 sections is 27 per stage.
 const MIN_FINE_POINTS: usize = 64;
 
+/// Signals of one record over the samples analysed, already low-passed
+/// with the analysis' filter (before any detrend): what the analysis'
+/// own preparation made of the friction and optical channels, so that
+/// they are not filtered twice ([`compute_lowpassed`]).
+pub(crate) type Lowpassed = [(Signal, Vec<f64>)];
+
 /// Resamples one record's friction and velocity on the grid `dx` (module
-/// docs).
+/// docs); `given`: signals already low-passed (the others are low-passed
+/// here).
+#[allow(clippy::too_many_arguments)]
 fn resample_record(
     rec: &Recording,
     range: std::ops::Range<usize>,
     friction: Option<&[f64]>,
+    given: Option<&Lowpassed>,
     filter: Option<&ZeroPhaseFilter>,
     settings: &AnalyzeSettings,
     dx: f64,
@@ -505,14 +488,29 @@ fn resample_record(
             planned.push((run, Some((a..b, sign, x0, m))));
         }
     }
-    // One signal on the grid, run by run (`None` for a run not resampled).
-    let on_grid = |y: &[f64]| -> Result<Vec<Option<Vec<f64>>>> {
+    // Each run's walk, made once for the signals (a short record's).
+    let walks: Option<Vec<Option<Walk>>> = (p.len() <= SHARED_WALK_MAX_SAMPLES).then(|| {
         planned
             .iter()
             .map(|(_, g)| {
                 g.as_ref()
+                    .map(|(r, sign, x0, m)| Walk::new(&p[r.clone()], *sign, *x0, fine, *m))
+            })
+            .collect()
+    });
+    // One signal on the grid, run by run (`None` for a run not resampled).
+    let on_grid = |y: &[f64]| -> Result<Vec<Option<Vec<f64>>>> {
+        planned
+            .iter()
+            .enumerate()
+            .map(|(k, (_, g))| {
+                g.as_ref()
                     .map(|(r, sign, x0, m)| {
-                        let fine_y = resample(&p[r.clone()], *sign, &y[r.clone()], *x0, fine, *m);
+                        let walk = walks.as_ref().and_then(|w| w[k].as_ref());
+                        let fine_y = match walk {
+                            Some(w) => w.apply(&y[r.clone()]),
+                            None => resample(&p[r.clone()], *sign, &y[r.clone()], *x0, fine, *m),
+                        };
                         decimate_pow2(fine_y, q, &name)
                     })
                     .transpose()
@@ -521,12 +519,25 @@ fn resample_record(
     };
     let vel = on_grid(&v)?;
     drop(v);
+    // A signal low-passed already (the same filter on the same samples:
+    // the same values), else low-passed here.
+    let given_of = |s: Signal| {
+        given
+            .and_then(|g| g.iter().find(|(t, _)| *t == s))
+            .map(|(_, y)| y.as_slice())
+    };
     let fr = match friction.or_else(|| rec.channel(Channel::Friction)) {
-        Some(x) => Some(on_grid(&lowpass(&x[range.clone()], "friction")?)?),
+        Some(x) => Some(match given_of(Signal::Friction) {
+            Some(y) => on_grid(y)?,
+            None => on_grid(&lowpass(&x[range.clone()], "friction")?)?,
+        }),
         None => None,
     };
     let op = match rec.channel(Channel::Optical).filter(|_| with_optical) {
-        Some(x) => Some(on_grid(&lowpass(&x[range.clone()], "optical")?)?),
+        Some(x) => Some(match given_of(Signal::Optical) {
+            Some(y) => on_grid(y)?,
+            None => on_grid(&lowpass(&x[range.clone()], "optical")?)?,
+        }),
         None => None,
     };
     let mut fr = fr.map(Vec::into_iter);
@@ -584,6 +595,21 @@ pub(crate) fn compute(
     compute_with(recs, settings, filter, d_avg_mm, Detail::Full)
 }
 
+/// [`compute`] with each record's friction and optical channels (over its
+/// range) already low-passed with `filter`, when `lowpassed[i]` holds them.
+///
+/// # Errors
+/// As [`compute`].
+pub(crate) fn compute_lowpassed(
+    recs: &[RecordPart<'_>],
+    lowpassed: &[Option<&Lowpassed>],
+    settings: &AnalyzeSettings,
+    filter: Option<&ZeroPhaseFilter>,
+    d_avg_mm: f64,
+) -> Result<PositionSpectra> {
+    compute_given(recs, lowpassed, settings, filter, d_avg_mm, Detail::Full)
+}
+
 /// How much [`compute_with`] does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Detail {
@@ -607,14 +633,28 @@ pub(crate) fn compute_with(
     d_avg_mm: f64,
     detail: Detail,
 ) -> Result<PositionSpectra> {
+    compute_given(recs, &[], settings, filter, d_avg_mm, detail)
+}
+
+/// [`compute_with`], record `i`'s signals in `lowpassed[i]` (when there)
+/// low-passed already.
+fn compute_given(
+    recs: &[RecordPart<'_>],
+    lowpassed: &[Option<&Lowpassed>],
+    settings: &AnalyzeSettings,
+    filter: Option<&ZeroPhaseFilter>,
+    d_avg_mm: f64,
+    detail: Detail,
+) -> Result<PositionSpectra> {
     let full = detail == Detail::Full;
     let dx = 2.0 * d_avg_mm / POINTS_PER_PERIOD as f64;
     let mut all = Vec::new();
-    for (rec, fr, range) in recs {
+    for (i, (rec, fr, range)) in recs.iter().enumerate() {
         all.push(resample_record(
             rec,
             range.clone(),
             *fr,
+            lowpassed.get(i).copied().flatten(),
             filter,
             settings,
             dx,

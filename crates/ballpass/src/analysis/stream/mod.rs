@@ -180,7 +180,7 @@ impl PassKit<'_> {
     }
 }
 
-/// The sums of the velocity error's statistics (as `prepare_raw` takes
+/// The sums of the velocity error's statistics (as `prepare_raw_keeping` takes
 /// them, in the same order).
 #[derive(Default)]
 struct Moments {

@@ -384,11 +384,20 @@ pub(crate) fn coefficient(m: &[f64], k: usize) -> (f64, f64) {
 /// The periodic interpolation of the bins at phase `phi` in [0, 1).
 pub(crate) fn at_phase(m: &[f64], phi: f64) -> f64 {
     let b = m.len();
-    let u = phi.rem_euclid(1.0) * b as f64;
+    // A phase already in [0, 1) is its own remainder (`fmod` is exact):
+    // the library call `rem_euclid` makes is left to the others.
+    let phi = if (0.0..1.0).contains(&phi) {
+        phi
+    } else {
+        phi.rem_euclid(1.0)
+    };
+    let u = phi * b as f64;
     // `u >= 0` (or NaN): the cast is the floor (see `interp`).
     let i = (u as usize).min(b - 1);
     let f = u - i as f64;
-    m[i] + f * (m[(i + 1) % b] - m[i])
+    // `(i + 1) % b` without the integer division.
+    let next = if i + 1 == b { 0 } else { i + 1 };
+    m[i] + f * (m[next] - m[i])
 }
 
 /// `1 − Σ (x − m(φ))² / Σ (x − x̄)²` over the samples of the periods.
