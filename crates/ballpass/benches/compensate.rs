@@ -36,6 +36,17 @@
 //! the bench itself (fundamental only, then 12 harmonics; the best of
 //! each's steps by f_c component, and by std among those meeting −80 %).
 //!
+//! With `--guard`, runs each bench with the product's table (the replay's
+//! design with its guard: a fixed-point round refused, and the rounds
+//! stopped, when the replay says its table makes the std larger than no
+//! table; a correction kept only when its f_c component falls; session 12,
+//! [`ballpass::validate::compensation_guard`]) and, where it differs, with
+//! the table built without the guard (main's before session 12), and
+//! prints per class (good; sticking with the std up to 15 %, 15–57 %, over
+//! 57 % of v) both goals for each, the std predicted within 20 % and the
+//! f_c component after within its interval, with 95 % intervals
+//! (`-- --guard N SEED [FIRST]`: draws FIRST..N).
+//!
 //! With `--rounds`, compensates each bench in three rounds, each table
 //! built from the run with the previous one applied
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
@@ -66,6 +77,10 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--trace") {
         trace();
+        return;
+    }
+    if std::env::args().any(|a| a == "--guard") {
+        guard();
         return;
     }
     let (n, seed) = n_and_seed(7_000_000);
@@ -447,5 +462,142 @@ fn trace() {
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
         }
+    }
+}
+
+/// The `--guard` measurement (module docs).
+fn guard() {
+    use ballpass::validate::compensation::CompensationCheck;
+    use ballpass::validate::compensation_guard::{guard_check, GuardCheck};
+    use ballpass::validate::Rate;
+    let (n, seed) = n_and_seed(16_000_000);
+    let first: u64 = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(0);
+    println!(
+        "i,v_mm_s,condition,std_over_v,rounds_kept,refused_round,corrections_kept,fc_before,std_before,fc_after,std_after,fc_pred,fc_low,fc_high,std_pred,warn_goal,warn_worse,u1_kept_max_n,u1_all_max_n,u1_final_n,u1_unguarded_n,fc_unguarded,std_unguarded,std_pred_unguarded,bare_std,round_stds"
+    );
+    let mut rows: Vec<GuardCheck> = Vec::new();
+    for i in first..n {
+        let s = bench(seed, i);
+        match guard_check(&s) {
+            Ok(g) => {
+                let p = &g.product;
+                let u = g.unguarded.as_ref();
+                println!(
+                    "{i},{:.3},{},{:.3},{},{},{},{:.2},{:.1},{:.3},{:.1},{:.3},{:.3},{:.3},{:.1},{},{},{:.2},{:.2},{:.2},{:.2},{},{},{},{:.1},{}",
+                    p.velocity_mm_s,
+                    p.condition.name(),
+                    p.std_before_um_s * 1e-3 / p.velocity_mm_s,
+                    g.kept.map_or(-1, |k| k.rounds as i64),
+                    g.kept
+                        .and_then(|k| k.refused_round)
+                        .map_or(String::new(), |r| r.to_string()),
+                    g.kept.map_or(-1, |k| k.corrections as i64),
+                    p.f_c_before_um_s,
+                    p.std_before_um_s,
+                    p.f_c_after_um_s,
+                    p.std_after_um_s,
+                    p.f_c_predicted_um_s,
+                    p.f_c_predicted_interval_um_s.0,
+                    p.f_c_predicted_interval_um_s.1,
+                    p.std_predicted_um_s,
+                    u8::from(p.warned_goal),
+                    u8::from(p.warned_worse),
+                    g.round_u1_max_n.0,
+                    g.round_u1_max_n.1,
+                    g.u1_n.0,
+                    g.u1_n.1,
+                    u.map_or(String::new(), |u| format!("{:.3}", u.f_c_um_s)),
+                    u.map_or(String::new(), |u| format!("{:.1}", u.std_um_s)),
+                    u.map_or(String::new(), |u| format!("{:.1}", u.std_predicted_um_s)),
+                    g.bare_std_um_s,
+                    g.round_std_um_s
+                        .iter()
+                        .map(|x| format!("{x:.1}"))
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                );
+                rows.push(g);
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+    let both = |c: &CompensationCheck, fc: f64, sd: f64| {
+        fc <= 0.2 * c.f_c_before_um_s && sd < c.std_before_um_s
+    };
+    type Pick = fn(&GuardCheck) -> bool;
+    let classes: [(&str, Pick); 4] = [
+        ("good", |g| {
+            g.product.condition == ballpass::sim::Condition::Good
+        }),
+        ("sticking, std <= 15 % of v", |g| {
+            g.product.condition == ballpass::sim::Condition::Sticking
+                && g.product.std_before_um_s * 1e-3 / g.product.velocity_mm_s <= 0.15
+        }),
+        ("sticking, 15-57 % of v", |g| {
+            let r = g.product.std_before_um_s * 1e-3 / g.product.velocity_mm_s;
+            g.product.condition == ballpass::sim::Condition::Sticking && r > 0.15 && r <= 0.57
+        }),
+        ("sticking, over 57 % of v", |g| {
+            g.product.condition == ballpass::sim::Condition::Sticking
+                && g.product.std_before_um_s * 1e-3 / g.product.velocity_mm_s > 0.57
+        }),
+    ];
+    println!("# benches run: {} of {}", rows.len(), n - first);
+    for (what, pick) in classes {
+        let r: Vec<&GuardCheck> = rows.iter().filter(|g| pick(g)).collect();
+        let m = r.len();
+        let count = |f: &dyn Fn(&GuardCheck) -> bool| r.iter().filter(|g| f(g)).count();
+        let guarded = count(&|g| {
+            both(
+                &g.product,
+                g.product.f_c_after_um_s,
+                g.product.std_after_um_s,
+            )
+        });
+        let unguarded = count(&|g| match &g.unguarded {
+            Some(u) => both(&g.product, u.f_c_um_s, u.std_um_s),
+            None => both(
+                &g.product,
+                g.product.f_c_after_um_s,
+                g.product.std_after_um_s,
+            ),
+        });
+        let std_ok = count(&|g| g.product.std_prediction_error() <= 0.2);
+        let interval = count(&|g| {
+            let (lo, hi) = g.product.f_c_predicted_interval_um_s;
+            g.product.f_c_after_um_s >= lo && g.product.f_c_after_um_s <= hi
+        });
+        let std_ok_u = count(&|g| match &g.unguarded {
+            Some(u) => (u.std_predicted_um_s - u.std_um_s).abs() <= 0.2 * u.std_um_s,
+            None => g.product.std_prediction_error() <= 0.2,
+        });
+        let interval_u = count(&|g| match &g.unguarded {
+            Some(u) => {
+                u.f_c_um_s >= u.f_c_predicted_um_s[0] && u.f_c_um_s <= u.f_c_predicted_um_s[2]
+            }
+            None => {
+                let (lo, hi) = g.product.f_c_predicted_interval_um_s;
+                g.product.f_c_after_um_s >= lo && g.product.f_c_after_um_s <= hi
+            }
+        });
+        let changed = count(&|g| g.unguarded.is_some());
+        let mut red: Vec<f64> = r.iter().map(|g| g.product.f_c_reduction()).collect();
+        red.sort_by(f64::total_cmp);
+        let med = if m > 0 { red[m / 2] } else { f64::NAN };
+        println!(
+            "# {what}: {m} benches; table changed by the guard on {changed}\n#   both goals: guarded {} (f_c median -{:.1} %), unguarded {}\n#   std predicted within 20 %: guarded {}, unguarded {}\n#   f_c after within its interval: guarded {}, unguarded {}",
+            Rate::of(guarded, m),
+            100.0 * med,
+            Rate::of(unguarded, m),
+            Rate::of(std_ok, m),
+            Rate::of(std_ok_u, m),
+            Rate::of(interval, m),
+            Rate::of(interval_u, m),
+        );
     }
 }

@@ -77,7 +77,7 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
 
 /// The compensation `ballpass compensate` builds for bench `s`, and the
 /// prediction it used.
-fn table_for(s: &SimSettings) -> Result<(Compensation, Prediction)> {
+pub(crate) fn table_for(s: &SimSettings) -> Result<(Compensation, Prediction)> {
     let sim = simulate(s)?;
     let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
     let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
@@ -92,7 +92,11 @@ fn table_for(s: &SimSettings) -> Result<(Compensation, Prediction)> {
 
 /// Bench `s` simulated with `ff` applied, and its f_c component and
 /// low-passed std of the velocity error, µm/s.
-fn closed_loop(s: &SimSettings, ff: Feedforward, pred: &Prediction) -> Result<(f64, f64)> {
+pub(crate) fn closed_loop(
+    s: &SimSettings,
+    ff: Feedforward,
+    pred: &Prediction,
+) -> Result<(f64, f64)> {
     let mut s1 = s.clone();
     s1.feedforward = Some(ff);
     let sim1 = simulate(&s1)?;
@@ -110,7 +114,7 @@ fn closed_loop(s: &SimSettings, ff: Feedforward, pred: &Prediction) -> Result<(f
 }
 
 /// [`check`] of the table `comp` built for bench `s`.
-fn check_table(
+pub(crate) fn check_table(
     s: &SimSettings,
     comp: &Compensation,
     pred: &Prediction,

@@ -77,7 +77,7 @@ pub fn trace(s: &SimSettings) -> Result<FcTrace> {
         source_name: sim.recording.source_name(),
         reason,
     };
-    let d = design_again(&a, recs, &comp).map_err(bad)?;
+    let d = design_again(&a, recs, &comp, true).map_err(bad)?;
     let c = |w: &[f64]| coefficient(w, 1);
     let (truth_fixed, std_fixed) = run(s, &d.trace.fixed_point, &pred)?;
     let (truth_final, std_final) = run(s, &comp.force_n, &pred)?;

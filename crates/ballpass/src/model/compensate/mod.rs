@@ -72,8 +72,16 @@
 
 use serde::Serialize;
 
+mod rail;
 pub(crate) mod replay;
 mod travel;
+
+pub use rail::{RailGrid, RailTable, RAIL_LOCK_FRACTION, RECORD_OFFSET_LIMIT};
+pub use replay::Kept;
+
+#[cfg(test)]
+use rail::rail_grid;
+use rail::rail_table;
 
 use crate::analysis::sync::{coefficient, SyncKey};
 use crate::analysis::{analyze, Analysis, AnalyzeSettings, Signal};
@@ -84,16 +92,6 @@ use crate::recording::Recording;
 
 /// Schema tag of `compensation.json`.
 pub const SCHEMA: &str = "ballpass.compensation/1";
-
-/// Largest rms distance of the passages from their rail grid, as a fraction
-/// of the pitch, for the rail-position table.
-pub const RAIL_LOCK_FRACTION: f64 = 0.05;
-
-/// Largest spread of the records' mean distances from the rail grid, as a
-/// fraction of the pitch, for the rail-position table from several
-/// records (records of one encoder frame agree; a record re-zeroed in
-/// between sits apart). Set on training benches (docs/methods.md §14).
-pub const RECORD_OFFSET_LIMIT: f64 = 0.05;
 
 /// Velocity-error std, as a fraction of the velocity, above which the
 /// stage nearly stalls at the friction peaks and the linear prediction
@@ -162,41 +160,6 @@ const SEVERE_STALL_WORDS: &str =
      goals (f_c component −80 %, std down) on 37 of 40 (f_c median −89 %, the misses −27 to \
      −79 %); the std it predicts held on 38 of 40; the f_c component after is given with an \
      interval that held 33 of 40 tables. Check it on the machine, scaled down first";
-
-/// The table against rail position.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RailTable {
-    /// Encoder position of phase 0 (an optical passage), mm.
-    pub x0_mm: f64,
-    /// Travel per period fitted to the passages, mm.
-    pub pitch_mm: f64,
-    /// Spacing of the table's positions, mm (`pitch / B`).
-    pub spacing_mm: f64,
-    /// Rms distance of the passages from the grid, mm.
-    pub lock_rms_mm: f64,
-}
-
-/// The rail grid fitted to the optical passages, whether or not they lock
-/// to it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RailGrid {
-    /// Encoder position of phase 0 (an optical passage), mm.
-    pub x0_mm: f64,
-    /// Travel per period fitted to the passages, mm.
-    pub pitch_mm: f64,
-    /// Rms distance of the passages from the grid, mm.
-    pub lock_rms_mm: f64,
-    /// The same as a fraction of the pitch (locked when ≤
-    /// [`RAIL_LOCK_FRACTION`]).
-    pub lock_fraction: f64,
-    /// Each record's phase on the grid relative to the first record's
-    /// (one intercept per record on a common pitch), fraction of the
-    /// pitch, within ±1/2 (records of one encoder frame agree).
-    pub record_offsets: Vec<f64>,
-    /// Largest minus smallest of `record_offsets` (0 for one record;
-    /// locked only when ≤ [`RECORD_OFFSET_LIMIT`]).
-    pub offset_spread: f64,
-}
 
 /// Where the stage model of the prediction came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -305,6 +268,9 @@ pub struct Compensation {
     /// Each record's friction level, restored and as replayed (empty
     /// without a replay).
     pub friction_levels: Vec<FrictionLevel>,
+    /// The replay's design steps kept by its guard (`None` without a
+    /// replay).
+    pub design_kept: Option<Kept>,
     /// The table against rail position, when the passages lock to it.
     pub rail: Option<RailTable>,
     /// Why there is or is not a rail table.
@@ -443,12 +409,15 @@ pub fn from_analysis(
     let replayed = keys
         .as_ref()
         .map_err(Clone::clone)
-        .and_then(|k| replay::design(k, &stage, a, b, refined));
+        .and_then(|k| replay::design(k, &stage, &replay::DesignAt::of(a), b, refined, true));
     let mut friction_levels = Vec::new();
+    let mut design_kept = None;
     let (force_n, table_source, table_text, prediction) = match replayed {
         Ok(d) => {
             let [low, mid, high] =
                 f_c_after_interval(d.after.f_c_um_s, d.f_c_model_error_um_s, stall);
+            design_kept = Some(d.kept);
+            let guard_text = d.guard_text();
             (
                 d.table,
                 TableSource::Replay,
@@ -475,9 +444,9 @@ pub fn from_analysis(
                     format!(
                     "friction as the compensated stage meets it: the records' friction against \
                      encoder position replayed through the stage with the table applied, averaged \
-                     over time against the travel since the last passage, {} rounds from the \
-                     friction against travel; {}",
-                    replay::ROUNDS,
+                     over time against the travel since the last passage, from the friction \
+                     against travel; {}; {}",
+                    guard_text,
                     if refined {
                         format!(
                             "passages at their optical pulses' centres in travel, the friction's \
@@ -611,6 +580,7 @@ pub fn from_analysis(
         table_text,
         force_sync_n,
         friction_levels,
+        design_kept,
         rail,
         rail_note,
         rail_grid,
@@ -623,16 +593,26 @@ pub fn from_analysis(
 }
 
 /// The replay's design of `comp` (made by [`from_analysis`] from `a` and
-/// `recs`) again, with its steps, for the validation's look inside.
+/// `recs`) again, with its steps, for the validation's look inside;
+/// `guarded` false: every round and correction taken, as before the guard
+/// ([`replay::design`]).
 pub(crate) fn design_again(
     a: &Analysis,
     recs: &[Recording],
     comp: &Compensation,
+    guarded: bool,
 ) -> std::result::Result<replay::Design, String> {
     let refined =
         comp.prediction.std_before_um_s * 1e-3 / comp.velocity_mm_s <= SEVERE_STALL_FRACTION;
     let keys = travel::record_keys(recs, a, refined)?;
-    replay::design(&keys, &comp.stage, a, comp.bins, refined)
+    replay::design(
+        &keys,
+        &comp.stage,
+        &replay::DesignAt::of(a),
+        comp.bins,
+        refined,
+        guarded,
+    )
 }
 
 /// The linear prediction of the periodic velocity error with `force`
@@ -680,146 +660,6 @@ fn describe(g: &PdLoop) -> String {
         "m = {:.4} kg, K·K_P = {:.4} N/m, K·K_D = {:.4} N·s/m",
         g.mass_kg, g.stiffness_n_per_m, g.damping_n_s_per_m
     )
-}
-
-/// The rail grid of the optical passages of every record, with the table
-/// when they lock to it and the records share one encoder frame.
-fn rail_table(
-    keys: &std::result::Result<Vec<travel::RecordKeys>, String>,
-    a: &Analysis,
-    bins: usize,
-) -> (Option<RailTable>, String, Option<RailGrid>) {
-    let grid = match keys {
-        Ok(k) => rail_grid(k, 2.0 * a.prediction.d_avg_mm),
-        Err(why) => Err(format!("no rail table: {why}")),
-    };
-    match grid {
-        Err(why) => (None, why, None),
-        Ok(g) if g.lock_fraction > RAIL_LOCK_FRACTION => (
-            None,
-            format!(
-                "no rail table: the passages wander {:.1} % of a pitch (rms) from a rail grid \
-                 (limit {:.0} %); use the table keyed on the passages",
-                100.0 * g.lock_fraction,
-                100.0 * RAIL_LOCK_FRACTION
-            ),
-            Some(g),
-        ),
-        Ok(g) if g.offset_spread > RECORD_OFFSET_LIMIT => (
-            None,
-            format!(
-                "no rail table: the records' passages sit {:.1} % of a pitch apart on the rail grid \
-                 (limit {:.0} %): the records do not share one encoder frame (re-homed or \
-                 re-zeroed between them?); use the table keyed on the passages, or records of \
-                 one frame",
-                100.0 * g.offset_spread,
-                100.0 * RECORD_OFFSET_LIMIT
-            ),
-            Some(g),
-        ),
-        Ok(g) => (
-            Some(RailTable {
-                x0_mm: g.x0_mm,
-                pitch_mm: g.pitch_mm,
-                spacing_mm: g.pitch_mm / bins as f64,
-                lock_rms_mm: g.lock_rms_mm,
-            }),
-            format!(
-                "the passages lock to the rail: rms {:.1} % of the pitch from x0 + k·{:.4} mm \
-                 (limit {:.0} %){}",
-                100.0 * g.lock_fraction,
-                g.pitch_mm,
-                100.0 * RAIL_LOCK_FRACTION,
-                if g.record_offsets.len() > 1 {
-                    format!(
-                        ", the records within {:.1} % of a pitch of each other (limit {:.0} %)",
-                        100.0 * g.offset_spread,
-                        100.0 * RECORD_OFFSET_LIMIT
-                    )
-                } else {
-                    String::new()
-                }
-            ),
-            Some(g),
-        ),
-    }
-}
-
-/// The rail grid fitted to the optical passages of every record (`pitch0`
-/// the predicted travel per period), or why there is none.
-fn rail_grid(keys: &[travel::RecordKeys], pitch0: f64) -> std::result::Result<RailGrid, String> {
-    let pos: Vec<f64> = keys
-        .iter()
-        .flat_map(|k| k.passage_mm.iter().copied())
-        .collect();
-    if pos.len() < 3 {
-        return Err("no rail table: fewer than 3 passages".into());
-    }
-    // Grid index of each passage from the predicted pitch, then a line.
-    let x_first = pos[0];
-    let k: Vec<f64> = pos
-        .iter()
-        .map(|x| ((x - x_first) / pitch0).round())
-        .collect();
-    let Some(fit) = crate::stats::linear_fit(&k, &pos) else {
-        return Err("no rail table: the passage positions do not fit a line".into());
-    };
-    let (pitch, x0) = (fit.slope, fit.intercept);
-    let resid: Vec<f64> = k
-        .iter()
-        .zip(&pos)
-        .map(|(k, x)| x - x0 - k * pitch)
-        .collect();
-    let rms = (resid.iter().map(|r| r * r).sum::<f64>() / pos.len() as f64).sqrt();
-    // Each record's own phase on a common pitch: x = x0_r + k·p with one
-    // intercept per record (a step between records is not absorbed by the
-    // slope, as it is in the single line), offsets relative to the first
-    // record, wrapped to ±p/2, fraction of the pitch.
-    let mut spans = Vec::with_capacity(keys.len());
-    let mut at = 0;
-    for kk in keys {
-        let n = kk.passage_mm.len();
-        if n >= 2 {
-            spans.push(at..at + n);
-        }
-        at += n;
-    }
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    let means: Vec<(f64, f64)> = spans
-        .iter()
-        .map(|r| {
-            let n = r.len() as f64;
-            let km = k[r.clone()].iter().sum::<f64>() / n;
-            let xm = pos[r.clone()].iter().sum::<f64>() / n;
-            for i in r.clone() {
-                sxy += (k[i] - km) * (pos[i] - xm);
-                sxx += (k[i] - km).powi(2);
-            }
-            (km, xm)
-        })
-        .collect();
-    let p_common = if sxx > 0.0 { sxy / sxx } else { pitch };
-    let x0s: Vec<f64> = means.iter().map(|(km, xm)| xm - p_common * km).collect();
-    let record_offsets: Vec<f64> = x0s
-        .iter()
-        .map(|x| {
-            let d = (x - x0s[0]) / p_common.abs();
-            d - d.round()
-        })
-        .collect();
-    let spread = record_offsets
-        .iter()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max)
-        - record_offsets.iter().copied().fold(f64::INFINITY, f64::min);
-    Ok(RailGrid {
-        x0_mm: x0,
-        pitch_mm: pitch,
-        lock_rms_mm: rms,
-        lock_fraction: rms / pitch.abs(),
-        record_offsets,
-        offset_spread: if spread.is_finite() { spread } else { 0.0 },
-    })
 }
 
 /// One of the compensation's tables, as its CSV file holds it.

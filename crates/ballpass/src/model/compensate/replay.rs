@@ -39,15 +39,55 @@ pub(crate) struct Design {
     /// how far the replay is from the stage it stands for, at the f_c
     /// component.
     pub f_c_model_error_um_s: f64,
+    /// Fixed-point rounds kept (of [`ROUNDS`]) and correction steps kept
+    /// (of [`FUNDAMENTAL_STEPS`]) by the guard ([`design`]).
+    pub kept: Kept,
     /// How the design went, for the validation's look inside.
     pub trace: Trace,
+}
+
+/// The steps of the replay's design kept by its guard: a step is kept
+/// only when the replay says it helps (`compensation.json`,
+/// `design_kept`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Kept {
+    /// The fixed-point round whose table the table comes from, of 4 (0:
+    /// the friction against travel).
+    pub rounds: usize,
+    /// The round refused, when one was: the first whose table the replay
+    /// says makes the velocity error's std larger than no table does
+    /// (the rounds stop there).
+    pub refused_round: Option<usize>,
+    /// Corrections of the table's fundamental kept, of 3.
+    pub corrections: usize,
+}
+
+/// One table of the design and the replay with it (for the trace).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Step {
+    /// Fundamental of the table (coefficient, N).
+    pub table_c1: (f64, f64),
+    /// The replay's f_c component with it, µm/s.
+    pub f_c_um_s: f64,
+    /// The replay's std with it, µm/s.
+    pub std_um_s: f64,
+}
+
+impl Step {
+    fn of(table: &[f64], r: &Replayed) -> Self {
+        Self {
+            table_c1: crate::analysis::sync::coefficient(table, 1),
+            f_c_um_s: r.f_c_um_s,
+            std_um_s: r.std_um_s,
+        }
+    }
 }
 
 /// The steps of [`design`], for the validation.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Trace {
-    /// The table after the fixed-point rounds, before the fundamental's
-    /// correction.
+    /// The table after the fixed-point rounds kept, before the
+    /// fundamental's correction.
     pub fixed_point: Vec<f64>,
     /// The replay with it.
     pub fixed_point_after: Replayed,
@@ -55,30 +95,86 @@ pub(crate) struct Trace {
     pub bare: Replayed,
     /// Fundamental of the records' velocity error (coefficient, µm/s).
     pub measured_v1: Option<(f64, f64)>,
+    /// The friction against travel and each fixed-point round tried
+    /// (the first refused one last, when the guard stopped the rounds).
+    pub rounds: Vec<Step>,
+    /// Each correction of the fundamental tried.
+    pub corrections: Vec<Step>,
+}
+
+/// What [`design`] takes from the analysis of the records.
+#[derive(Debug, Clone)]
+pub(crate) struct DesignAt {
+    /// Ball pitch `2·d_avg`, mm.
+    pub pitch_mm: f64,
+    /// Commanded velocity, mm/s.
+    pub velocity_mm_s: f64,
+    /// The analysis' settings (the replay's low-pass).
+    pub settings: AnalyzeSettings,
+    /// Fundamental of the records' velocity error (coefficient, µm/s).
+    pub measured_v1: Option<(f64, f64)>,
+    /// Ball-pass angular frequency of the synchronous average, rad/s
+    /// (without it, no correction of the fundamental).
+    pub w_c_rad_s: Option<f64>,
+}
+
+impl DesignAt {
+    /// From the analysis `a` of the records.
+    pub(crate) fn of(a: &crate::analysis::Analysis) -> Self {
+        Self {
+            pitch_mm: 2.0 * a.prediction.d_avg_mm,
+            velocity_mm_s: a.prediction.velocity_mm_s,
+            settings: a.settings.clone(),
+            measured_v1: a
+                .sync
+                .as_ref()
+                .and_then(|s| s.waveform(Signal::VelocityError))
+                .map(|w| crate::analysis::sync::coefficient(&w.mean, 1)),
+            w_c_rad_s: a
+                .sync
+                .as_ref()
+                .map(|s| std::f64::consts::TAU / s.period_s.mean),
+        }
+    }
 }
 
 /// The table of `bins` bins the compensated stage meets: starting from the
 /// friction against travel ([`super::travel`]), each round replays the
 /// records with the table and takes the friction met, averaged over time
 /// against the travel phase (a fixed point: the table equals the periodic
-/// friction as the stage moves with it applied); [`ROUNDS`] rounds. Then
-/// [`FUNDAMENTAL_STEPS`] steps of [`correct_fundamental`] on the replay
-/// with the table, and the replay's own error at f_c without a table.
+/// friction as the stage moves with it applied); up to [`ROUNDS`] rounds.
+/// Then up to [`FUNDAMENTAL_STEPS`] steps of [`correct_fundamental`] on the
+/// replay with the table, and the replay's own error at f_c without a
+/// table.
+///
+/// With `guarded` (the product), a step is kept only when the replay says
+/// it helps. A round is refused when the replay with its table gives a
+/// velocity-error std not below the replay's without any table (near stall
+/// the rounds can run away, the table feeding the stalls it is meant to
+/// remove); the rounds then stop, and the table kept is the one, of the
+/// friction against travel and the rounds before, with which the replay's
+/// std is lowest. A correction of the fundamental is kept only when the
+/// replay's f_c component falls (what the correction is for), and the
+/// corrections stop at the first that does not. Without `guarded` (the
+/// validation's comparison), every round and correction is taken, as
+/// before session 12.
 pub(crate) fn design(
     keys: &[RecordKeys],
     stage: &PdLoop,
-    a: &crate::analysis::Analysis,
+    at: &DesignAt,
     bins: usize,
     fit_level: bool,
+    guarded: bool,
 ) -> Result<Design, String> {
-    let pitch = 2.0 * a.prediction.d_avg_mm;
+    let pitch = at.pitch_mm;
     let (sum, count) = super::travel::travel_bins(keys, |k| &k.friction_n, pitch, bins);
     let mut table = super::travel::travel_table(&sum, &count)
         .ok_or("no period between two passages to average the friction over")?;
-    let v = a.prediction.velocity_mm_s;
+    let v = at.velocity_mm_s;
+    let settings = &at.settings;
     let mut keys = keys.to_vec();
     let levels = if fit_level {
-        fit_levels(&mut keys, stage, pitch, v, &a.settings)?
+        fit_levels(&mut keys, stage, pitch, v, settings)?
     } else {
         keys.iter()
             .map(|k| {
@@ -91,30 +187,57 @@ pub(crate) fn design(
             .collect()
     };
     let keys = &keys[..];
-    for _ in 0..ROUNDS {
-        let r = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
-        table = r
+    let play = |t: &[f64]| replay(keys, stage, Some(t), pitch, v, settings);
+    let bare = replay(keys, stage, None, pitch, v, settings)?;
+    let mut after = play(&table)?;
+    let mut rounds = vec![Step::of(&table, &after)];
+    let mut tables = vec![(table.clone(), after.clone())];
+    let mut kept = Kept {
+        rounds: 0,
+        refused_round: None,
+        corrections: 0,
+    };
+    for r in 1..=ROUNDS {
+        let next = after
             .friction_met_n
+            .clone()
             .ok_or("the replay did not reach the passages")?;
+        let next_after = play(&next)?;
+        rounds.push(Step::of(&next, &next_after));
+        if guarded {
+            let stds: Vec<f64> = rounds.iter().map(|x| x.std_um_s).collect();
+            if let Some(best) = round_refused(&stds, bare.std_um_s) {
+                (table, after) = tables.swap_remove(best);
+                kept.rounds = best;
+                kept.refused_round = Some(r);
+                break;
+            }
+        }
+        (table, after) = (next, next_after);
+        if guarded {
+            tables.push((table.clone(), after.clone()));
+        }
+        kept.rounds = r;
     }
-    let mut after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
     let (fixed_point, fixed_point_after) = (table.clone(), after.clone());
-    let measured = a
-        .sync
-        .as_ref()
-        .and_then(|s| s.waveform(Signal::VelocityError))
-        .map(|w| crate::analysis::sync::coefficient(&w.mean, 1));
-    let bare = replay(keys, stage, None, pitch, v, &a.settings)?;
+    let measured = at.measured_v1;
     let (re, im) = crate::analysis::sync::coefficient(&bare.waveform_um_s, 1);
     let f_c_model_error_um_s = measured.map_or(f64::NAN, |m| 2.0 * (m.0 - re).hypot(m.1 - im));
-    if let Some(w_c) = a
-        .sync
-        .as_ref()
-        .map(|s| std::f64::consts::TAU / s.period_s.mean)
-    {
-        for _ in 0..FUNDAMENTAL_STEPS {
-            correct_fundamental(&mut table, &after.waveform_um_s, stage, w_c);
-            after = replay(keys, stage, Some(&table), pitch, v, &a.settings)?;
+    let mut corrections = Vec::new();
+    if let Some(w_c) = at.w_c_rad_s {
+        for k in 1..=FUNDAMENTAL_STEPS {
+            let mut next = table.clone();
+            correct_fundamental(&mut next, &after.waveform_um_s, stage, w_c);
+            let next_after = play(&next)?;
+            corrections.push(Step::of(&next, &next_after));
+            // A NaN (a replay that cannot say) refuses the correction too.
+            let lower =
+                next_after.f_c_um_s.partial_cmp(&after.f_c_um_s) == Some(std::cmp::Ordering::Less);
+            if guarded && !lower {
+                break;
+            }
+            (table, after) = (next, next_after);
+            kept.corrections = k;
         }
     }
     Ok(Design {
@@ -122,13 +245,72 @@ pub(crate) fn design(
         after,
         levels,
         f_c_model_error_um_s,
+        kept,
         trace: Trace {
             fixed_point,
             fixed_point_after,
             bare,
             measured_v1: measured,
+            rounds,
+            corrections,
         },
     })
+}
+
+impl Design {
+    /// The rounds and corrections kept by the guard, in words, with the
+    /// replay's figures for the first step refused.
+    pub(crate) fn guard_text(&self) -> String {
+        let t = &self.trace;
+        let mut out = match self.kept.refused_round {
+            None => format!("{ROUNDS} rounds"),
+            Some(r) => {
+                let from = if self.kept.rounds == 0 {
+                    "the friction against travel".to_string()
+                } else {
+                    format!("round {}", self.kept.rounds)
+                };
+                format!(
+                    "the rounds stopped at round {r} of {ROUNDS}, whose table the replay says makes \
+                     the velocity error worse than no table (std {:.1} µm/s, {:.1} without a \
+                     table): the table is {from}'s (std {:.1} µm/s, the lowest before)",
+                    t.rounds[r].std_um_s, t.bare.std_um_s, t.fixed_point_after.std_um_s
+                )
+            }
+        };
+        out += &format!(
+            ", then {} of {FUNDAMENTAL_STEPS} corrections of the table's fundamental",
+            self.kept.corrections
+        );
+        if self.kept.corrections < t.corrections.len() {
+            let before = if self.kept.corrections == 0 {
+                t.fixed_point_after.f_c_um_s
+            } else {
+                t.corrections[self.kept.corrections - 1].f_c_um_s
+            };
+            out += &format!(
+                " (the next would have taken the replay's f_c component from {:.1} to {:.1} \
+                 µm/s; a correction is kept only when it lowers it)",
+                before, t.corrections[self.kept.corrections].f_c_um_s
+            );
+        }
+        out
+    }
+}
+
+/// The guard on the fixed-point rounds: `stds` the replay's velocity-error
+/// std with the friction against travel and each round so far (µm/s), the
+/// last one just tried, `bare_std` the replay's without a table. `None`
+/// when the last round is kept: the replay says its table makes the
+/// velocity error smaller than no table. Else the round to keep instead:
+/// of those before, the one with the lowest std (a NaN std, a replay that
+/// cannot say, refuses the round too).
+pub(crate) fn round_refused(stds: &[f64], bare_std: f64) -> Option<usize> {
+    let (&last, before) = stds.split_last()?;
+    if last < bare_std || before.is_empty() {
+        return None;
+    }
+    (0..before.len()).min_by(|&i, &j| before[i].total_cmp(&before[j]))
 }
 
 /// Steps of the fundamental's correction ([`correct_fundamental`]).

@@ -245,3 +245,91 @@ fn the_f_c_interval_is_ordered_scaled_by_regime_and_keeps_the_replay_s_residual(
     let got = f_c_after_interval(300.0, 4.0, 0.7);
     assert!(got.iter().all(|&x| (300.0..300.1).contains(&x)), "{got:?}");
 }
+
+/// The rounds' guard on a trace like the runaway ones (session 11's design
+/// benches: the replay's std with the table climbing from below to several
+/// times the one without a table): the first round not below the bare
+/// replay is refused and the lowest before it kept; rounds that stay below
+/// are all kept, however they wander.
+#[test]
+fn the_round_guard_refuses_a_runaway_round_and_keeps_the_lowest_before() {
+    use super::replay::round_refused;
+    let bare = 1400.0;
+    // Running away: friction against travel, rounds 1, 2 (kept), round 3
+    // above the bare replay: refused, round 1 (the lowest) kept.
+    assert_eq!(round_refused(&[1005.0, 980.0], bare), None);
+    assert_eq!(round_refused(&[1005.0, 980.0, 1300.0], bare), None);
+    assert_eq!(
+        round_refused(&[1005.0, 980.0, 1300.0, 6361.0], bare),
+        Some(1)
+    );
+    // Equal to the bare replay: the table does not help, refused.
+    assert_eq!(round_refused(&[1005.0, 1400.0], bare), Some(0));
+    // Oscillating below the bare replay (as on many near-stall benches):
+    // every round kept.
+    for k in 2..=5 {
+        let stds = [1682.0, 1210.0, 1386.0, 1211.0, 1358.0];
+        assert_eq!(round_refused(&stds[..k], 2260.0), None, "{k}");
+    }
+    // A replay that cannot say (NaN) refuses the round.
+    assert_eq!(round_refused(&[900.0, f64::NAN], bare), Some(0));
+}
+
+/// A near-stall record (spikes whose height varies from ball to ball, so
+/// the compensated stage still sticks): the guarded design keeps only what
+/// the replay says helps (its table's replay below the bare one, each
+/// correction kept lowering the replay's f_c component), and where it
+/// refuses nothing it is the unguarded design.
+#[test]
+fn the_guarded_design_keeps_only_steps_the_replay_supports() {
+    use super::replay::{design, DesignAt};
+    let (v, pitch, fs) = (3.0f64, 8.1f64, 1000.0);
+    let n = (12.0 * pitch / v * fs) as usize;
+    let x: Vec<f64> = (0..n).map(|i| v * i as f64 / fs).collect();
+    let f: Vec<f64> = x
+        .iter()
+        .map(|&x| {
+            let k = (x / pitch).floor() as u64;
+            // Ball-to-ball spread of the spike height, fixed pseudo-random.
+            let r = (k.wrapping_mul(2_654_435_761) % 1000) as f64 / 500.0 - 1.0;
+            let ph = (x / pitch).fract() - 0.5;
+            4.0 + 0.5 * (std::f64::consts::TAU * x / 1.3).sin()
+                + 20.0 * (1.0 + 0.9 * r) * (-0.5 * (ph * pitch / 0.17).powi(2)).exp()
+        })
+        .collect();
+    let passages: Vec<f64> = (0..)
+        .map(|k| k as f64 * pitch / v * fs)
+        .take_while(|&u| u < (n - 1) as f64)
+        .collect();
+    let passage_mm = passages.iter().map(|&u| at_index(&x, u)).collect();
+    let keys = vec![RecordKeys {
+        fs_hz: fs,
+        friction_n: f,
+        velocity_error_std_um_s: 0.0,
+        position_mm: x,
+        passages,
+        passage_mm,
+    }];
+    let at = DesignAt {
+        pitch_mm: pitch,
+        velocity_mm_s: v,
+        settings: AnalyzeSettings::default(),
+        measured_v1: None,
+        w_c_rad_s: Some(std::f64::consts::TAU * v / pitch),
+    };
+    let g = design(&keys, &stage(), &at, 64, false, true).unwrap();
+    let d = design(&keys, &stage(), &at, 64, false, false).unwrap();
+    let bare = g.trace.bare.std_um_s;
+    // Near stall without a table.
+    assert!(bare > 0.3e3 * v, "{bare}");
+    assert!(g.after.std_um_s < bare, "{} vs {bare}", g.after.std_um_s);
+    let mut prev = g.trace.fixed_point_after.f_c_um_s;
+    for c in &g.trace.corrections[..g.kept.corrections] {
+        assert!(c.f_c_um_s < prev, "{:?}", g.trace.corrections);
+        prev = c.f_c_um_s;
+    }
+    if g.kept.refused_round.is_none() && g.kept.corrections == super::replay::FUNDAMENTAL_STEPS {
+        assert_eq!(g.table, d.table);
+    }
+    assert!(!g.guard_text().is_empty());
+}
