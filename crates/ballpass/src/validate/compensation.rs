@@ -377,18 +377,50 @@ pub struct Diagnosis {
     pub friction_level_n: (f64, f64),
 }
 
+/// A simulated bench as `ballpass compensate` takes it, on the simulated
+/// stage's gains: the record, its prediction, analysis and compensation.
+pub(crate) struct Compensated {
+    pub(crate) sim: crate::sim::Simulation,
+    pub(crate) pred: Prediction,
+    pub(crate) gains: PdLoop,
+    pub(crate) analysis: crate::analysis::Analysis,
+    pub(crate) comp: Compensation,
+}
+
+/// Simulates bench `s`, analyses it and builds its compensation.
+///
+/// # Errors
+/// The simulator's, the analysis' and the compensation's errors.
+pub(crate) fn simulate_and_compensate(s: &SimSettings) -> Result<Compensated> {
+    let sim = simulate(s)?;
+    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
+    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let recs = std::slice::from_ref(&sim.recording);
+    let analysis = analyze(recs, &pred, &AnalyzeSettings::default())?;
+    let comp = crate::model::compensate::from_analysis(&analysis, recs, Some(gains))?;
+    Ok(Compensated {
+        sim,
+        pred,
+        gains,
+        analysis,
+        comp,
+    })
+}
+
 /// [`check`] and the same bench with the table built on the simulated
 /// stage (the identification ignored).
 ///
 /// # Errors
 /// As [`check`].
 pub fn diagnose(s: &SimSettings) -> Result<Diagnosis> {
-    let sim = simulate(s)?;
-    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
-    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let Compensated {
+        sim,
+        pred,
+        gains,
+        analysis: a,
+        comp,
+    } = simulate_and_compensate(s)?;
     let recs = std::slice::from_ref(&sim.recording);
-    let a = analyze(recs, &pred, &AnalyzeSettings::default())?;
-    let comp = crate::model::compensate::from_analysis(&a, recs, Some(gains))?;
     let product = check_table(s, &comp, &pred)?;
     let mut a2 = a.clone();
     if let Some(st) = a2.stage.as_mut() {

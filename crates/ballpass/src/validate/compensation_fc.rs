@@ -9,13 +9,14 @@
 use serde::Serialize;
 
 use crate::analysis::sync::coefficient;
-use crate::analysis::{analyze, AnalyzeSettings, Signal};
+use crate::analysis::Signal;
 use crate::bearing::Prediction;
 use crate::error::{Error, Result};
-use crate::model::compensate::{design_again, from_analysis, StageSource};
+use crate::model::compensate::{design_again, StageSource};
 use crate::model::stage::PdLoop;
 use crate::sim::feedforward::{Feedforward, FeedforwardKey};
-use crate::sim::{simulate, SimSettings};
+use crate::sim::SimSettings;
+use crate::validate::compensation::{simulate_and_compensate, Compensated};
 
 /// A fundamental, `c_1` (re, im), µm/s or N.
 pub type C1 = (f64, f64);
@@ -67,12 +68,15 @@ pub struct FcTrace {
 /// # Errors
 /// The simulator's, the analysis' and the compensation's errors.
 pub fn trace(s: &SimSettings) -> Result<FcTrace> {
-    let sim = simulate(s)?;
-    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
-    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let Compensated {
+        sim,
+        pred,
+        gains,
+        analysis: a,
+        comp,
+        ..
+    } = simulate_and_compensate(s)?;
     let recs = std::slice::from_ref(&sim.recording);
-    let a = analyze(recs, &pred, &AnalyzeSettings::default())?;
-    let comp = from_analysis(&a, recs, Some(gains))?;
     let bad = |reason: String| Error::InvalidRecording {
         source_name: sim.recording.source_name(),
         reason,

@@ -9,14 +9,14 @@
 
 use serde::Serialize;
 
-use crate::analysis::{analyze, AnalyzeSettings};
 use crate::error::{Error, Result};
-use crate::model::compensate::{design_again, from_analysis, Kept};
-use crate::model::stage::PdLoop;
+use crate::model::compensate::{design_again, Kept};
 use crate::sim::feedforward::{Feedforward, FeedforwardKey};
-use crate::sim::{simulate, SimSettings};
+use crate::sim::SimSettings;
 
-use super::compensation::{check_table, closed_loop, CompensationCheck};
+use super::compensation::{
+    check_table, closed_loop, simulate_and_compensate, Compensated, CompensationCheck,
+};
 
 /// One bench with the guarded and the unguarded table.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -63,12 +63,14 @@ pub struct Unguarded {
 /// # Errors
 /// The simulator's, the analysis' and the compensation's errors.
 pub fn guard_check(s: &SimSettings) -> Result<GuardCheck> {
-    let sim = simulate(s)?;
-    let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
-    let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
+    let Compensated {
+        sim,
+        pred,
+        analysis: a,
+        comp,
+        ..
+    } = simulate_and_compensate(s)?;
     let recs = std::slice::from_ref(&sim.recording);
-    let a = analyze(recs, &pred, &AnalyzeSettings::default())?;
-    let comp = from_analysis(&a, recs, Some(gains))?;
     let product = check_table(s, &comp, &pred)?;
     let bad = |reason: String| Error::InvalidRecording {
         source_name: sim.recording.source_name(),

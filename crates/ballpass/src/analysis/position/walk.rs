@@ -2,12 +2,12 @@
 //! a signal's value where the running maximum of the travel first reaches
 //! each grid point, by linear interpolation between samples.
 
-/// Values of `y` where the running maximum of `sign · p` (a non-decreasing
-/// travel axis) first reaches each grid point `x0 + j dx`, `j = 0..m`
-/// (linear interpolation between samples). The running maximum is taken
-/// as the walk goes, never stored.
-pub(super) fn resample(p: &[f64], sign: f64, y: &[f64], x0: f64, dx: f64, m: usize) -> Vec<f64> {
-    let mut out = Vec::with_capacity(m);
+/// Walks the running maximum of `sign · p` (a non-decreasing travel axis)
+/// to each grid point `x0 + j dx`, `j = 0..m`, in order, and calls
+/// `at(i, t)` with the sample `i` and the fraction `t` at which it first
+/// reaches the point: the value there is `y[i − 1] + t (y[i] − y[i − 1])`.
+/// The running maximum is taken as the walk goes, never stored.
+fn walk(p: &[f64], sign: f64, x0: f64, dx: f64, m: usize, mut at: impl FnMut(usize, f64)) {
     // The running maximum at samples i - 1 and i.
     let mut prev = f64::NEG_INFINITY.max(sign * p[0]);
     let mut cur = prev.max(sign * p[1]);
@@ -25,8 +25,18 @@ pub(super) fn resample(p: &[f64], sign: f64, y: &[f64], x0: f64, dx: f64, m: usi
         } else {
             1.0
         };
-        out.push(y[i - 1] + t * (y[i] - y[i - 1]));
+        at(i, t);
     }
+}
+
+/// Values of `y` where the running maximum of `sign · p` first reaches
+/// each grid point `x0 + j dx`, `j = 0..m` (linear interpolation between
+/// samples; [`walk`]).
+pub(super) fn resample(p: &[f64], sign: f64, y: &[f64], x0: f64, dx: f64, m: usize) -> Vec<f64> {
+    let mut out = Vec::with_capacity(m);
+    walk(p, sign, x0, dx, m, |i, t| {
+        out.push(y[i - 1] + t * (y[i] - y[i - 1]));
+    });
     out
 }
 
@@ -42,25 +52,10 @@ impl Walk {
     /// [`resample`]'s walk over `p` (at most `u32::MAX` samples).
     pub(super) fn new(p: &[f64], sign: f64, x0: f64, dx: f64, m: usize) -> Walk {
         let (mut iv, mut tv) = (Vec::with_capacity(m), Vec::with_capacity(m));
-        let mut prev = f64::NEG_INFINITY.max(sign * p[0]);
-        let mut cur = prev.max(sign * p[1]);
-        let mut i = 1;
-        for j in 0..m {
-            let x = x0 + j as f64 * dx;
-            while i + 1 < p.len() && cur < x {
-                i += 1;
-                prev = cur;
-                cur = cur.max(sign * p[i]);
-            }
-            let (a, b) = (prev, cur);
-            let t = if b > a {
-                ((x - a) / (b - a)).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
+        walk(p, sign, x0, dx, m, |i, t| {
             iv.push(i as u32);
             tv.push(t);
-        }
+        });
         Walk { i: iv, t: tv }
     }
 
