@@ -44,6 +44,7 @@ use crate::recording::Recording;
 pub mod confidence;
 pub mod correlation;
 pub mod export;
+pub mod harmonics;
 pub mod load_cell;
 pub mod passage;
 pub mod passage_table;
@@ -59,12 +60,13 @@ mod train_fit;
 
 pub use correlation::{CorrelationWindow, Correlations, MeasuredPeriod, SignalPeriod};
 pub use export::{write_outputs, OutputPaths};
+pub use harmonics::{CoherenceRow, HarmonicRow, HarmonicValue};
 pub use passage::{detect_passages, PassageAnalysis, PassageSettings};
 pub use passage_table::{PassageFailure, PassageOutput, PassageRow};
 pub use phase::Phase;
 pub use preprocess::{Prepared, VelocityErrorStats};
 pub use repeats::{RecordScalars, Repeats, Spread};
-pub use spectra::{CoherenceRow, HarmonicRow, HarmonicValue, Spectra, SpectrumInfo};
+pub use spectra::{Spectra, SpectrumInfo};
 
 /// Schema tag of `analysis.json`.
 pub const SCHEMA: &str = "ballpass.analysis/2";

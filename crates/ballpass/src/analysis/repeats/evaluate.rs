@@ -6,9 +6,10 @@
 use serde::Serialize;
 
 use crate::analysis::correlation::{self, pairs_for, Correlations, MeasuredPeriod, SignalPeriod};
+use crate::analysis::harmonics::{self, HarmonicRow};
 use crate::analysis::phase::{self, LineSpectra, Phase};
 use crate::analysis::preprocess::Prepared;
-use crate::analysis::spectra::{self, HarmonicRow, Spectra};
+use crate::analysis::spectra::Spectra;
 use crate::analysis::{AnalyzeSettings, Signal, Verdict};
 use crate::bearing::Prediction;
 use crate::stats::MeanStd;
@@ -63,7 +64,7 @@ pub(crate) struct Findings {
     pub(crate) measured: MeasuredPeriod,
     pub(crate) phases: Vec<Phase>,
     pub(crate) harmonics: Vec<HarmonicRow>,
-    pub(crate) coherence: Vec<spectra::CoherenceRow>,
+    pub(crate) coherence: Vec<harmonics::CoherenceRow>,
     pub(crate) showing: Vec<Signal>,
     /// The ball-pass frequency the phases are taken at (measured, else
     /// predicted), Hz.
@@ -90,7 +91,7 @@ pub(crate) fn evaluate(
 ) -> Findings {
     let signals: Vec<Signal> = hires.auto.iter().map(|(s, _)| *s).collect();
     // Which signals show f_c at the prediction (chooses the period's source).
-    let pre = spectra::harmonics(hires, pred.f_c_hz, None, settings);
+    let pre = harmonics::harmonics(hires, pred.f_c_hz, None, settings);
     let k1: Vec<&HarmonicRow> = pre.iter().filter(|r| r.k == 1).collect();
     let shows = |s: Signal| pre.iter().any(|r| r.signal == s && is_sig(r) == Some(true));
     let per_signal: Vec<SignalPeriod> = signals
@@ -157,7 +158,7 @@ pub(crate) fn evaluate(
     let f_meas = period_s.map(|t| 1.0 / t);
     let f_spec = from
         .and_then(|s| hires.auto_of(s))
-        .and_then(|psd| spectra::spectral_peak(hires, psd, pred.f_c_hz));
+        .and_then(|psd| harmonics::spectral_peak(hires, psd, pred.f_c_hz));
     if let (Some(a), Some(b)) = (f_meas, f_spec) {
         if (a - b).abs() > hires.info.resolution_hz {
             warnings.push(format!(
@@ -179,7 +180,7 @@ pub(crate) fn evaluate(
     // The tests at the prediction are those of `pre` (same spectra,
     // prediction and settings): taken, not recomputed.
     let harmonics =
-        spectra::harmonics_reusing(hires, pred.f_c_hz, f_meas.zip(from), settings, &pre);
+        harmonics::harmonics_reusing(hires, pred.f_c_hz, f_meas.zip(from), settings, &pre);
     // A signal shows f_c when any of its harmonics stands above its floor
     // after the family correction.
     let showing: Vec<Signal> = signals
@@ -191,7 +192,7 @@ pub(crate) fn evaluate(
                 .any(|r| r.signal == s && is_sig(r) == Some(true))
         })
         .collect();
-    let coherence = spectra::coherence_rows(hires, f_used, settings);
+    let coherence = harmonics::coherence_rows(hires, f_used, settings);
     Findings {
         measured: MeasuredPeriod {
             from_signal: from,
