@@ -12,16 +12,13 @@ fn stage() -> PdLoop {
     PdLoop::from_products(s.mass_kg, s.kkp_n_per_m, s.kkd_n_s_per_m).unwrap()
 }
 
-/// A record met at exactly `v` mm/s: friction `3 + a·cos(2πx/P)` N against
-/// position, passages every `P` from `x0`.
-fn record(v: f64, pitch: f64, a: f64, seconds: f64) -> RecordKeys {
+/// A record met at exactly `v` mm/s for `seconds` at 1 kHz: friction
+/// `friction(x)` N against position `x`, passages every `P` from 0.
+fn met_at(v: f64, pitch: f64, seconds: f64, friction: impl Fn(f64) -> f64) -> RecordKeys {
     let fs = 1000.0;
     let n = (seconds * fs) as usize;
     let x: Vec<f64> = (0..n).map(|i| v * i as f64 / fs).collect();
-    let f = x
-        .iter()
-        .map(|x| 3.0 + a * (std::f64::consts::TAU * x / pitch).cos())
-        .collect();
+    let f = x.iter().map(|&x| friction(x)).collect();
     let passages: Vec<f64> = (0..)
         .map(|k| k as f64 * pitch / v * fs)
         .take_while(|&u| u < (n - 1) as f64)
@@ -35,6 +32,13 @@ fn record(v: f64, pitch: f64, a: f64, seconds: f64) -> RecordKeys {
         passages,
         passage_mm,
     }
+}
+
+/// [`met_at`] with friction `3 + a·cos(2πx/P)` N.
+fn record(v: f64, pitch: f64, a: f64, seconds: f64) -> RecordKeys {
+    met_at(v, pitch, seconds, |x| {
+        3.0 + a * (std::f64::consts::TAU * x / pitch).cos()
+    })
 }
 
 /// A small sinusoidal friction leaves the stage in its linear range: the
@@ -283,33 +287,15 @@ fn the_round_guard_refuses_a_runaway_round_and_keeps_the_lowest_before() {
 #[test]
 fn the_guarded_design_keeps_only_steps_the_replay_supports() {
     use super::replay::{design, DesignAt};
-    let (v, pitch, fs) = (3.0f64, 8.1f64, 1000.0);
-    let n = (12.0 * pitch / v * fs) as usize;
-    let x: Vec<f64> = (0..n).map(|i| v * i as f64 / fs).collect();
-    let f: Vec<f64> = x
-        .iter()
-        .map(|&x| {
-            let k = (x / pitch).floor() as u64;
-            // Ball-to-ball spread of the spike height, fixed pseudo-random.
-            let r = (k.wrapping_mul(2_654_435_761) % 1000) as f64 / 500.0 - 1.0;
-            let ph = (x / pitch).fract() - 0.5;
-            4.0 + 0.5 * (std::f64::consts::TAU * x / 1.3).sin()
-                + 20.0 * (1.0 + 0.9 * r) * (-0.5 * (ph * pitch / 0.17).powi(2)).exp()
-        })
-        .collect();
-    let passages: Vec<f64> = (0..)
-        .map(|k| k as f64 * pitch / v * fs)
-        .take_while(|&u| u < (n - 1) as f64)
-        .collect();
-    let passage_mm = passages.iter().map(|&u| at_index(&x, u)).collect();
-    let keys = vec![RecordKeys {
-        fs_hz: fs,
-        friction_n: f,
-        velocity_error_std_um_s: 0.0,
-        position_mm: x,
-        passages,
-        passage_mm,
-    }];
+    let (v, pitch) = (3.0f64, 8.1f64);
+    let keys = vec![met_at(v, pitch, 12.0 * pitch / v, |x| {
+        let k = (x / pitch).floor() as u64;
+        // Ball-to-ball spread of the spike height, fixed pseudo-random.
+        let r = (k.wrapping_mul(2_654_435_761) % 1000) as f64 / 500.0 - 1.0;
+        let ph = (x / pitch).fract() - 0.5;
+        4.0 + 0.5 * (std::f64::consts::TAU * x / 1.3).sin()
+            + 20.0 * (1.0 + 0.9 * r) * (-0.5 * (ph * pitch / 0.17).powi(2)).exp()
+    })];
     let at = DesignAt {
         pitch_mm: pitch,
         velocity_mm_s: v,
