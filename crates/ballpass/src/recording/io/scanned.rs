@@ -111,3 +111,25 @@ macro_rules! scanned_getters {
     };
 }
 pub(crate) use scanned_getters;
+
+/// What every fixed-rate stream source checks first: the options valid,
+/// the path resolved (a `FILE#GROUP` or the like split off), and no gap
+/// policy that fills or splits (that needs the record whole). `Ok(Err(why))`
+/// when the file is to be read whole instead.
+///
+/// # Errors
+/// The options' and the path's errors.
+#[allow(clippy::type_complexity)]
+pub(crate) fn stream_request<'a>(
+    path: &Path,
+    opts: &'a LoadOptions,
+) -> Result<std::result::Result<(PathBuf, std::borrow::Cow<'a, LoadOptions>), String>> {
+    opts.validate()?;
+    let (file_path, opts) = super::resolve(path, opts)?;
+    if !opts.gaps.refuses() {
+        return Ok(Err(
+            "filling or splitting at gaps needs the record in memory".into(),
+        ));
+    }
+    Ok(Ok((file_path, opts)))
+}

@@ -40,8 +40,10 @@ use super::tree::Data;
 use super::v73::{H5Data, V73File};
 use super::{format_err, is_v73, parse_file, File, Role};
 use crate::error::{excerpt, Result};
-use crate::recording::io::scanned::{first_block, piece_options, scanned_getters, Scanned};
-use crate::recording::io::{finish, resolve, timebase, LoadOptions, RawColumn};
+use crate::recording::io::scanned::{
+    first_block, piece_options, scanned_getters, stream_request, Scanned,
+};
+use crate::recording::io::{finish, timebase, LoadOptions, RawColumn};
 use crate::recording::stream::{io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
 
@@ -105,14 +107,11 @@ pub(crate) fn open_sized(
     opts: &LoadOptions,
     block: usize,
 ) -> Result<std::result::Result<MatSource, String>> {
-    opts.validate()?;
-    let (file_path, opts) = resolve(path, opts)?;
+    let (file_path, opts) = match stream_request(path, opts)? {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
     let opts = opts.as_ref();
-    if !opts.gaps.refuses() {
-        return Ok(Err(
-            "filling or splitting at gaps needs the record in memory".into(),
-        ));
-    }
     let block = block.max(Recording::MIN_SAMPLES);
     let size = std::fs::metadata(&file_path)
         .map_err(|e| io_error(&file_path, e))?

@@ -39,10 +39,12 @@ use falcon_mdf::Mf4File;
 
 use super::{check_magic, format_err, mdf, open_options, time_unit, values, Mapping, R};
 use crate::error::{excerpt, shown_path, Error, Result};
-use crate::recording::io::scanned::{first_block, piece_options, scanned_getters, Scanned};
+use crate::recording::io::scanned::{
+    first_block, piece_options, scanned_getters, stream_request, Scanned,
+};
 use crate::recording::io::timebase::{self, TimeError};
 use crate::recording::io::{
-    finish, name_record, resolve, LoadOptions, Locator, RawColumn, RawTable, TimeUnit,
+    finish, name_record, LoadOptions, Locator, RawColumn, RawTable, TimeUnit,
 };
 use crate::recording::stream::{io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
@@ -148,14 +150,11 @@ pub(crate) fn open_sized(
     opts: &LoadOptions,
     block: usize,
 ) -> Result<std::result::Result<Mf4Source, String>> {
-    opts.validate()?;
-    let (file_path, opts) = resolve(path, opts)?;
+    let (file_path, opts) = match stream_request(path, opts)? {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
     let opts = opts.as_ref();
-    if !opts.gaps.refuses() {
-        return Ok(Err(
-            "filling or splitting at gaps needs the record in memory".into(),
-        ));
-    }
     let block = block.max(Recording::MIN_SAMPLES);
     let p = file_path.as_path();
     let (file, size) = open_file(p)?;

@@ -34,9 +34,11 @@ use super::values::{check_run, decode, scaled, scaling, Scaling};
 use super::{channel_err, column, format_err, plan};
 use crate::error::excerpt;
 use crate::error::Result;
-use crate::recording::io::scanned::{first_block, piece_options, scanned_getters, Scanned};
+use crate::recording::io::scanned::{
+    first_block, piece_options, scanned_getters, stream_request, Scanned,
+};
 use crate::recording::io::{
-    finish, name_record, resolve, timebase, LoadOptions, Locator, RawTable, TimeUnit,
+    finish, name_record, timebase, LoadOptions, Locator, RawTable, TimeUnit,
 };
 use crate::recording::stream::{io_error, Block, RecordSource};
 use crate::recording::{Channel, Metadata, Recording};
@@ -99,14 +101,11 @@ pub(crate) fn open_sized(
     opts: &LoadOptions,
     sizes: (usize, usize),
 ) -> Result<std::result::Result<TdmsSource, String>> {
-    opts.validate()?;
-    let (file_path, opts) = resolve(path, opts)?;
+    let (file_path, opts) = match stream_request(path, opts)? {
+        Ok(r) => r,
+        Err(why) => return Ok(Err(why)),
+    };
     let opts = opts.as_ref();
-    if !opts.gaps.refuses() {
-        return Ok(Err(
-            "filling or splitting at gaps needs the record in memory".into(),
-        ));
-    }
     let sizes = (sizes.0.max(Recording::MIN_SAMPLES), sizes.1.max(64));
     let mut file = File::open(&file_path).map_err(|e| io_error(&file_path, e))?;
     let size = file.metadata().map_err(|e| io_error(&file_path, e))?.len();
