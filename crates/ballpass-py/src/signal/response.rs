@@ -1,0 +1,122 @@
+//! Frequency responses (`freqs`, `freqz`, `sosfreqz`) and numpy's `gradient`.
+
+use ballpass_dsp as dsp;
+use ballpass_dsp::Spacing;
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use super::filters::sos_from;
+use super::{map_rows, rows, slice1, stack, Arr1, Arr2, CArr1, SMALL_WORK};
+use crate::errors;
+
+/// A response as a numpy array: `ballpass_dsp::Complex64` is numpy's
+/// complex128 element (both `num_complex::Complex<f64>`), so the vector
+/// becomes the array without a copy.
+fn complex(py: Python<'_>, h: Vec<dsp::Complex64>) -> CArr1<'_> {
+    h.into_pyarray(py)
+}
+
+/// `scipy.signal.freqs(b, a, worN=w)`: `H(j w)`.
+#[pyfunction]
+pub(super) fn freqs<'py>(
+    py: Python<'py>,
+    b: PyReadonlyArray1<'py, f64>,
+    a: PyReadonlyArray1<'py, f64>,
+    w: PyReadonlyArray1<'py, f64>,
+) -> PyResult<CArr1<'py>> {
+    let (b, a, w) = (slice1(&b)?, slice1(&a)?, slice1(&w)?);
+    let h = py
+        .detach(|| dsp::freqs_values(b, a, w))
+        .map_err(errors::dsp)?;
+    Ok(complex(py, h))
+}
+
+/// `scipy.signal.freqz(b, a, worN=f, fs=fs)`: `H` at frequencies `f`.
+#[pyfunction]
+pub(super) fn freqz<'py>(
+    py: Python<'py>,
+    b: PyReadonlyArray1<'py, f64>,
+    a: PyReadonlyArray1<'py, f64>,
+    f: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+) -> PyResult<CArr1<'py>> {
+    let (b, a, f) = (slice1(&b)?, slice1(&a)?, slice1(&f)?);
+    let h = py
+        .detach(|| dsp::freqz_values(b, a, f, fs))
+        .map_err(errors::dsp)?;
+    Ok(complex(py, h))
+}
+
+/// `scipy.signal.freqz_sos(sos, worN=f, fs=fs)`: `H` at frequencies `f`.
+#[pyfunction]
+pub(super) fn sosfreqz<'py>(
+    py: Python<'py>,
+    sos: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+) -> PyResult<CArr1<'py>> {
+    let sos = sos_from(&sos)?;
+    let f = slice1(&f)?;
+    let h = py
+        .detach(|| dsp::sosfreqz_values(&sos, f, fs))
+        .map_err(errors::dsp)?;
+    Ok(complex(py, h))
+}
+
+/// `numpy.gradient` along each row, with a uniform step `h` or sample
+/// coordinates `coords`.
+#[pyfunction]
+#[pyo3(signature = (f, h, coords, edge_order))]
+pub(super) fn gradient<'py>(
+    py: Python<'py>,
+    f: PyReadonlyArray2<'py, f64>,
+    h: f64,
+    coords: Option<PyReadonlyArray1<'py, f64>>,
+    edge_order: usize,
+) -> PyResult<Arr2<'py>> {
+    let edge = match edge_order {
+        1 => dsp::EdgeOrder::First,
+        2 => dsp::EdgeOrder::Second,
+        _ => return Err(errors::value("'edge_order' greater than 2 not supported")),
+    };
+    let c = match &coords {
+        Some(c) => Some(slice1(c)?),
+        None => None,
+    };
+    let spacing = match c {
+        Some(c) => Spacing::Coordinates(c),
+        None => Spacing::Uniform(h),
+    };
+    let (xs, m, n) = rows(&f)?;
+    let (flat, width) = map_rows(py, xs, m, n, |r| {
+        dsp::gradient_with_edge_order(r, spacing, edge)
+    })?;
+    stack(py, flat, m, width)
+}
+
+/// `numpy.gradient(f, h, edge_order=edge_order)` of one 1-D signal with a
+/// uniform step: the common call, without the rows' plumbing. A short
+/// signal is differentiated without releasing the GIL (a few microseconds
+/// of work, less than the release and the wait to take it back).
+#[pyfunction]
+pub(super) fn gradient1<'py>(
+    py: Python<'py>,
+    f: PyReadonlyArray1<'py, f64>,
+    h: f64,
+    edge_order: usize,
+) -> PyResult<Arr1<'py>> {
+    let edge = match edge_order {
+        1 => dsp::EdgeOrder::First,
+        2 => dsp::EdgeOrder::Second,
+        _ => return Err(errors::value("'edge_order' greater than 2 not supported")),
+    };
+    let f = slice1(&f)?;
+    let run = || dsp::gradient_with_edge_order(f, Spacing::Uniform(h), edge);
+    let g = if f.len() <= SMALL_WORK {
+        run()
+    } else {
+        py.detach(run)
+    }
+    .map_err(errors::dsp)?;
+    Ok(g.into_pyarray(py))
+}
