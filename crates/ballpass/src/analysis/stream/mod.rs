@@ -82,8 +82,8 @@ mod sync;
 use ballpass_dsp::{WelchStream, WindowCorrelation, ZeroPhaseStream};
 use serde::Serialize;
 
-use self::chain::{Chain, Output, TrendSums};
-use self::support::{channel_of, check_count, load_cell_pass, Progress};
+use self::chain::{Output, TrendSums};
+use self::support::{channel_of, load_cell_pass, Moments, PassKit};
 use super::correlation::{pairs_for, Correlations};
 use super::load_cell;
 use super::phase::LineStream;
@@ -117,86 +117,6 @@ pub struct StreamInfo {
     /// detail), gathered while streaming; not written to `analysis.json`.
     #[serde(skip)]
     pub signals: Option<SignalSamples>,
-}
-
-/// What every pass of the chain over the record shares.
-struct PassKit<'a> {
-    signals: &'a [Signal],
-    fs: f64,
-    velocity: f64,
-    trim_n: (usize, usize),
-    len: usize,
-    restore: Option<(f64, f64)>,
-    filter: Option<&'a ballpass_dsp::ZeroPhaseFilter>,
-    filter_block: usize,
-    name: &'a str,
-    /// Signals the chain hands out untrimmed too (the stage's).
-    untrimmed: &'a [usize],
-}
-
-impl PassKit<'_> {
-    /// Reads the record through a new chain: `on_block` sees each block
-    /// as read, `eat` what the chain gives for it (`true` at the end);
-    /// checks that the whole analysed span came through.
-    fn run(
-        &self,
-        src: &mut dyn RecordSource,
-        what: String,
-        progress: &mut dyn FnMut(&str),
-        on_block: &mut dyn FnMut(Block<'_>),
-        eat: &mut dyn FnMut(&mut Output, bool) -> Result<()>,
-    ) -> Result<()> {
-        let mut chain = Chain::new(
-            self.signals,
-            self.fs,
-            self.velocity,
-            self.trim_n,
-            self.restore,
-            self.filter,
-            self.filter_block,
-        )
-        .with_untrimmed(self.untrimmed);
-        let mut out = Output::new();
-        let mut prog = Progress {
-            f: progress,
-            what,
-            total: self.len,
-            done: 0,
-            shown: 0,
-        };
-        src.pass(&mut |b| {
-            on_block(b);
-            chain.push(b, &mut out)?;
-            eat(&mut out, false)?;
-            out.advance();
-            prog.add(b.len());
-            Ok(())
-        })?;
-        chain.finish(&mut out)?;
-        eat(&mut out, true)?;
-        out.advance();
-        check_count(self.name, out.raw_at, self.trim_n.1)?;
-        check_count(self.name, out.filtered_at, self.trim_n.1)
-    }
-}
-
-/// The sums of the velocity error's statistics (as `prepare_raw_keeping` takes
-/// them, in the same order).
-#[derive(Default)]
-struct Moments {
-    sum: f64,
-    sq: f64,
-    dev: f64,
-}
-
-impl Moments {
-    fn new() -> Self {
-        Moments {
-            sum: -0.0,
-            sq: -0.0,
-            dev: -0.0,
-        }
-    }
 }
 
 /// Analyses one record read block by block (module docs).

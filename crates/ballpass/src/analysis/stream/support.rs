@@ -1,6 +1,7 @@
-//! The load-cell pass of [`super::analyze_stream`] and small helpers.
+//! The pass runner and the load-cell pass of [`super::analyze_stream`],
+//! and small helpers.
 
-use super::chain::Sum;
+use super::chain::{Chain, Output, Sum};
 use crate::analysis::load_cell::{self, Decision};
 use crate::analysis::{AnalyzeSettings, Signal};
 use crate::bearing::Prediction;
@@ -139,4 +140,84 @@ pub(super) fn load_cell_pass(
     // The spread is not known yet: a placeholder the caller replaces.
     let (undo, dc) = load_cell::decide(decision, 0.0);
     Ok((undo, dc, mean))
+}
+
+/// What every pass of the chain over the record shares.
+pub(super) struct PassKit<'a> {
+    pub(super) signals: &'a [Signal],
+    pub(super) fs: f64,
+    pub(super) velocity: f64,
+    pub(super) trim_n: (usize, usize),
+    pub(super) len: usize,
+    pub(super) restore: Option<(f64, f64)>,
+    pub(super) filter: Option<&'a ballpass_dsp::ZeroPhaseFilter>,
+    pub(super) filter_block: usize,
+    pub(super) name: &'a str,
+    /// Signals the chain hands out untrimmed too (the stage's).
+    pub(super) untrimmed: &'a [usize],
+}
+
+impl PassKit<'_> {
+    /// Reads the record through a new chain: `on_block` sees each block
+    /// as read, `eat` what the chain gives for it (`true` at the end);
+    /// checks that the whole analysed span came through.
+    pub(super) fn run(
+        &self,
+        src: &mut dyn RecordSource,
+        what: String,
+        progress: &mut dyn FnMut(&str),
+        on_block: &mut dyn FnMut(Block<'_>),
+        eat: &mut dyn FnMut(&mut Output, bool) -> Result<()>,
+    ) -> Result<()> {
+        let mut chain = Chain::new(
+            self.signals,
+            self.fs,
+            self.velocity,
+            self.trim_n,
+            self.restore,
+            self.filter,
+            self.filter_block,
+        )
+        .with_untrimmed(self.untrimmed);
+        let mut out = Output::new();
+        let mut prog = Progress {
+            f: progress,
+            what,
+            total: self.len,
+            done: 0,
+            shown: 0,
+        };
+        src.pass(&mut |b| {
+            on_block(b);
+            chain.push(b, &mut out)?;
+            eat(&mut out, false)?;
+            out.advance();
+            prog.add(b.len());
+            Ok(())
+        })?;
+        chain.finish(&mut out)?;
+        eat(&mut out, true)?;
+        out.advance();
+        check_count(self.name, out.raw_at, self.trim_n.1)?;
+        check_count(self.name, out.filtered_at, self.trim_n.1)
+    }
+}
+
+/// The sums of the velocity error's statistics (as `prepare_raw_keeping` takes
+/// them, in the same order).
+#[derive(Default)]
+pub(super) struct Moments {
+    pub(super) sum: f64,
+    pub(super) sq: f64,
+    pub(super) dev: f64,
+}
+
+impl Moments {
+    pub(super) fn new() -> Self {
+        Moments {
+            sum: -0.0,
+            sq: -0.0,
+            dev: -0.0,
+        }
+    }
 }
