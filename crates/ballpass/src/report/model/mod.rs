@@ -7,6 +7,10 @@ use super::kinds::{bode, fmt_sig};
 use super::spec::{Axis, Figure, Marker, MarkerStyle, Panel, Rgb, Series, SeriesStyle};
 use crate::model::stage::{BodeRow, DifferenceRow, VelocityResponse};
 
+mod reports;
+
+pub use reports::{pulses_report, signals_report, stage_report};
+
 /// Bode plots of `G_xr`, `G_xf` and `G_vf` (ids `bode_g_xr`, `bode_g_xf`,
 /// `bode_g_vf`), each with the natural frequency `f_n_hz` marked, and the
 /// ball-pass frequency when given.
