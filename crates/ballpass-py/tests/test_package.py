@@ -22,11 +22,11 @@ def _stub_names(path: pathlib.Path) -> set[str]:
 
 
 def test_stubs_name_what_exists_and_cover_the_public_api():
-    for stub, mod in ((PKG / "_native.pyi", _native), (PKG / "signal.pyi", signal)):
+    for stub, mod in ((PKG / "_native.pyi", _native), (PKG / "signal" / "__init__.pyi", signal)):
         names = _stub_names(stub)
         missing = sorted(n for n in names if not hasattr(mod, n))
         assert not missing, f"{stub.name} declares {missing}, which {mod.__name__} lacks"
-    assert set(signal.__all__) <= _stub_names(PKG / "signal.pyi")
+    assert set(signal.__all__) <= _stub_names(PKG / "signal" / "__init__.pyi")
     public = {n for n in dir(_native) if not n.startswith("_")}
     assert public <= _stub_names(PKG / "_native.pyi"), public - _stub_names(PKG / "_native.pyi")
     assert (PKG / "py.typed").exists()
