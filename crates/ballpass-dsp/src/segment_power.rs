@@ -52,7 +52,13 @@ pub fn segment_powers(segments: &[&[f64]], dx: f64, freqs: &[f64]) -> Result<Vec
     if !freqs.is_empty() {
         check_finite("freqs", freqs)?;
     }
-    Ok(crate::simd::widest(|| powers(segments, dx, freqs)))
+    // `#[inline(always)]`: the closure must be compiled inside the wide
+    // function; left to the inliner, the wheel's build kept it out of line,
+    // as SSE2 code (two lanes per register instead of eight).
+    Ok(crate::simd::widest(
+        #[inline(always)]
+        || powers(segments, dx, freqs),
+    ))
 }
 
 /// [`segment_powers`] on checked input: chunks of 16 frequencies (two
