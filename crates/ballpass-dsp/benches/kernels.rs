@@ -143,6 +143,10 @@ fn main() {
     let segs: Vec<&[f64]> = x.chunks_exact(1024).take(8).collect();
     let f10: Vec<f64> = (0..10).map(|j| 0.01 + 0.003 * j as f64).collect();
     let f16: Vec<f64> = (0..16).map(|j| 0.01 + 0.002 * j as f64).collect();
+    // The single 30 s record at 9 mm/s has 3 segments (and 5 at 15 mm/s),
+    // 5 frequencies a golden-section step (one new point per line).
+    let segs3: Vec<&[f64]> = segs[..3].to_vec();
+    let f5: Vec<f64> = f10[..5].to_vec();
     type Kernel<'a> = (&'static str, Box<dyn FnMut() + 'a>);
     let kernels: Vec<Kernel> = vec![
         (
@@ -155,6 +159,18 @@ fn main() {
             "segment_powers16",
             Box::new(|| {
                 black_box(dsp::segment_powers(&segs, 0.1, &f16).expect("ok"));
+            }),
+        ),
+        (
+            "segment_powers16x3",
+            Box::new(|| {
+                black_box(dsp::segment_powers(&segs3, 0.1, &f16).expect("ok"));
+            }),
+        ),
+        (
+            "segment_powers5x3",
+            Box::new(|| {
+                black_box(dsp::segment_powers(&segs3, 0.1, &f5).expect("ok"));
             }),
         ),
         (

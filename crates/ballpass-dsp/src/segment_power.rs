@@ -10,8 +10,9 @@
 //! in segment order. Every frequency gets exactly that arithmetic whatever
 //! the lane count or vector width ([`tests::power_alone`] is the
 //! one-frequency reference, checked bit for bit): frequencies run 16 at a
-//! time in lock step (the phasor table is made once for all segments),
-//! segments 4 at a time (independent sums keep the adder busy), compiled
+//! time in lock step, segments up to 4 at a time with the phasors made on
+//! the way and shared by the group (independent sums keep the adder
+//! busy; no phasor table in memory), compiled
 //! for the widest vectors the CPU has through `crate::simd::widest` (no
 //! FMA, so every operation rounds as the baseline's).
 
@@ -51,7 +52,13 @@ pub fn segment_powers(segments: &[&[f64]], dx: f64, freqs: &[f64]) -> Result<Vec
     if !freqs.is_empty() {
         check_finite("freqs", freqs)?;
     }
-    Ok(crate::simd::widest(|| powers(segments, dx, freqs)))
+    // `#[inline(always)]`: the closure must be compiled inside the wide
+    // function; left to the inliner, the wheel's build kept it out of line,
+    // as SSE2 code (two lanes per register instead of eight).
+    Ok(crate::simd::widest(
+        #[inline(always)]
+        || powers(segments, dx, freqs),
+    ))
 }
 
 /// [`segment_powers`] on checked input: chunks of 16 frequencies (two
@@ -60,7 +67,6 @@ pub fn segment_powers(segments: &[&[f64]], dx: f64, freqs: &[f64]) -> Result<Vec
 #[inline(always)]
 fn powers(segments: &[&[f64]], dx: f64, freqs: &[f64]) -> Vec<f64> {
     let mut out = Vec::with_capacity(freqs.len());
-    let (mut t16, mut t8) = (Vec::new(), Vec::new());
     let mut rest = freqs;
     while !rest.is_empty() {
         let take = if rest.len() > 8 {
@@ -70,9 +76,9 @@ fn powers(segments: &[&[f64]], dx: f64, freqs: &[f64]) -> Vec<f64> {
         };
         let (chunk, tail) = rest.split_at(take);
         if take > 8 {
-            chunk_powers::<16>(segments, dx, chunk, &mut t16, &mut out);
+            chunk_powers::<16>(segments, dx, chunk, &mut out);
         } else {
-            chunk_powers::<8>(segments, dx, chunk, &mut t8, &mut out);
+            chunk_powers::<8>(segments, dx, chunk, &mut out);
         }
         rest = tail;
     }
@@ -80,82 +86,87 @@ fn powers(segments: &[&[f64]], dx: f64, freqs: &[f64]) -> Vec<f64> {
 }
 
 /// Appends to `out` the mean powers at the (up to `L`) frequencies of
-/// `chunk`, in lock step; `table` is the phasor table's buffer.
+/// `chunk`, in lock step: the segments 4 at a time, the last 1 to 3
+/// together.
 #[inline(always)]
-fn chunk_powers<const L: usize>(
-    segments: &[&[f64]],
-    dx: f64,
-    chunk: &[f64],
-    table: &mut Vec<Phasors<L>>,
-    out: &mut Vec<f64>,
-) {
-    let n = segments[0].len();
+fn chunk_powers<const L: usize>(segments: &[&[f64]], dx: f64, chunk: &[f64], out: &mut Vec<f64>) {
     let count = segments.len() as f64;
-    table.resize(n, ([0.0; L], [0.0; L]));
     // Unused lanes rotate by zero (cos 1, sin 0) and are dropped.
     let (mut c, mut sn) = ([1.0f64; L], [0.0f64; L]);
     for (j, f) in chunk.iter().enumerate() {
         let step = std::f64::consts::TAU * f * dx;
         (c[j], sn[j]) = (step.cos(), step.sin());
     }
-    fill_table(table, &c, &sn);
     let mut total = [0.0f64; L];
     let mut groups = segments.chunks_exact(G);
     for group in groups.by_ref() {
-        let sums = sums::<L, G>(group.try_into().expect("G segments"), table);
-        for (re, im) in sums {
-            for j in 0..L {
-                total[j] += re[j] * re[j] + im[j] * im[j];
-            }
-        }
+        let group: &[&[f64]; G] = group.try_into().expect("G segments");
+        add_powers(&mut total, &sums::<L, G>(group, &c, &sn));
     }
-    for seg in groups.remainder() {
-        let [(re, im)] = sums::<L, 1>(&[seg], table);
-        for j in 0..L {
-            total[j] += re[j] * re[j] + im[j] * im[j];
-        }
+    match *groups.remainder() {
+        [a, b, d] => add_powers(&mut total, &sums::<L, 3>(&[a, b, d], &c, &sn)),
+        [a, b] => add_powers(&mut total, &sums::<L, 2>(&[a, b], &c, &sn)),
+        [a] => add_powers(&mut total, &sums::<L, 1>(&[a], &c, &sn)),
+        _ => {}
     }
     out.extend(total[..chunk.len()].iter().map(|t| t / count));
 }
 
-/// The phasors `(pr, pi)` of every sample, lane by lane: `(1, 0)`, then
-/// rotated by `(c, sn)` and renormalised after every 256th rotation.
+/// Adds each segment's `re² + im²` to `total`, in segment order.
 #[inline(always)]
-fn fill_table<const L: usize>(table: &mut [Phasors<L>], c: &[f64; L], sn: &[f64; L]) {
-    let (mut pr, mut pi) = ([1.0f64; L], [0.0f64; L]);
-    for (k, slot) in table.iter_mut().enumerate() {
-        *slot = (pr, pi);
+fn add_powers<const L: usize>(total: &mut [f64; L], sums: &[Phasors<L>]) {
+    for (re, im) in sums {
         for j in 0..L {
-            let t = pr[j] * c[j] - pi[j] * sn[j];
-            pi[j] = pr[j] * sn[j] + pi[j] * c[j];
-            pr[j] = t;
+            total[j] += re[j] * re[j] + im[j] * im[j];
         }
-        if k % 256 == 255 {
+    }
+}
+
+/// `(Σ v·pr, −Σ v·pi)` of each of `K` segments, in sample order, with the
+/// phasors `(pr, pi)` made on the way, lane by lane: `(1, 0)`, then
+/// rotated by `(c, sn)` after each sample and renormalised after every
+/// 256th rotation. The `K` segments share the phasors, which are never
+/// stored (a table of them, 128-256 kB, read once per group of segments,
+/// took twice the time).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // sample k of K segments at once
+fn sums<const L: usize, const K: usize>(
+    segs: &[&[f64]; K],
+    c: &[f64; L],
+    sn: &[f64; L],
+) -> [Phasors<L>; K] {
+    let n = segs[0].len();
+    let segs: [&[f64]; K] = std::array::from_fn(|g| &segs[g][..n]);
+    let mut acc = [([0.0f64; L], [0.0f64; L]); K];
+    let (mut pr, mut pi) = ([1.0f64; L], [0.0f64; L]);
+    let mut start = 0;
+    while start < n {
+        let end = (start + 256).min(n);
+        for k in start..end {
+            for g in 0..K {
+                let v = segs[g][k];
+                let (re, im) = &mut acc[g];
+                for j in 0..L {
+                    re[j] += v * pr[j];
+                    im[j] -= v * pi[j];
+                }
+            }
+            for j in 0..L {
+                let t = pr[j] * c[j] - pi[j] * sn[j];
+                pi[j] = pr[j] * sn[j] + pi[j] * c[j];
+                pr[j] = t;
+            }
+        }
+        // After the 256th rotation of a block (a partial last block's
+        // phasors are not used again).
+        if end - start == 256 {
             for j in 0..L {
                 let a = (pr[j] * pr[j] + pi[j] * pi[j]).sqrt();
                 pr[j] /= a;
                 pi[j] /= a;
             }
         }
-    }
-}
-
-/// `(Σ v·pr, −Σ v·pi)` of each of `K` segments, in sample order.
-#[inline(always)]
-fn sums<const L: usize, const K: usize>(
-    segs: &[&[f64]; K],
-    table: &[Phasors<L>],
-) -> [Phasors<L>; K] {
-    let mut acc = [([0.0f64; L], [0.0f64; L]); K];
-    for (k, (pr, pi)) in table.iter().enumerate() {
-        for g in 0..K {
-            let v = segs[g][k];
-            let (re, im) = &mut acc[g];
-            for j in 0..L {
-                re[j] += v * pr[j];
-                im[j] -= v * pi[j];
-            }
-        }
+        start = end;
     }
     acc
 }
@@ -202,12 +213,12 @@ mod tests {
 
     #[test]
     fn lock_step_equals_one_frequency_at_a_time_bit_for_bit() {
-        // 1 to 9 segments (groups of 4 and remainders), 600 samples (two
+        // 1 to 9 segments (groups of 4 and remainders of 1 to 3), 600 samples (two
         // renormalisations), 1 to 40 frequencies (chunks of 16 and of 8,
         // full and partial).
         let segs: Vec<Vec<f64>> = (0..9).map(|s| noise(s + 3, 600)).collect();
         let dx = 0.127;
-        for s_count in [1, 3, 4, 5, 8, 9] {
+        for s_count in 1..=9 {
             let segs: Vec<&[f64]> = segs[..s_count].iter().map(Vec::as_slice).collect();
             for f_count in [1, 7, 8, 9, 16, 17, 25, 40] {
                 let freqs: Vec<f64> = (0..f_count).map(|j| 0.05 + 0.173 * j as f64).collect();

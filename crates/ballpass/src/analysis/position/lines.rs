@@ -122,8 +122,9 @@ impl LineScan {
             })
             .collect();
         let p = powers(&grid);
-        // Per range: (a, b, h).
-        let mut state: Vec<(f64, f64, f64)> = ranges
+        // Per range: the bracket, its interior points and their powers
+        // (`c < d`; `None` until measured), and the grid step.
+        let mut state: Vec<Golden> = ranges
             .iter()
             .enumerate()
             .map(|(r, &(lo, hi))| {
@@ -134,35 +135,97 @@ impl LineScan {
                     .max_by(|&a, &b| p[a].total_cmp(&p[b]))
                     .map(|j| grid[j])
                     .expect("grid");
-                ((best - h).max(lo), (best + h).min(hi), h)
+                Golden::new((best - h).max(lo), (best + h).min(hi), h)
             })
             .collect();
-        let g = 0.5 * (5f64.sqrt() - 1.0);
         loop {
-            let active: Vec<usize> = (0..state.len())
-                .filter(|&r| state[r].1 - state[r].0 > 1e-4 * state[r].2)
-                .collect();
-            if active.is_empty() {
-                break;
-            }
-            let freqs: Vec<f64> = active
+            // The points to measure: both interior points of a new
+            // bracket, then the one new point per step.
+            let wanted: Vec<(usize, bool, f64)> = state
                 .iter()
-                .flat_map(|&r| {
-                    let (a, b, _) = state[r];
-                    [b - g * (b - a), a + g * (b - a)]
+                .enumerate()
+                .filter(|(_, st)| st.active())
+                .flat_map(|(r, st)| {
+                    let c = st.pc.is_none().then_some((r, false, st.c));
+                    let d = st.pd.is_none().then_some((r, true, st.d));
+                    c.into_iter().chain(d)
                 })
                 .collect();
+            if wanted.is_empty() {
+                break;
+            }
+            let freqs: Vec<f64> = wanted.iter().map(|w| w.2).collect();
             let p = powers(&freqs);
-            for (i, &r) in active.iter().enumerate() {
-                let (c, d) = (freqs[2 * i], freqs[2 * i + 1]);
-                if p[2 * i] >= p[2 * i + 1] {
-                    state[r].1 = d;
+            for (&(r, is_d, _), &v) in wanted.iter().zip(&p) {
+                if is_d {
+                    state[r].pd = Some(v);
                 } else {
-                    state[r].0 = c;
+                    state[r].pc = Some(v);
                 }
             }
+            for st in state.iter_mut().filter(|st| st.active()) {
+                st.step();
+            }
         }
-        Some(state.iter().map(|&(a, b, _)| 0.5 * (a + b)).collect())
+        Some(state.iter().map(|st| 0.5 * (st.a + st.b)).collect())
+    }
+}
+
+/// The golden ratio's conjugate, `(√5 − 1) / 2`.
+fn golden_ratio() -> f64 {
+    0.5 * (5f64.sqrt() - 1.0)
+}
+
+/// One golden-section search for a maximum: the bracket `[a, b]`, its
+/// interior points `c = b − g (b − a)` and `d = a + g (b − a)` and their
+/// powers once measured. Each step keeps the side of the larger power
+/// (`c` on ties) and reuses the kept interior point and its power, so one
+/// new point is measured per step; it stops when the bracket is at most
+/// `1e-4 h` wide.
+#[derive(Debug, Clone, Copy)]
+struct Golden {
+    a: f64,
+    b: f64,
+    h: f64,
+    c: f64,
+    d: f64,
+    pc: Option<f64>,
+    pd: Option<f64>,
+}
+
+impl Golden {
+    fn new(a: f64, b: f64, h: f64) -> Self {
+        let g = golden_ratio();
+        Golden {
+            a,
+            b,
+            h,
+            c: b - g * (b - a),
+            d: a + g * (b - a),
+            pc: None,
+            pd: None,
+        }
+    }
+
+    fn active(&self) -> bool {
+        self.b - self.a > 1e-4 * self.h
+    }
+
+    /// Narrows the bracket once both interior powers are known.
+    fn step(&mut self) {
+        let (Some(pc), Some(pd)) = (self.pc, self.pd) else {
+            return;
+        };
+        let g = golden_ratio();
+        if pc >= pd {
+            (self.b, self.d, self.pd) = (self.d, self.c, Some(pc));
+            self.c = self.b - g * (self.b - self.a);
+            self.pc = None;
+        } else {
+            (self.a, self.c, self.pc) = (self.c, self.d, Some(pd));
+            self.d = self.a + g * (self.b - self.a);
+            self.pd = None;
+        }
     }
 }
 
@@ -311,14 +374,20 @@ mod tests {
             .max_by(|&a, &b| p[a].total_cmp(&p[b]))
             .map(|j| grid[j])
             .expect("grid");
+        // Golden section, each step measuring the one new interior point.
         let (mut a, mut b) = ((best - h).max(lo), (best + h).min(hi));
         let g = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+        let (mut pc, mut pd) = (power_alone(scan, s, c), power_alone(scan, s, d));
         while b - a > 1e-4 * h {
-            let (c, d) = (b - g * (b - a), a + g * (b - a));
-            if power_alone(scan, s, c) >= power_alone(scan, s, d) {
-                b = d;
+            if pc >= pd {
+                (b, d, pd) = (d, c, pc);
+                c = b - g * (b - a);
+                pc = power_alone(scan, s, c);
             } else {
-                a = c;
+                (a, c, pc) = (c, d, pd);
+                d = a + g * (b - a);
+                pd = power_alone(scan, s, d);
             }
         }
         0.5 * (a + b)
