@@ -684,7 +684,7 @@ e0_amp,et_amp,et_over_e0,et_minus_e0_deg,g_ratio_abs,g_ratio_deg"
                     alt(&a.product),
                     a.fundamental_only
                         .as_ref()
-                        .map_or(",,,,,".to_string(), |f| alt(f)),
+                        .map_or(",,,,,".to_string(), &alt),
                     alt(&a.true_gains),
                     amp(a.e_0),
                     amp(a.e_t),
