@@ -47,6 +47,15 @@
 //! f_c component after within its interval, with 95 % intervals
 //! (`-- --guard N SEED [FIRST]`: draws FIRST..N).
 //!
+//! With `--near-stall`, takes apart each sticking bench under 8 mm/s whose
+//! velocity-error std is over 15 % of the velocity (session 13,
+//! [`ballpass::validate::compensation_near_stall`]): closed loop without a
+//! table, with the product's table, with the fundamental of its
+//! fixed-point table alone, and with the table built on the simulated
+//! stage's gains, each beside the replay's figures, and the replay's error
+//! at f_c without a table (`E_0`) and with the product's (`E_T`)
+//! (`-- --near-stall N SEED [FIRST]`).
+//!
 //! With `--rounds`, compensates each bench in three rounds, each table
 //! built from the run with the previous one applied
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
@@ -81,6 +90,14 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--guard") {
         guard();
+        return;
+    }
+    if std::env::args().any(|a| a == "--runaway") {
+        runaway();
+        return;
+    }
+    if std::env::args().any(|a| a == "--near-stall") {
+        near_stall();
         return;
     }
     let (n, seed) = n_and_seed(7_000_000);
@@ -599,5 +616,127 @@ fn guard() {
             Rate::of(interval, m),
             Rate::of(interval_u, m),
         );
+    }
+}
+
+/// The `--near-stall` measurement (module docs).
+fn near_stall() {
+    use ballpass::validate::compensation_near_stall::{near_stall_check, Alternative};
+    let (n, seed) = n_and_seed(18_000_000);
+    let first: u64 = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(0);
+    println!(
+        "i,v_mm_s,std_over_v,rounds_kept,refused_round,corrections_kept,fc_before,std_before,stuck_none,replay_bare_fc,replay_bare_std,travel_replay_std,\
+prod_fc,prod_std,prod_stuck,prod_replay_fc,prod_replay_std,prod_u1,\
+fo_fc,fo_std,fo_stuck,fo_replay_fc,fo_replay_std,fo_u1,\
+tg_fc,tg_std,tg_stuck,tg_replay_fc,tg_replay_std,tg_u1,\
+e0_amp,et_amp,et_over_e0,et_minus_e0_deg,g_ratio_abs,g_ratio_deg"
+    );
+    let alt = |a: &Alternative| {
+        format!(
+            "{:.3},{:.1},{:.3},{:.3},{:.1},{:.2}",
+            a.run.f_c_um_s,
+            a.run.std_um_s,
+            a.run.stuck_fraction,
+            a.replay_f_c_um_s,
+            a.replay_std_um_s,
+            a.u1_n
+        )
+    };
+    for i in first..n {
+        let s = bench(seed, i);
+        if s.condition != ballpass::sim::Condition::Sticking || s.velocity_mm_s >= 8.0 {
+            continue;
+        }
+        match near_stall_check(&s) {
+            Ok(c) => {
+                let Some(a) = &c.apart else {
+                    println!(
+                        "# bench {i} ({:.3} mm/s): std {:.3} of v",
+                        s.velocity_mm_s, c.std_over_v
+                    );
+                    continue;
+                };
+                let p = &c.product;
+                let amp = |x: (f64, f64)| 2.0 * x.0.hypot(x.1);
+                let arg = |x: (f64, f64)| x.1.atan2(x.0).to_degrees();
+                let mut dphi = arg(a.e_t) - arg(a.e_0);
+                dphi = (dphi + 540.0).rem_euclid(360.0) - 180.0;
+                println!(
+                    "{i},{:.3},{:.3},{},{},{},{:.2},{:.1},{:.3},{:.2},{:.1},{:.1},{},{},{},{:.2},{:.2},{:.3},{:.3},{:.2},{:.1}",
+                    p.velocity_mm_s,
+                    c.std_over_v,
+                    c.kept.map_or(-1, |k| k.rounds as i64),
+                    c.kept
+                        .and_then(|k| k.refused_round)
+                        .map_or(String::new(), |r| r.to_string()),
+                    c.kept.map_or(-1, |k| k.corrections as i64),
+                    p.f_c_before_um_s,
+                    p.std_before_um_s,
+                    a.none.stuck_fraction,
+                    a.replay_bare.0,
+                    a.replay_bare.1,
+                    a.travel_replay_std_um_s,
+                    alt(&a.product),
+                    a.fundamental_only
+                        .as_ref()
+                        .map_or(",,,,,".to_string(), &alt),
+                    alt(&a.true_gains),
+                    amp(a.e_0),
+                    amp(a.e_t),
+                    amp(a.e_t) / amp(a.e_0),
+                    dphi,
+                    a.g_ratio.0.hypot(a.g_ratio.1),
+                    arg(a.g_ratio),
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+}
+
+/// The `--runaway` look-up (session 13): bench `I` of `SEED` cut to each
+/// duration given, with the product's table and the unguarded one
+/// (`-- --runaway SEED I D1 D2 ...`), to find a short bench whose
+/// unguarded table runs away for the test.
+fn runaway() {
+    use ballpass::validate::compensation_guard::guard_check;
+    let args: Vec<f64> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let (seed, i) = (args[0] as u64, args[1] as u64);
+    println!("duration_s,v_mm_s,std_before,std_after,refused,std_unguarded,fc_before,fc_after,fc_unguarded,seconds");
+    for &d in &args[2..] {
+        let mut s = bench(seed, i);
+        s.duration_s = d;
+        let t = std::time::Instant::now();
+        match guard_check(&s) {
+            Ok(g) => {
+                let p = &g.product;
+                println!(
+                    "{d},{:.3},{:.1},{:.1},{},{},{:.1},{:.2},{},{:.1}",
+                    s.velocity_mm_s,
+                    p.std_before_um_s,
+                    p.std_after_um_s,
+                    u8::from(p.refused),
+                    g.unguarded
+                        .as_ref()
+                        .map_or(String::new(), |u| format!("{:.1}", u.std_um_s)),
+                    p.f_c_before_um_s,
+                    p.f_c_after_um_s,
+                    g.unguarded
+                        .as_ref()
+                        .map_or(String::new(), |u| format!("{:.2}", u.f_c_um_s)),
+                    t.elapsed().as_secs_f64()
+                );
+            }
+            Err(e) => println!("# {d} s: {e}"),
+        }
     }
 }

@@ -84,14 +84,21 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
             v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                 - v.iter().copied().fold(f64::INFINITY, f64::min)
         };
-        writeln!(
-            so,
-            "table: {} bins per ball-pass period ({:.4} s, {} periods averaged), {:.4} N peak to peak",
-            comp.bins,
-            comp.period_s,
-            comp.periods_used,
-            range(&comp.force_n)
-        )?;
+        match &comp.table_refused {
+            Some(why) => writeln!(
+                so,
+                "table: none given (the force written is all zeros): {}",
+                text::line(why)
+            )?,
+            None => writeln!(
+                so,
+                "table: {} bins per ball-pass period ({:.4} s, {} periods averaged), {:.4} N peak to peak",
+                comp.bins,
+                comp.period_s,
+                comp.periods_used,
+                range(&comp.force_n)
+            )?,
+        }
         writeln!(so, "phase 0: {}", comp.phase_reference)?;
         writeln!(so, "table from: {}", comp.table_text)?;
         writeln!(so, "rail: {}", comp.rail_note)?;

@@ -39,6 +39,10 @@ pub struct CompensationCheck {
     pub warned_goal: bool,
     /// Whether it warned that the replay predicts a worse velocity error.
     pub warned_worse: bool,
+    /// Whether `compensate` refused to give a table (the replay said no
+    /// table lowers the velocity error; the run "with the table" is the
+    /// bench as it is).
+    pub refused: bool,
     /// Low-passed velocity-error std without the table, µm/s.
     pub std_before_um_s: f64,
     /// The same with the table, simulated, µm/s.
@@ -141,6 +145,7 @@ pub(crate) fn check_table(
             .warnings
             .iter()
             .any(|w| w.starts_with("the replay predicts that the table makes")),
+        refused: comp.table_refused.is_some(),
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: std_after,
         std_predicted_um_s: p.std_after_um_s,

@@ -271,6 +271,10 @@ pub struct Compensation {
     /// The replay's design steps kept by its guard (`None` without a
     /// replay).
     pub design_kept: Option<Kept>,
+    /// Why no table is given, when the replay says no table it can make
+    /// lowers the velocity error (`force_n` is then all zeros and the
+    /// prediction after is the record as it is; [`replay::select`]).
+    pub table_refused: Option<String>,
     /// The table against rail position, when the passages lock to it.
     pub rail: Option<RailTable>,
     /// Why there is or is not a rail table.
@@ -318,6 +322,16 @@ pub fn from_analysis(
     recs: &[Recording],
     gains: Option<PdLoop>,
 ) -> Result<Compensation> {
+    designed(a, recs, gains).map(|(c, _)| c)
+}
+
+/// [`from_analysis`], with the replay's design when there was one (for
+/// the validation's look inside).
+pub(crate) fn designed(
+    a: &Analysis,
+    recs: &[Recording],
+    gains: Option<PdLoop>,
+) -> Result<(Compensation, Option<replay::Design>)> {
     let names = || {
         a.inputs
             .iter()
@@ -410,14 +424,23 @@ pub fn from_analysis(
         .as_ref()
         .map_err(Clone::clone)
         .and_then(|k| replay::design(k, &stage, &replay::DesignAt::of(a), b, refined, true));
+    let design = replayed.as_ref().ok().cloned();
+    // The table given, of the design's (session 13, [`replay::select`]).
+    let mut table_refused = None;
+    let replayed = replayed.map(|d| {
+        if let Err(why) = replay::select(&d) {
+            table_refused = Some(why);
+        }
+        let text = d.guard_text();
+        (d, text)
+    });
     let mut friction_levels = Vec::new();
     let mut design_kept = None;
     let (force_n, table_source, table_text, prediction) = match replayed {
-        Ok(d) => {
+        Ok((d, guard_text)) => {
             let [low, mid, high] =
                 f_c_after_interval(d.after.f_c_um_s, d.f_c_model_error_um_s, stall);
             design_kept = Some(d.kept);
-            let guard_text = d.guard_text();
             (
                 d.table,
                 TableSource::Replay,
@@ -506,7 +529,31 @@ pub fn from_analysis(
             )
         }
     };
+    let (force_n, table_text, prediction) = match &table_refused {
+        None => (force_n, table_text, prediction),
+        Some(why) => {
+            let vm = v.mean.iter().sum::<f64>() / v.mean.len().max(1) as f64;
+            (
+                vec![0.0; b],
+                format!("no table (all zeros): {why}; the design refused was: {table_text}"),
+                ResidualPrediction {
+                    f_c_after_um_s: prediction.f_c_before_um_s,
+                    f_c_after_low_um_s: None,
+                    f_c_after_high_um_s: None,
+                    std_after_um_s: prediction.std_before_um_s,
+                    waveform_after_um_s: v.mean.iter().map(|x| x - vm).collect(),
+                    ..prediction
+                },
+            )
+        }
+    };
     let mut warnings = Vec::new();
+    if let Some(why) = &table_refused {
+        warnings.push(format!(
+            "no compensation table given (its force is all zeros): {why}; a table is refused \
+             rather than given to make the velocity error worse"
+        ));
+    }
     if stall > STALL_FRACTION {
         let words = if stall > SEVERE_STALL_FRACTION {
             SEVERE_STALL_WORDS
@@ -520,6 +567,7 @@ pub fn from_analysis(
         ));
     }
     if prediction.method == PredictionMethod::Replay
+        && table_refused.is_none()
         && (prediction.std_after_um_s >= prediction.std_before_um_s
             || prediction.f_c_after_um_s >= prediction.f_c_before_um_s)
     {
@@ -557,39 +605,43 @@ pub fn from_analysis(
         }
     }
     warnings.extend(a.warnings.iter().cloned());
-    Ok(Compensation {
-        schema: SCHEMA,
-        version: crate::VERSION,
-        sources: a.inputs.iter().map(|i| i.source.clone()).collect(),
-        velocity_mm_s: a.prediction.velocity_mm_s,
-        phase_reference: match table_source {
-            TableSource::Replay => format!(
-                "{}; the phase is the travel since that passage over the ball pitch 2·d_avg = \
+    Ok((
+        Compensation {
+            schema: SCHEMA,
+            version: crate::VERSION,
+            sources: a.inputs.iter().map(|i| i.source.clone()).collect(),
+            velocity_mm_s: a.prediction.velocity_mm_s,
+            phase_reference: match table_source {
+                TableSource::Replay => format!(
+                    "{}; the phase is the travel since that passage over the ball pitch 2·d_avg = \
                  {:.4} mm (at the commanded velocity, the fraction of the period)",
-                s.key_text,
-                2.0 * a.prediction.d_avg_mm
-            ),
-            TableSource::SyncAverage => s.key_text.clone(),
+                    s.key_text,
+                    2.0 * a.prediction.d_avg_mm
+                ),
+                TableSource::SyncAverage => s.key_text.clone(),
+            },
+            bins: b,
+            phase_spacing: 1.0 / b as f64,
+            period_s: s.period_s.mean,
+            periods_used: s.periods_used,
+            force_n,
+            table_source,
+            table_text,
+            force_sync_n,
+            friction_levels,
+            design_kept,
+            table_refused,
+            rail,
+            rail_note,
+            rail_grid,
+            stage_source,
+            stage,
+            stage_text,
+            prediction,
+            warnings,
         },
-        bins: b,
-        phase_spacing: 1.0 / b as f64,
-        period_s: s.period_s.mean,
-        periods_used: s.periods_used,
-        force_n,
-        table_source,
-        table_text,
-        force_sync_n,
-        friction_levels,
-        design_kept,
-        rail,
-        rail_note,
-        rail_grid,
-        stage_source,
-        stage,
-        stage_text,
-        prediction,
-        warnings,
-    })
+        design,
+    ))
 }
 
 /// The replay's design of `comp` (made by [`from_analysis`] from `a` and
@@ -608,7 +660,10 @@ pub(crate) fn design_again(
     replay::design(
         &keys,
         &comp.stage,
-        &replay::DesignAt::of(a),
+        &replay::DesignAt {
+            fundamental_only: guarded,
+            ..replay::DesignAt::of(a)
+        },
         comp.bins,
         refined,
         guarded,

@@ -100,6 +100,9 @@ pub(crate) struct Trace {
     pub rounds: Vec<Step>,
     /// Each correction of the fundamental tried.
     pub corrections: Vec<Step>,
+    /// The fundamental of the fixed-point table alone, corrected as the
+    /// table is (guarded only; without a ball-pass frequency, `None`).
+    pub fundamental_only: Option<Corrected>,
 }
 
 /// What [`design`] takes from the analysis of the records.
@@ -116,6 +119,10 @@ pub(crate) struct DesignAt {
     /// Ball-pass angular frequency of the synchronous average, rad/s
     /// (without it, no correction of the fundamental).
     pub w_c_rad_s: Option<f64>,
+    /// Whether to make, for the validation, the fundamental of the
+    /// fixed-point table alone, corrected ([`Trace::fundamental_only`];
+    /// guarded designs only; the product does not).
+    pub fundamental_only: bool,
 }
 
 impl DesignAt {
@@ -134,6 +141,7 @@ impl DesignAt {
                 .sync
                 .as_ref()
                 .map(|s| std::f64::consts::TAU / s.period_s.mean),
+            fundamental_only: false,
         }
     }
 }
@@ -224,20 +232,14 @@ pub(crate) fn design(
     let (re, im) = crate::analysis::sync::coefficient(&bare.waveform_um_s, 1);
     let f_c_model_error_um_s = measured.map_or(f64::NAN, |m| 2.0 * (m.0 - re).hypot(m.1 - im));
     let mut corrections = Vec::new();
+    let mut fundamental_only = None;
     if let Some(w_c) = at.w_c_rad_s {
-        for k in 1..=FUNDAMENTAL_STEPS {
-            let mut next = table.clone();
-            correct_fundamental(&mut next, &after.waveform_um_s, stage, w_c);
-            let next_after = play(&next)?;
-            corrections.push(Step::of(&next, &next_after));
-            // A NaN (a replay that cannot say) refuses the correction too.
-            let lower =
-                next_after.f_c_um_s.partial_cmp(&after.f_c_um_s) == Some(std::cmp::Ordering::Less);
-            if guarded && !lower {
-                break;
-            }
-            (table, after) = (next, next_after);
-            kept.corrections = k;
+        let c = correct(table, after, &play, stage, w_c, guarded)?;
+        (table, after, kept.corrections, corrections) = (c.table, c.after, c.kept, c.steps);
+        if guarded && at.fundamental_only {
+            let only = fundamental_of(&fixed_point);
+            let only_after = play(&only)?;
+            fundamental_only = Some(correct(only, only_after, &play, stage, w_c, true)?);
         }
     }
     Ok(Design {
@@ -253,8 +255,69 @@ pub(crate) fn design(
             measured_v1: measured,
             rounds,
             corrections,
+            fundamental_only,
         },
     })
+}
+
+/// A table after the corrections of its fundamental ([`correct`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Corrected {
+    /// The table.
+    pub table: Vec<f64>,
+    /// The replay with it.
+    pub after: Replayed,
+    /// Corrections kept.
+    pub kept: usize,
+    /// Each correction tried.
+    pub steps: Vec<Step>,
+}
+
+/// Up to [`FUNDAMENTAL_STEPS`] corrections of the fundamental of `table`
+/// ([`correct_fundamental`]) on the replay `play`; with `guarded`, a
+/// correction is kept only when the replay's f_c component falls, and the
+/// corrections stop at the first that does not.
+fn correct(
+    mut table: Vec<f64>,
+    mut after: Replayed,
+    play: &dyn Fn(&[f64]) -> Result<Replayed, String>,
+    stage: &PdLoop,
+    w_c: f64,
+    guarded: bool,
+) -> Result<Corrected, String> {
+    let (mut kept, mut steps) = (0, Vec::new());
+    for k in 1..=FUNDAMENTAL_STEPS {
+        let mut next = table.clone();
+        correct_fundamental(&mut next, &after.waveform_um_s, stage, w_c);
+        let next_after = play(&next)?;
+        steps.push(Step::of(&next, &next_after));
+        // A NaN (a replay that cannot say) refuses the correction too.
+        let lower =
+            next_after.f_c_um_s.partial_cmp(&after.f_c_um_s) == Some(std::cmp::Ordering::Less);
+        if guarded && !lower {
+            break;
+        }
+        (table, after) = (next, next_after);
+        kept = k;
+    }
+    Ok(Corrected {
+        table,
+        after,
+        kept,
+        steps,
+    })
+}
+
+/// The fundamental of `table` alone (zero mean, no harmonics).
+pub(crate) fn fundamental_of(table: &[f64]) -> Vec<f64> {
+    let (re, im) = crate::analysis::sync::coefficient(table, 1);
+    let b = table.len() as f64;
+    (0..table.len())
+        .map(|j| {
+            let th = std::f64::consts::TAU * j as f64 / b;
+            2.0 * (re * th.cos() - im * th.sin())
+        })
+        .collect()
 }
 
 impl Design {
@@ -296,6 +359,30 @@ impl Design {
         }
         out
     }
+}
+
+/// The table given, from the replay with and without it (session 13):
+/// the design's table when its replay leaves a smaller velocity-error std
+/// than the replay without a table; else none (`Err`, with the reason):
+/// the replay says the table does harm, and a table is refused rather
+/// than given to do it. Near stall, the replay's std said so on the
+/// benches where even the friction against travel made the stage stick
+/// more (session 12), and there the table did harm in closed loop.
+/// (The fundamental of the fixed-point table alone, tried as a second
+/// choice on the design seeds, left the std where it was in closed loop
+/// on 50 benches between 15 and 89 % of v, median 1.00 of the one
+/// without a table; docs/methods.md §14.)
+pub(crate) fn select(d: &Design) -> Result<(), String> {
+    let bare = d.trace.bare.std_um_s;
+    // A NaN (a replay that cannot say) refuses the table too.
+    if d.after.std_um_s < bare {
+        return Ok(());
+    }
+    Err(format!(
+        "the replay through the stage says the table makes the velocity error worse: \
+         its std is {:.0} µm/s with the table, {:.0} without",
+        d.after.std_um_s, bare
+    ))
 }
 
 /// The guard on the fixed-point rounds: `stds` the replay's velocity-error

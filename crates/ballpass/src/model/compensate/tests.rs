@@ -302,6 +302,7 @@ fn the_guarded_design_keeps_only_steps_the_replay_supports() {
         settings: AnalyzeSettings::default(),
         measured_v1: None,
         w_c_rad_s: Some(std::f64::consts::TAU * v / pitch),
+        fundamental_only: false,
     };
     let g = design(&keys, &stage(), &at, 64, false, true).unwrap();
     let d = design(&keys, &stage(), &at, 64, false, false).unwrap();
@@ -318,4 +319,15 @@ fn the_guarded_design_keeps_only_steps_the_replay_supports() {
         assert_eq!(g.table, d.table);
     }
     assert!(!g.guard_text().is_empty());
+    // The table given (session 13): this one, whose replay is below the
+    // bare one; none when its replay is not below (equal included) or
+    // cannot say, with both stds in the reason.
+    use super::replay::select;
+    assert_eq!(select(&g), Ok(()));
+    for worse in [bare, 1.5 * bare, f64::NAN] {
+        let mut h = g.clone();
+        h.after.std_um_s = worse;
+        let why = select(&h).unwrap_err();
+        assert!(why.contains(&format!("{bare:.0} without")), "{why}");
+    }
 }
