@@ -146,20 +146,20 @@ pub const F_C_GOAL_FRACTION: f64 = 0.2;
 
 /// What the near-stall warning says of the table between
 /// [`STALL_FRACTION`] and [`SEVERE_STALL_FRACTION`] (measured on fresh
-/// simulated benches, seeds 12 000 000, 240 benches,
-/// docs/methods.md §14).
+/// simulated benches, seeds 19 000 000, 240 benches, with the table
+/// withheld when the replay says it harms; docs/methods.md §14).
 const STALL_WORDS: &str =
     "on fresh simulated benches between 15 and 57 % the table met both goals (f_c component \
-     −80 %, std down) on 46 of 47 (f_c median −98 %); the std it predicts was within 20 % of the \
-     one met on 47 of 47; the f_c component after is given with an interval that held 35 of 47 \
-     tables. Try it with care (scaled down first)";
+     −80 %, std down) on 43 of 48 (f_c median −98 %; 3 of the 5 misses were tables withheld as \
+     harmful); the f_c component after is given with an interval that held 36 of 48. Try it \
+     with care (scaled down first)";
 
 /// What it says above [`SEVERE_STALL_FRACTION`].
 const SEVERE_STALL_WORDS: &str =
     "above 57 % the stage sticks in most periods: on fresh simulated benches the table met both \
-     goals (f_c component −80 %, std down) on 37 of 40 (f_c median −89 %, the misses −27 to \
-     −79 %); the std it predicts held on 38 of 40; the f_c component after is given with an \
-     interval that held 33 of 40 tables. Check it on the machine, scaled down first";
+     goals (f_c component −80 %, std down) on 38 of 43 (f_c median −90 %); the std it predicts \
+     held on 42 of 43; the f_c component after is given with an interval that held 33 of 43 \
+     tables. Check it on the machine, scaled down first";
 
 /// Where the stage model of the prediction came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
