@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6] [N] [--list] [--json] [--clean] [--fwhm R]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -23,7 +23,8 @@
 //! tables. `--clean` scores the same benches without noise, drift, AC
 //! coupling or interference, `--fwhm R` with every pulse `R τ_c` wide
 //! (what the detector does where nothing but the pulses' shape and
-//! overlap is in the way).
+//! overlap is in the way). `--seeds a,b,...` scores only those bench
+//! seeds (to look at single records of a design set).
 
 use ballpass::validate::passages::{score, summarize, PassageScore};
 use ballpass::validate::Domain;
@@ -61,9 +62,17 @@ fn main() {
         .position(|a| a == "--fwhm")
         .and_then(|i| args.get(i + 1))
         .and_then(|a| a.parse().ok());
+    // `--seeds a,b,...`: only these bench seeds of the set (looking at
+    // single records of a design set; the set's range is not checked).
+    let only: Option<Vec<u64>> = args
+        .iter()
+        .position(|a| a == "--seeds")
+        .and_then(|i| args.get(i + 1))
+        .map(|a| a.split(',').filter_map(|v| v.trim().parse().ok()).collect());
     let domain = Domain::default();
     let t0 = std::time::Instant::now();
-    let scores: Vec<PassageScore> = (first..first + n)
+    let seeds: Vec<u64> = only.unwrap_or_else(|| (first..first + n).collect());
+    let scores: Vec<PassageScore> = seeds
         .into_par_iter()
         .map(|seed| {
             let mut bench = domain.draw(seed);
@@ -119,7 +128,8 @@ fn main() {
         return;
     }
     println!(
-        "{set}: {n} benches (seeds {first}..={}), {elapsed:.1} s\n",
+        "{set}: {} benches (seeds {first}..={}), {elapsed:.1} s\n",
+        scores.len(),
         first + n - 1
     );
     print!("{}", summarize(&scores).to_markdown());

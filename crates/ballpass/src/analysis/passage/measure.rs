@@ -3,6 +3,7 @@
 //! pulses the seeds missed (and of either polarity), until the set of
 //! pulses stops changing (module docs of [`super`], "Method").
 
+use super::gaps::gap_lines;
 use super::lsq::{Problem, Solution, Splines};
 use super::pulse_fit::{fit_pulse, PulseFit};
 use super::scan::{scan, Seeds};
@@ -258,7 +259,7 @@ pub(super) fn measure(
                 }
             }
             // What the splines and pulses leave, followed where the light
-            // is dark (`gap_level`), else averaged over a period (twice):
+            // is dark (`gap_lines`), else averaged over a period (twice):
             // zero for anything that repeats every period, so it follows a
             // drift too fast for the splines but not the pulses.
             if let Some(f) = &full {
@@ -269,7 +270,7 @@ pub(super) fn measure(
                     None
                 } else {
                     f.shape()
-                        .and_then(|sh| gap_level(&r, &all, &sh, noise / qf.sqrt(), pd))
+                        .and_then(|sh| gap_lines(&r, &all, &sh, noise / qf.sqrt(), pd))
                 };
                 let r = gaps.unwrap_or_else(|| period_mean(&period_mean(&r, pd), pd));
                 for (f, v) in fast.iter_mut().zip(&r) {
@@ -452,116 +453,6 @@ fn with_mean_ramp(baseline: &[f64], z: &[f64], kappa: f64, dt: f64) -> Vec<f64> 
         .enumerate()
         .map(|(i, b)| b + rate * i as f64 * dt)
         .collect()
-}
-
-/// Half length of [`gap_level`]'s window, in template FWHM: the window is
-/// twice a pulse's support (three half widths either side of its peak), so
-/// that a pulse not yet found covers at most half of it.
-const GAP_WINDOW_FWHM: f64 = 3.0;
-
-/// Half widths either side of a found pulse's half-maximum points left out
-/// of [`gap_level`] (where its misfit to the template is).
-const GAP_MASK_HALF_WIDTHS: f64 = 1.0;
-
-/// Quantile of the dark samples [`gap_level`] takes.
-const GAP_QUANTILE: f64 = 0.25;
-
-/// The level of `r` (what the baseline and the modelled pulses leave)
-/// where the light is dark: a running low quantile of the samples outside
-/// every found pulse (its half-maximum span and one half width either
-/// side), over a window of [`GAP_WINDOW_FWHM`] template FWHM either side,
-/// longer where that holds too few dark samples (up to a period either
-/// side), lifted by the noise's own quantile (white noise of
-/// `block_noise` per block). A window needs enough dark samples that a
-/// pulse not found yet covers less than `1 − GAP_QUANTILE` of them.
-///
-/// A pulse of light only adds to the dark level, so a low quantile stays
-/// on the dark level under a pulse the search has not found yet (it covers
-/// at most half the window); the window follows a drift as fast as a few
-/// pulse widths, where a running mean over a period cannot. `None` when
-/// some window holds too few dark samples (pulses that fill most of the
-/// period: the period mean is used then).
-fn gap_level(
-    r: &[f64],
-    pulses: &[Pulse],
-    shape: &super::template::Shape,
-    block_noise: f64,
-    pd: f64,
-) -> Option<Vec<f64>> {
-    let n = r.len();
-    let fwhm = shape.fwhm();
-    if n == 0 || fwhm.is_nan() || fwhm <= 0.0 {
-        return None;
-    }
-    let w = (GAP_WINDOW_FWHM * fwhm).min(pd).max(4.0).round() as usize;
-    let hw_l = shape.peak_u - shape.left_u;
-    let hw_r = shape.right_u - shape.peak_u;
-    let mut dark = vec![true; n];
-    for p in pulses {
-        let a = p.c + p.s * (shape.left_u - GAP_MASK_HALF_WIDTHS * hw_l);
-        let b = p.c + p.s * (shape.right_u + GAP_MASK_HALF_WIDTHS * hw_r);
-        let lo = a.ceil().max(0.0) as usize;
-        let hi = (b.floor().min((n - 1) as f64)).max(-1.0);
-        if hi < lo as f64 {
-            continue;
-        }
-        dark[lo..=hi as usize].iter_mut().for_each(|d| *d = false);
-    }
-    // −Φ⁻¹(GAP_QUANTILE): the noise's quantile below its median.
-    let lift = 0.674_489_750_196_081_7 * block_noise;
-    let stride = (w / 4).max(1);
-    let mut anchors: Vec<usize> = (0..n).step_by(stride).collect();
-    if anchors.last() != Some(&(n - 1)) {
-        anchors.push(n - 1);
-    }
-    // A pulse not found yet lifts the low quantile once it covers more
-    // than `1 − GAP_QUANTILE` of the dark samples: a window needs that many
-    // more than the span a pulse covers (the span left out of a found one).
-    let span = (1.0 + GAP_MASK_HALF_WIDTHS) * fwhm;
-    let need = (span / (1.0 - GAP_QUANTILE)).max(8.0);
-    // Dark samples before each block (to size each window).
-    let mut cum = vec![0usize; n + 1];
-    for (j, d) in dark.iter().enumerate() {
-        cum[j + 1] = cum[j] + usize::from(*d);
-    }
-    // The longest window allowed: a period either side.
-    let w_max = (pd.round() as usize).max(w);
-    let mut buf = Vec::with_capacity(2 * w_max + 1);
-    let mut values = Vec::with_capacity(anchors.len());
-    for &i in &anchors {
-        // The shortest window from `w` either side (kept whole at the
-        // record's ends) up to `w_max` holding `need` dark samples.
-        let mut half = w;
-        let (a, b) = loop {
-            let len = (2 * half + 1).min(n);
-            let a = i.saturating_sub(half).min(n - len);
-            let b = a + len - 1;
-            if (cum[b + 1] - cum[a]) as f64 >= need || half >= w_max || len == n {
-                break (a, b);
-            }
-            half = (half + stride).min(w_max);
-        };
-        buf.clear();
-        buf.extend((a..=b).filter(|&j| dark[j]).map(|j| r[j]));
-        if (buf.len() as f64) < need {
-            return None;
-        }
-        let k = ((GAP_QUANTILE * (buf.len() - 1) as f64).round() as usize).min(buf.len() - 1);
-        let (_, v, _) = buf.select_nth_unstable_by(k, f64::total_cmp);
-        values.push(*v + lift);
-    }
-    let mut out = vec![0.0; n];
-    for (k, pair) in anchors.windows(2).enumerate() {
-        let (i0, i1) = (pair[0], pair[1]);
-        let (v0, v1) = (values[k], values[k + 1]);
-        for (j, o) in out.iter_mut().enumerate().take(i1 + 1).skip(i0) {
-            *o = v0 + (v1 - v0) * (j - i0) as f64 / (i1 - i0) as f64;
-        }
-    }
-    if anchors.len() == 1 {
-        out[0] = values[0];
-    }
-    Some(out)
 }
 
 /// Centred running mean over `period` blocks (rounded; shorter at the

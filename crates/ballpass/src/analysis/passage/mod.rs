@@ -108,6 +108,7 @@ use crate::stats::MeanStd;
 
 mod conditions;
 mod fits;
+mod gaps;
 mod lsq;
 mod measure;
 mod overlap;
