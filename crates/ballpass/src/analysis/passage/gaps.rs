@@ -85,19 +85,7 @@ pub(super) fn gap_lines(
     if n == 0 || fwhm.is_nan() || fwhm <= 0.0 {
         return None;
     }
-    let hw_l = shape.peak_u - shape.left_u;
-    let hw_r = shape.right_u - shape.peak_u;
-    let mut dark = vec![true; n];
-    for p in pulses {
-        let a = p.c + p.s * (shape.left_u - MASK_HALF_WIDTHS * hw_l);
-        let b = p.c + p.s * (shape.right_u + MASK_HALF_WIDTHS * hw_r);
-        let lo = a.ceil().max(0.0) as usize;
-        let hi = (b.floor().min((n - 1) as f64)).max(-1.0);
-        if hi < lo as f64 {
-            continue;
-        }
-        dark[lo..=hi as usize].iter_mut().for_each(|d| *d = false);
-    }
+    let dark = dark_mask(n, pulses, shape);
     let amps: Vec<f64> = pulses.iter().map(|p| p.a.abs()).collect();
     let med_amp = if amps.is_empty() {
         0.0
@@ -127,7 +115,7 @@ pub(super) fn gap_lines(
         // the record's end: the running quantile there, which a pulse it
         // has not found covers at most half of (its lines otherwise).
         if len as f64 > pd {
-            let lv = level.get_or_insert_with(|| gap_level(r, pulses, shape, block_noise, pd));
+            let lv = level.get_or_insert_with(|| gap_level(r, &dark, shape, block_noise, pd));
             if let Some(lv) = lv {
                 let b = i - 1;
                 lines.push(Line {
@@ -194,6 +182,25 @@ pub(super) fn gap_lines(
         }
     }
     Some(out)
+}
+
+/// Blocks outside every found pulse's half-maximum span widened by
+/// [`MASK_HALF_WIDTHS`] half widths either side (`true` = dark).
+fn dark_mask(n: usize, pulses: &[Pulse], shape: &Shape) -> Vec<bool> {
+    let hw_l = shape.peak_u - shape.left_u;
+    let hw_r = shape.right_u - shape.peak_u;
+    let mut dark = vec![true; n];
+    for p in pulses {
+        let a = p.c + p.s * (shape.left_u - MASK_HALF_WIDTHS * hw_l);
+        let b = p.c + p.s * (shape.right_u + MASK_HALF_WIDTHS * hw_r);
+        let lo = a.ceil().max(0.0) as usize;
+        let hi = (b.floor().min((n - 1) as f64)).max(-1.0);
+        if hi < lo as f64 {
+            continue;
+        }
+        dark[lo..=hi as usize].iter_mut().for_each(|d| *d = false);
+    }
+    dark
 }
 
 /// Least-squares line through `r[a..=b]`, refitted without the samples more
@@ -274,7 +281,7 @@ const GAP_QUANTILE: f64 = 0.25;
 /// period: the period mean is used then).
 fn gap_level(
     r: &[f64],
-    pulses: &[Pulse],
+    dark: &[bool],
     shape: &Shape,
     block_noise: f64,
     pd: f64,
@@ -285,19 +292,6 @@ fn gap_level(
         return None;
     }
     let w = (GAP_WINDOW_FWHM * fwhm).min(pd).max(4.0).round() as usize;
-    let hw_l = shape.peak_u - shape.left_u;
-    let hw_r = shape.right_u - shape.peak_u;
-    let mut dark = vec![true; n];
-    for p in pulses {
-        let a = p.c + p.s * (shape.left_u - MASK_HALF_WIDTHS * hw_l);
-        let b = p.c + p.s * (shape.right_u + MASK_HALF_WIDTHS * hw_r);
-        let lo = a.ceil().max(0.0) as usize;
-        let hi = (b.floor().min((n - 1) as f64)).max(-1.0);
-        if hi < lo as f64 {
-            continue;
-        }
-        dark[lo..=hi as usize].iter_mut().for_each(|d| *d = false);
-    }
     // −Φ⁻¹(GAP_QUANTILE): the noise's quantile below its median.
     let lift = 0.674_489_750_196_081_7 * block_noise;
     let stride = (w / 4).max(1);
