@@ -265,16 +265,19 @@ fn refine() {
 
 /// The positional arguments `[N] [SEED]` (20 and `default_seed` when absent).
 fn n_and_seed(default_seed: u64) -> (u64, u64) {
+    let (n, seed, _) = n_seed_first(default_seed);
+    (n, seed)
+}
+
+/// [`n_and_seed`] and the first bench index (the third positional
+/// argument, default 0).
+fn n_seed_first(default_seed: u64) -> (u64, u64, u64) {
     let args: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect();
-    let n = args.first().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let seed = args
-        .get(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(default_seed);
-    (n, seed)
+    let at = |i: usize, default: u64| args.get(i).and_then(|a| a.parse().ok()).unwrap_or(default);
+    (at(0, 20), at(1, default_seed), at(2, 0))
 }
 
 /// The `--variants` measurement: the product's table against the table
@@ -487,13 +490,7 @@ fn guard() {
     use ballpass::validate::compensation::CompensationCheck;
     use ballpass::validate::compensation_guard::{guard_check, GuardCheck};
     use ballpass::validate::Rate;
-    let (n, seed) = n_and_seed(16_000_000);
-    let first: u64 = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .nth(2)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(0);
+    let (n, seed, first) = n_seed_first(16_000_000);
     println!(
         "i,v_mm_s,condition,std_over_v,rounds_kept,refused_round,corrections_kept,fc_before,std_before,fc_after,std_after,fc_pred,fc_low,fc_high,std_pred,warn_goal,warn_worse,u1_kept_max_n,u1_all_max_n,u1_final_n,u1_unguarded_n,fc_unguarded,std_unguarded,std_pred_unguarded,bare_std,round_stds"
     );
@@ -622,13 +619,7 @@ fn guard() {
 /// The `--near-stall` measurement (module docs).
 fn near_stall() {
     use ballpass::validate::compensation_near_stall::{near_stall_check, Alternative};
-    let (n, seed) = n_and_seed(18_000_000);
-    let first: u64 = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .nth(2)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(0);
+    let (n, seed, first) = n_seed_first(18_000_000);
     println!(
         "i,v_mm_s,std_over_v,rounds_kept,refused_round,corrections_kept,fc_before,std_before,stuck_none,replay_bare_fc,replay_bare_std,travel_replay_std,\
 prod_fc,prod_std,prod_stuck,prod_replay_fc,prod_replay_std,prod_u1,\
