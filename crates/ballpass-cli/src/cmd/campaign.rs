@@ -18,9 +18,8 @@ use ballpass::campaign::{
     Manifest, ManifestEntry, Selection,
 };
 use ballpass::report::campaign::{
-    diagnosis_parts, friction_examples, sweep_parts, FrictionTrace, ReportParts,
+    campaign_report, diagnosis_parts, friction_examples, sweep_parts, FrictionTrace, ReportParts,
 };
-use ballpass::report::{Block, Report, Section};
 use clap::Args;
 use serde::Serialize;
 
@@ -194,48 +193,6 @@ fn run(
     })
 }
 
-/// The campaign report: inputs and selection, the command's sections,
-/// failed records, settings, then the command's figures.
-fn campaign_report(
-    title: &str,
-    b: &Batch,
-    parts: ReportParts,
-    settings: &CampaignSettings,
-) -> Result<Report> {
-    let mut report = Report::new(format!("{title}: {}", b.manifest.source.display()))
-        .with_command(command_line());
-    let mut inputs = vec![
-        (
-            "source".to_string(),
-            b.manifest.source.display().to_string(),
-        ),
-        (
-            "records".to_string(),
-            format!("{} ({} failed)", b.entries.len(), b.outcome.n_failed()),
-        ),
-    ];
-    for n in &b.notes {
-        inputs.push(("selection".into(), n.clone()));
-    }
-    report = report.with_section(Section::new("Inputs").with(Block::KeyValues(inputs)));
-    for s in parts.sections {
-        report = report.with_section(s);
-    }
-    let failed: Vec<String> = b
-        .outcome
-        .failed()
-        .map(|(e, why)| format!("{}: {why}", e.label()))
-        .collect();
-    if !failed.is_empty() {
-        report = report.with_section(Section::new("Failed records").with(Block::Warnings(failed)));
-    }
-    report = report.with_section(Section::new("Settings").with(Block::settings(settings)?));
-    for f in parts.figures {
-        report = report.with_figure(f);
-    }
-    Ok(report)
-}
-
 /// What `sweep` or `diagnose` found, to be written by [`finish`].
 struct Outputs<'a, T: Serialize> {
     /// `ballpass sweep` or `ballpass diagnose`: the report's title.
@@ -286,7 +243,16 @@ fn finish<T: Serialize>(
     let report = if a.report.no_report {
         None
     } else {
-        let report = campaign_report(o.title, b, parts()?, settings)?;
+        let report = campaign_report(
+            o.title,
+            &b.manifest.source,
+            b.entries.len(),
+            &b.outcome,
+            &b.notes,
+            parts()?,
+            settings,
+        )?
+        .with_command(command_line());
         a.report.write(&report, staged)?
     };
     Ok((report.map(|r| b.out.final_path(&r.html)), o.summary))

@@ -10,7 +10,7 @@ use ballpass::analysis::preflight::PreflightSettings;
 use ballpass::bearing::Geometry;
 use ballpass::recording::io::load_all;
 use ballpass::recording::Recording;
-use ballpass::report::{self, Block, Report, Section};
+use ballpass::report;
 use clap::Args;
 
 use crate::args::{command_line, LoadArgs, ReportArgs};
@@ -142,7 +142,8 @@ pub fn run(a: &PassageArgs) -> Result<()> {
     };
     result.write(staged)?;
     let (done, failed) = (&result.records, &result.failed);
-    let report = build_report(&recs, done, failed, &settings, &bearing_name)?;
+    let report = report::passage::passages_report(&recs, done, failed, &settings, &bearing_name)?
+        .with_command(command_line());
     let written = a.report.write(&report, staged)?;
     let dir = output::commit(out)?;
     let mut out = output::stdout();
@@ -187,41 +188,6 @@ fn one(
     let stated = a.load.velocity.or(file_velocity);
     let c = checked_passages(rec, stated, a.load.velocity, settings, geometry, pre)?;
     Ok((c.recording, c.passages, c.warnings, c.notes))
-}
-
-fn build_report(
-    recs: &[Recording],
-    done: &[PassageAnalysis],
-    failed: &[PassageFailure],
-    settings: &PassageSettings,
-    bearing: &str,
-) -> Result<Report> {
-    let title = match done {
-        [one] => format!("ballpass passage: {}", one.source),
-        _ => format!("ballpass passage: {} records", done.len()),
-    };
-    let mut rep = Report::new(title).with_command(command_line());
-    for (k, (rec, r)) in recs.iter().zip(done).enumerate() {
-        for s in report::passage::record_sections(k + 1, rec, r, "passages.csv", "")? {
-            rep = rep.with_section(s);
-        }
-    }
-    if !failed.is_empty() {
-        rep = rep.with_section(
-            Section::new("Records that failed").with(Block::Warnings(
-                failed
-                    .iter()
-                    .map(|f| format!("{}: {}", f.record, f.error))
-                    .collect(),
-            )),
-        );
-    }
-    let mut settings_block = Section::new("Settings").with(Block::KeyValues(vec![(
-        "bearing".into(),
-        bearing.to_string(),
-    )]));
-    settings_block = settings_block.with(Block::settings(settings)?);
-    Ok(rep.with_section(settings_block))
 }
 
 fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {

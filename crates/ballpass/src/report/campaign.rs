@@ -1,12 +1,14 @@
 //! Report sections and figures of campaigns (thesis Figs. 29, 52, 53, 66–68).
 
+use crate::campaign::batch::BatchOutcome;
 use crate::campaign::diagnose::{Condition, Diagnosis};
+use crate::campaign::run::CampaignSettings;
 use crate::campaign::sweep::Sweep;
 use crate::error::Result;
 use crate::recording::{Channel, Recording};
 use crate::report::kinds::{self, fmt_pm, fmt_sig, Overlaid, PowerLaw, SpectrumView};
 use crate::report::{
-    Axis, Block, Figure, Level, Panel, Rgb, Section, Series, SeriesStyle, Table, Verdict,
+    Axis, Block, Figure, Level, Panel, Report, Rgb, Section, Series, SeriesStyle, Table, Verdict,
 };
 
 /// What a campaign report shows: sections with their figures in place, and
@@ -17,6 +19,52 @@ pub struct ReportParts {
     pub sections: Vec<Section>,
     /// Figures shown after the sections.
     pub figures: Vec<Figure>,
+}
+
+/// The report of a campaign (`sweep`, `diagnose`): its inputs and
+/// selection, the command's `parts`, the failed records, the settings, then
+/// the figures without a section. `title` names the command, `source` the
+/// manifest or folder, `n_records` the records selected, `notes` the
+/// selection's notes. The caller adds the command line.
+///
+/// # Errors
+/// [`crate::Error::Report`] if the settings cannot be tabulated.
+pub fn campaign_report<T>(
+    title: &str,
+    source: &std::path::Path,
+    n_records: usize,
+    outcome: &BatchOutcome<T>,
+    notes: &[String],
+    parts: ReportParts,
+    settings: &CampaignSettings,
+) -> Result<Report> {
+    let mut report = Report::new(format!("{title}: {}", source.display()));
+    let mut inputs = vec![
+        ("source".to_string(), source.display().to_string()),
+        (
+            "records".to_string(),
+            format!("{n_records} ({} failed)", outcome.n_failed()),
+        ),
+    ];
+    for n in notes {
+        inputs.push(("selection".into(), n.clone()));
+    }
+    report = report.with_section(Section::new("Inputs").with(Block::KeyValues(inputs)));
+    for s in parts.sections {
+        report = report.with_section(s);
+    }
+    let failed: Vec<String> = outcome
+        .failed()
+        .map(|(e, why)| format!("{}: {why}", e.label()))
+        .collect();
+    if !failed.is_empty() {
+        report = report.with_section(Section::new("Failed records").with(Block::Warnings(failed)));
+    }
+    report = report.with_section(Section::new("Settings").with(Block::settings(settings)?));
+    for f in parts.figures {
+        report = report.with_figure(f);
+    }
+    Ok(report)
 }
 
 /// A link to a recording file: its absolute path (the report may live in

@@ -3,10 +3,11 @@
 //! (thesis Figs. 47–48), `τ_c` and `τ_p` per passage, and the summary.
 
 use super::campaign::recording_link;
-use super::html::{Block, Level, Section, Table, Verdict};
+use super::html::{Block, Level, Report, Section, Table, Verdict};
 use super::kinds::{fmt_pm, fmt_sig, pulses_with_models};
 use super::spec::{Axis, Figure, Marker, Panel, Rgb, Series, SeriesStyle};
-use crate::analysis::passage::PassageAnalysis;
+use crate::analysis::passage::{PassageAnalysis, PassageSettings};
+use crate::analysis::passage_table::PassageFailure;
 use crate::error::Result;
 use crate::recording::{Channel, Recording};
 
@@ -19,6 +20,49 @@ pub(crate) fn short_name(source: &str) -> String {
     std::path::Path::new(source)
         .file_name()
         .map_or_else(|| source.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// The report of `ballpass passage` over `recs` (each with its analysis in
+/// `done`): per record its sections, then the records that `failed`, then
+/// the settings with the `bearing` named. The caller adds the command line.
+///
+/// # Errors
+/// [`crate::Error::MissingChannel`] when a record has no optical channel;
+/// [`crate::Error::Report`] if the settings cannot be tabulated.
+pub fn passages_report(
+    recs: &[Recording],
+    done: &[PassageAnalysis],
+    failed: &[PassageFailure],
+    settings: &PassageSettings,
+    bearing: &str,
+) -> Result<Report> {
+    let title = match done {
+        [one] => format!("ballpass passage: {}", one.source),
+        _ => format!("ballpass passage: {} records", done.len()),
+    };
+    let mut rep = Report::new(title);
+    for (k, (rec, r)) in recs.iter().zip(done).enumerate() {
+        for s in record_sections(k + 1, rec, r, "passages.csv", "")? {
+            rep = rep.with_section(s);
+        }
+    }
+    if !failed.is_empty() {
+        rep = rep.with_section(
+            Section::new("Records that failed").with(Block::Warnings(
+                failed
+                    .iter()
+                    .map(|f| format!("{}: {}", f.record, f.error))
+                    .collect(),
+            )),
+        );
+    }
+    let settings_block = Section::new("Settings")
+        .with(Block::KeyValues(vec![(
+            "bearing".into(),
+            bearing.to_string(),
+        )]))
+        .with(Block::settings(settings)?);
+    Ok(rep.with_section(settings_block))
 }
 
 /// One record's figures: `optical_<k>`, `pulses_<k>` (when fitted) and
