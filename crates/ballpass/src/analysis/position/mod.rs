@@ -483,7 +483,7 @@ fn compute_given(
 /// pitch `d_avg_mm`, with the analysis' low-pass and window (module docs).
 ///
 /// # Errors
-/// As [`compute`]; [`Error::InvalidSetting`] for a bad low-pass.
+/// As `compute`; [`Error::InvalidSetting`] for a bad low-pass.
 pub fn position_spectra(
     recs: &[Recording],
     d_avg_mm: f64,

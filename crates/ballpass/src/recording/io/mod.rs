@@ -21,7 +21,7 @@
 //! Errors are one line and name the file and the line and column (text) or
 //! the variable/channel and sample (binary formats). Loaders bound their
 //! time and memory by what the file can really hold, and contain any
-//! failure of a third-party parser as such an error (see [`contain`]).
+//! failure of a third-party parser as such an error (see `contain`).
 //!
 //! [`write_csv`] writes the canonical CSV and [`write_mat`] a level-5 MAT-file;
 //! [`load`] reads either back bit for bit.

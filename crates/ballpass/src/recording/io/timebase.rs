@@ -201,10 +201,10 @@ pub fn derive(
     })
 }
 
-/// The fast path of [`derive`] for a time column known by its first and
+/// The fast path of [`derive()`] for a time column known by its first and
 /// last stamps, its length `n >= 2` and its smallest and largest step
 /// (all positive): the timebase when every step is within the tolerance
-/// of the smallest, else `None` (the column needs [`derive`] itself).
+/// of the smallest, else `None` (the column needs [`derive()`] itself).
 /// What a column read in pieces can check without holding it.
 pub fn uniform(
     first: f64,

@@ -2,12 +2,12 @@
 //! times as the streamed analysis needs, never held whole.
 //!
 //! [`open`] scans the file once: its header, its rows in pieces (the fast
-//! path of [`super::stream`]), the time column's steps (the uniform-grid
+//! path of `super::stream`), the time column's steps (the uniform-grid
 //! check of [`timebase::derive`], from the first and last stamps and the
 //! smallest and largest step, which gives the same rate to the bit), and
 //! that every channel value is finite. Each [`RecordSource::pass`] then
 //! reads the pieces again and makes each one a recording exactly as the
-//! whole-file reader makes the file one ([`finish`]: units, scales and
+//! whole-file reader makes the file one (`finish`: units, scales and
 //! offsets, range checks, errors naming the line), at the scanned rate.
 //!
 //! A file the scan does not take — anything the fast path declines, a
@@ -15,7 +15,6 @@
 //! a given or stated rate, a record name — gives `None`: it is read whole,
 //! where it is reported, filled or split as the options say.
 //!
-//! [`finish`]: super::super::finish::finish
 
 use std::path::{Path, PathBuf};
 

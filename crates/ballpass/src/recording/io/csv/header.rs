@@ -9,7 +9,7 @@ use super::*;
 /// Reads the header of a text recording (for `inspect` and error hints).
 ///
 /// # Errors
-/// As [`super::load`] for an empty or binary file or a malformed first row.
+/// As `super::load` for an empty or binary file or a malformed first row.
 pub fn read_header(
     path: &Path,
     bytes: &[u8],

@@ -21,10 +21,10 @@
 //! to `f64`; a matrix that is not a vector, complex or sparse data, text or
 //! an object is an error naming the variable and what it is.
 //!
-//! The level-5 parser is our own ([`v5`]): its time and memory are bounded
+//! The level-5 parser is our own (`v5`): its time and memory are bounded
 //! by the file (nesting depth, every length checked against its container,
 //! compressed variables inflated only when used and never nested). v7.3
-//! files are read with `hdf5-reader` ([`v73`]) with its panics contained.
+//! files are read with `hdf5-reader` (`v73`) with its panics contained.
 
 use std::path::Path;
 

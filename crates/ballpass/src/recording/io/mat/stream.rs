@@ -3,11 +3,11 @@
 //!
 //! [`open`] opens the HDF5 file on disk, reading only its metadata (the
 //! variable tree of the whole-file reader, numeric data left unread), and
-//! finds the channels as the whole-file reader does ([`super::parse_file`]:
+//! finds the channels as the whole-file reader does (`super::parse_file`:
 //! plain variables, ControlDesk layouts, struct fields by path, a scalar
 //! rate field), reading only the first block of each channel and of the
 //! time. A time variable is then scanned in ranges (its steps checked as
-//! [`timebase::Steps`] checks a column read in pieces, which gives the rate
+//! `timebase::Steps` checks a column read in pieces, which gives the rate
 //! of the whole column to the bit). The first block is finished as the
 //! whole file is, which gives the channels, metadata and any error of
 //! units or options.
@@ -15,7 +15,7 @@
 //! Each [`RecordSource::pass`] reads every channel in ranges of
 //! [`BLOCK_SAMPLES`] through `hdf5-reader`'s hyperslab reads (contiguous,
 //! compact and chunked datasets, deflate and shuffle filters), converts
-//! them by the whole-file reader's own function ([`H5Data::numbers_in`])
+//! them by the whole-file reader's own function (`H5Data::numbers_in`)
 //! and finishes each block the same way, so every sample equals the
 //! whole-file read to the bit.
 //!
@@ -86,7 +86,7 @@ impl fmt::Debug for MatSource {
 /// is read whole instead (module docs).
 ///
 /// # Errors
-/// [`Error::Io`] when the file cannot be read; what the whole-file reader
+/// [`Error::Io`](crate::Error::Io) when the file cannot be read; what the whole-file reader
 /// says of a damaged file, a variable not found or bad options.
 pub fn open(path: &Path, opts: &LoadOptions) -> Result<std::result::Result<MatSource, String>> {
     open_sized(path, opts, BLOCK_SAMPLES)

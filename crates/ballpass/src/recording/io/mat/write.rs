@@ -17,7 +17,7 @@ const MX_DOUBLE_CLASS: u32 = 6;
 /// Writes a recording as a MAT-file (level 5, uncompressed, little-endian):
 /// column vectors `time_s` (`start_time_s + i / fs_hz`) and the channels
 /// present under their canonical names, all double. MATLAB, Octave, scipy
-/// and [`super::load`] read it; `load` gives back the same bits.
+/// and `super::load` read it; `load` gives back the same bits.
 ///
 /// Written to a temporary file beside `path` and renamed into place.
 ///

@@ -8,14 +8,14 @@
 //! whole-file reader maps them. It then reads the master time channel once,
 //! in bounded windows, keeping its first and last stamps and its smallest
 //! and largest step: the uniform-grid check of
-//! [`timebase::derive`](super::super::timebase::derive) when every step is
+//! `timebase::derive` when every step is
 //! within the tolerance of the smallest, which gives the same rate to the
 //! bit, and the check of a given rate against it. Each
 //! [`RecordSource::pass`] reads the channels' records in bounded windows
 //! (`falcon_mdf`'s aligned chunks: at most one data block inflated, or
 //! 4 MB of an uncompressed one, plus one block of samples), decodes them
 //! by the same code as the whole-file reader (the crate's conversions and
-//! invalidation bits, then [`values`](super::values)) and finishes each
+//! invalidation bits, then `values`) and finishes each
 //! block as the whole-file reader finishes the file, so every sample
 //! equals the whole-file read to the bit.
 //!

@@ -2,10 +2,10 @@
 //! many times as the streamed analysis needs, never held whole.
 //!
 //! [`open`] reads the file's segment lead-ins and metadata once, seeking
-//! past the raw data ([`segments::read`] on the file), and keeps what the
+//! past the raw data (`segments::read` on the file), and keeps what the
 //! whole-file reader keeps: each channel's runs (where its values lie).
 //! It then finishes the first block of the record as the whole-file reader
-//! finishes the file (the [`Plan`] of channels and timing, units, scales,
+//! finishes the file (the `Plan` of channels and timing, units, scales,
 //! the rate stated or given), which gives the rate, channels and metadata.
 //! Each [`RecordSource::pass`] reads every channel's runs through a window
 //! of the file of bounded size, decodes and scales them by the same
@@ -22,7 +22,6 @@
 //! channels of different lengths (the whole-file reader's error), DAQmx
 //! scalers of different lengths.
 //!
-//! [`Plan`]: super::Plan
 
 use std::collections::HashMap;
 use std::fs::File;
@@ -62,7 +61,7 @@ pub struct TdmsSource {
 /// when it is read whole instead (module docs).
 ///
 /// # Errors
-/// [`Error::Io`] when the file cannot be read; what the whole-file reader
+/// [`Error::Io`](crate::Error::Io) when the file cannot be read; what the whole-file reader
 /// says of a damaged file, a channel not found or bad options.
 pub fn open(path: &Path, opts: &LoadOptions) -> Result<std::result::Result<TdmsSource, String>> {
     open_sized(path, opts, (BLOCK_SAMPLES, WINDOW_BYTES))
