@@ -128,6 +128,29 @@ pub fn interrupt() -> usize {
     n
 }
 
+/// A small text file read whole (a manifest, a profile): its bytes as
+/// UTF-8 text. `what` says what the file should be ("a manifest is CSV text"):
+/// the error for bytes that are not UTF-8 ends with it.
+///
+/// # Errors
+/// [`Error::Io`] when unreadable; [`Error::Parse`] naming the line of the
+/// first byte that is not UTF-8.
+pub(crate) fn read_text(path: &Path, what: &str) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    String::from_utf8(bytes).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        line: 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count(),
+        column: None,
+        reason: format!("text that is not UTF-8; {what}"),
+    })
+}
+
 /// Writes `bytes` to `path` atomically (see the module docs).
 ///
 /// # Errors

@@ -136,19 +136,7 @@ const REQUIRED: [&str; 4] = ["path", "bearing", "velocity_mm_s", "repeat"];
 /// a duplicate (bearing, velocity, repeat); [`Error::Format`] for a manifest
 /// without entries.
 pub fn read_manifest(path: &Path) -> Result<Manifest> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
-        path: path.to_path_buf(),
-        line: 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count(),
-        column: None,
-        reason: "text that is not UTF-8; a manifest is CSV text".into(),
-    })?;
+    let text = crate::fsutil::read_text(path, "a manifest is CSV text")?;
     parse_manifest(path, &text)
 }
 
@@ -511,6 +499,23 @@ mod tests {
         // Round trip through the writer.
         std::fs::write(&m, manifest_csv(&man.entries)).unwrap();
         assert_eq!(read_manifest(&m).unwrap().entries, man.entries);
+    }
+
+    /// A manifest that is not UTF-8 text, or cannot be read, is an error
+    /// naming the file (and the line of the first bad byte).
+    #[test]
+    fn a_manifest_that_is_not_text_names_its_line() {
+        let d = tmpdir("not-utf8");
+        let m = d.join("m.csv");
+        std::fs::write(&m, b"path,bearing,velocity_mm_s,repeat\nr\xff.csv,b1,9,1\n").unwrap();
+        let e = read_manifest(&m).unwrap_err().to_string();
+        let want = format!("{}:2", m.display());
+        assert!(e.starts_with(&want), "{e}");
+        assert!(e.contains("not UTF-8; a manifest is CSV text"), "{e}");
+        let e = read_manifest(&d.join("absent.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("absent.csv"), "{e}");
     }
 
     /// An empty velocity is "measured" (NaN) for a segmented run; the

@@ -139,19 +139,7 @@ impl Profile {
     /// [`Error::Io`] when unreadable; [`Error::Parse`] naming the line for bad
     /// TOML, an unknown key, a value of the wrong type or out of range.
     pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
-            path: path.to_path_buf(),
-            line: 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
-                .iter()
-                .filter(|&&b| b == b'\n')
-                .count(),
-            column: None,
-            reason: "text that is not UTF-8; a profile is TOML text".into(),
-        })?;
+        let text = crate::fsutil::read_text(path, "a profile is TOML text")?;
         let mut p = Self::parse(path, &text)?;
         p.source = Some(path.to_path_buf());
         p.load_options().map_err(|e| locate(path, &text, e))?;
