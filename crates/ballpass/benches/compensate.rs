@@ -56,6 +56,11 @@
 //! at f_c without a table (`E_0`) and with the product's (`E_T`)
 //! (`-- --near-stall N SEED [FIRST]`).
 //!
+//! With `--second`, runs each bench with the product's table, then with
+//! the table corrected from the run made with it (session 14,
+//! [`ballpass::validate::compensation_second`]; `-- --second N SEED
+//! [FIRST]`).
+//!
 //! With `--rounds`, compensates each bench in three rounds, each table
 //! built from the run with the previous one applied
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
@@ -98,6 +103,10 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--near-stall") {
         near_stall();
+        return;
+    }
+    if std::env::args().any(|a| a == "--second") {
+        second();
         return;
     }
     let (n, seed) = n_and_seed(7_000_000);
@@ -728,6 +737,54 @@ fn runaway() {
                 );
             }
             Err(e) => println!("# {d} s: {e}"),
+        }
+    }
+}
+
+/// The `--second` measurement (session 14,
+/// [`ballpass::validate::compensation_second`]): every bench with the
+/// product's table, then with the table corrected from the run made with
+/// it (`-- --second N SEED [FIRST]`: draws FIRST..N).
+fn second() {
+    use ballpass::validate::compensation_second::second_round_check;
+    let (n, seed, first) = n_seed_first(20_000_000);
+    println!(
+        "i,v_mm_s,condition,std_over_v,fc_before,std_before,fc_1,std_1,fc_pred_1,std_pred_1,refused,\
+fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
+    );
+    for i in first..n {
+        let s = bench(seed, i);
+        match second_round_check(&s) {
+            Ok(c) => {
+                let p = &c.first;
+                let two = match &c.second {
+                    Ok(r) => format!(
+                        "{:.3},{:.1},{:.3},{:.3},{:.3},{:.1},{:.4}",
+                        r.f_c_after_um_s,
+                        r.std_after_um_s,
+                        r.f_c_predicted_um_s[0],
+                        r.f_c_predicted_um_s[1],
+                        r.f_c_predicted_um_s[2],
+                        r.std_predicted_um_s,
+                        r.change_n
+                    ),
+                    Err(_) => ",,,,,,".into(),
+                };
+                println!(
+                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two}",
+                    p.velocity_mm_s,
+                    p.condition.name(),
+                    c.std_over_v,
+                    p.f_c_before_um_s,
+                    p.std_before_um_s,
+                    p.f_c_after_um_s,
+                    p.std_after_um_s,
+                    p.f_c_predicted_um_s,
+                    p.std_predicted_um_s,
+                    p.refused,
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
         }
     }
 }

@@ -156,3 +156,70 @@ fn a_near_stall_bench_whose_unguarded_table_runs_away_is_not_made_worse() {
     }
     assert!(p.std_after_um_s < u.std_um_s, "{g:?}");
 }
+
+/// The second round (session 14): a near-stall bench of the design seeds
+/// (20 000 000, draw 67, 2.18 mm/s, std 63 % of v, cut to 60 s) on which
+/// the product's table leaves a large part of the f_c component; the
+/// table corrected from the run made with it leaves much less, and the
+/// std stays where the first table put it.
+#[test]
+fn a_second_round_from_records_taken_with_the_table_lowers_the_f_c_component() {
+    use ballpass::validate::compensation_second::second_round_check;
+    let mut s = ballpass::validate::compensation::bench(20_000_000, 67);
+    s.duration_s = 60.0;
+    let c = second_round_check(&s).unwrap();
+    let p = &c.first;
+    let r = c.second.as_ref().expect("a table was given");
+    // Measured (debug test profile): f_c 290.5 µm/s before, 178.8 with
+    // the product's table (−38 %, a miss), 19.0 after the second round
+    // (−93 %); std 1291 → 1148 → 1101 µm/s. The margins: the second round
+    // at most half of the first's f_c (0.11 measured) and within the goal
+    // (0.066 of before measured, the goal 0.2); the std below the one
+    // without a table and within 10 % of the first round's (−4.1 %
+    // measured; session 10 saw −8 to +1.5 % on 19 near-stall benches);
+    // the std predicted (the first round's) within the 20 %.
+    assert!(
+        r.f_c_after_um_s < 0.5 * p.f_c_after_um_s,
+        "second round did not halve the f_c component: {c:?}"
+    );
+    assert!(
+        r.f_c_after_um_s <= 0.2 * p.f_c_before_um_s,
+        "second round misses the goal: {c:?}"
+    );
+    assert!(r.std_after_um_s < p.std_before_um_s, "{c:?}");
+    assert!(
+        (r.std_after_um_s / p.std_after_um_s - 1.0).abs() < 0.1,
+        "the std moved by more than 10 %: {c:?}"
+    );
+    assert!(
+        (r.std_predicted_um_s / r.std_after_um_s - 1.0).abs() < 0.2,
+        "std predicted not within 20 %: {c:?}"
+    );
+}
+
+/// A table withheld (all zeros) is not refined: records taken without a
+/// table say nothing of the compensated stage.
+#[test]
+fn a_second_round_on_a_withheld_table_is_refused_with_a_reason() {
+    let s = bench(Condition::Good, 3);
+    let sim = simulate(&s).unwrap();
+    let pred = s.geometry.predict(s.velocity_mm_s, 5).unwrap();
+    let a = ballpass::analysis::analyze(
+        std::slice::from_ref(&sim.recording),
+        &pred,
+        &ballpass::analysis::AnalyzeSettings::default(),
+    )
+    .unwrap();
+    let stage =
+        PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m).unwrap();
+    let e = ballpass::model::compensate::second::second_round(&[0.0; 64], &stage, &a, 0.01)
+        .unwrap_err();
+    assert!(e.contains("all zeros"), "{e}");
+    let e =
+        ballpass::model::compensate::second::second_round(&[1.0; 2], &stage, &a, 0.01).unwrap_err();
+    assert!(e.contains("2 bins"), "{e}");
+    let ok =
+        ballpass::model::compensate::second::second_round(&[0.5; 64], &stage, &a, 0.01).unwrap();
+    assert_eq!(ok.force_n.len(), 64);
+    assert!(ok.std_after_um_s.is_finite() && ok.f_c_with_table_um_s.is_finite());
+}

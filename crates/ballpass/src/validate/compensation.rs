@@ -124,8 +124,33 @@ pub(crate) fn check_table(
     pred: &Prediction,
 ) -> Result<CompensationCheck> {
     let (f_c_after, std_after) = closed_loop(s, comp.feedforward(), pred)?;
+    Ok(check_of(s, comp, f_c_after, std_after))
+}
+
+/// [`check_table`] from the analysis `a1` of the run `rec` made with the
+/// table applied.
+pub(crate) fn check_from_run(
+    s: &SimSettings,
+    comp: &Compensation,
+    a1: &crate::analysis::Analysis,
+    rec: &crate::recording::Recording,
+) -> Result<CompensationCheck> {
+    let f_c_after = velocity_error_f_c(a1, rec)?;
+    let std_after = a1
+        .velocity_error
+        .as_ref()
+        .map_or(f64::NAN, |v| v.lowpassed_std_um_s);
+    Ok(check_of(s, comp, f_c_after, std_after))
+}
+
+fn check_of(
+    s: &SimSettings,
+    comp: &Compensation,
+    f_c_after: f64,
+    std_after: f64,
+) -> CompensationCheck {
     let p = &comp.prediction;
-    Ok(CompensationCheck {
+    CompensationCheck {
         velocity_mm_s: s.velocity_mm_s,
         condition: s.condition,
         seed: s.seed,
@@ -149,7 +174,7 @@ pub(crate) fn check_table(
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: std_after,
         std_predicted_um_s: p.std_after_um_s,
-    })
+    }
 }
 
 /// The f_c component of the velocity error of a compensated run's

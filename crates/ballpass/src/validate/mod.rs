@@ -8,6 +8,7 @@ pub mod compensation;
 pub mod compensation_fc;
 pub mod compensation_guard;
 pub mod compensation_near_stall;
+pub mod compensation_second;
 pub mod compensation_stall;
 pub mod estimate;
 pub mod fleets;

@@ -74,6 +74,7 @@ use serde::Serialize;
 
 mod rail;
 pub(crate) mod replay;
+pub mod second;
 mod travel;
 
 pub use rail::{RailGrid, RailTable, RAIL_LOCK_FRACTION, RECORD_OFFSET_LIMIT};
