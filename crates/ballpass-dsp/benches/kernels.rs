@@ -193,6 +193,12 @@ fn main() {
             }),
         ),
         (
+            "lfilter_fast",
+            Box::new(|| {
+                black_box(dsp::lfilter_fast(&b, &a, &x).expect("ok"));
+            }),
+        ),
+        (
             "find_peaks",
             Box::new(|| {
                 black_box(dsp::find_peaks(&pulses, &peaks_settings).expect("ok"));

@@ -143,21 +143,7 @@ pub fn gradient_with_edge_order(
             out.push(0.0);
             let finite = crate::simd::widest(
                 #[inline(always)]
-                || {
-                    // Blocks written, then checked while still in L1.
-                    let mut finite = true;
-                    for start in (0..n - 2).step_by(CHECK_BLOCK) {
-                        let end = (start + CHECK_BLOCK).min(n - 2);
-                        out.extend(
-                            f[start + 2..end + 2]
-                                .iter()
-                                .zip(&f[start..end])
-                                .map(|(next, prev)| (next - prev) * inv_h2),
-                        );
-                        finite &= crate::error::all_finite(&out[start + 1..end + 1]);
-                    }
-                    finite
-                },
+                || interior_uniform(f, inv_h2, &mut out),
             );
             out.push(0.0);
             if !finite {
@@ -217,8 +203,47 @@ pub fn gradient_with_edge_order(
     Ok(out)
 }
 
-/// Outputs written between two finiteness checks of [`gradient_with_edge_order`].
-const CHECK_BLOCK: usize = 1024;
+/// Outputs per vector group of [`interior_uniform`].
+const GROUP: usize = 8;
+
+/// Appends the interior `out[i] = (f[i+1] - f[i-1]) * inv_h2`,
+/// `0 < i < n-1`, to `out` (which holds `out[0]`), and says whether every
+/// value is finite. One pass: each group of [`GROUP`] outputs is stored
+/// and added into its lanes' checks (`0 x` is `+-0` for finite `x`, NaN
+/// otherwise) while in registers. The first `GROUP - 1` interior values
+/// are written one by one, so that the groups' stores start at `out[GROUP]`
+/// and do not straddle cache lines when the buffer is aligned (numpy's and
+/// the allocators' large buffers are): a store split over two lines costs
+/// about twice one within a line.
+#[inline(always)]
+fn interior_uniform(f: &[f64], inv_h2: f64, out: &mut Vec<f64>) -> bool {
+    let n = f.len();
+    let mut acc = [0.0f64; GROUP];
+    let head = GROUP.min(n - 1);
+    for i in 1..head {
+        let v = (f[i + 1] - f[i - 1]) * inv_h2;
+        acc[0] += 0.0 * v;
+        out.push(v);
+    }
+    // Outputs head .. n-1: prev[j] = f[head - 1 + j], next[j] = f[head + 1 + j].
+    let (prev, next) = (&f[head - 1..n - 2], &f[head + 1..]);
+    let groups = prev.chunks_exact(GROUP).zip(next.chunks_exact(GROUP));
+    let done = prev.len() / GROUP * GROUP;
+    for (p, q) in groups {
+        let mut v = [0.0; GROUP];
+        for k in 0..GROUP {
+            v[k] = (q[k] - p[k]) * inv_h2;
+            acc[k] += 0.0 * v[k];
+        }
+        out.extend_from_slice(&v);
+    }
+    for (p, q) in prev[done..].iter().zip(&next[done..]) {
+        let v = (q - p) * inv_h2;
+        acc[0] += 0.0 * v;
+        out.push(v);
+    }
+    acc.iter().fold(true, |ok, &a| ok & (a == 0.0))
+}
 
 #[cfg(test)]
 mod tests {

@@ -100,3 +100,24 @@ pub fn assert_close_scaled(what: &str, a: &[f64], b: &[f64], rtol: f64) {
         "{what}: max error {err:e} > {rtol:e} * max|ref| ({scale:e})"
     );
 }
+
+/// Elementwise `|a - b| / max(|b|, 1e-12 max|b|) <= rtol` for complex
+/// values (the modulus, so that a bin whose imaginary part alone is tiny is
+/// judged against its size).
+#[track_caller]
+pub fn assert_close_complex(
+    what: &str,
+    a: &[ballpass_dsp::Complex64],
+    b: &[ballpass_dsp::Complex64],
+    rtol: f64,
+) {
+    assert_eq!(a.len(), b.len(), "{what}: length");
+    let scale = b.iter().fold(0.0f64, |m, z| m.max(z.norm()));
+    let floor = (1e-12 * scale).max(f64::MIN_POSITIVE);
+    let err = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).norm() / y.norm().max(floor))
+        .fold(0.0, f64::max);
+    assert!(err <= rtol, "{what}: max relative error {err:e} > {rtol:e}");
+}

@@ -133,6 +133,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(response::freqs, m)?)?;
     m.add_function(wrap_pyfunction!(response::freqz, m)?)?;
     m.add_function(wrap_pyfunction!(response::sosfreqz, m)?)?;
+    m.add_function(wrap_pyfunction!(response::freqz_grid, m)?)?;
+    m.add_function(wrap_pyfunction!(response::sosfreqz_grid, m)?)?;
     m.add_function(wrap_pyfunction!(response::gradient, m)?)?;
     m.add_function(wrap_pyfunction!(response::gradient1, m)?)?;
     Ok(())

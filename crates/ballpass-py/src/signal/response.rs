@@ -47,6 +47,52 @@ pub(super) fn freqz<'py>(
     Ok(complex(py, h))
 }
 
+/// The frequencies SciPy's `freqz` / `freqz_sos` return for an array
+/// `worN` in the units of `fs`: `2 pi f / fs` (the rad/sample values it
+/// evaluates at) converted back, `(2 pi f / fs) (fs / (2 pi))`, with
+/// NumPy's operations in NumPy's order (one pass here instead of three
+/// array passes in Python).
+fn scipy_grid(f: &[f64], fs: f64) -> Vec<f64> {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let back = fs / two_pi;
+    f.iter().map(|&v| two_pi * v / fs * back).collect()
+}
+
+/// `scipy.signal.freqz(b, a, worN=f, fs=fs)` for an array `f` in the units
+/// of `fs`: `(w, H)`, `w` as SciPy returns it ([`scipy_grid`]) and `H`
+/// at `f`.
+#[pyfunction]
+pub(super) fn freqz_grid<'py>(
+    py: Python<'py>,
+    b: PyReadonlyArray1<'py, f64>,
+    a: PyReadonlyArray1<'py, f64>,
+    f: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+) -> PyResult<(Arr1<'py>, CArr1<'py>)> {
+    let (b, a, f) = (slice1(&b)?, slice1(&a)?, slice1(&f)?);
+    let (w, h) = py
+        .detach(|| dsp::freqz_values(b, a, f, fs).map(|h| (scipy_grid(f, fs), h)))
+        .map_err(errors::dsp)?;
+    Ok((w.into_pyarray(py), complex(py, h)))
+}
+
+/// `scipy.signal.freqz_sos(sos, worN=f, fs=fs)` for an array `f`: `(w, H)`
+/// as [`freqz_grid`].
+#[pyfunction]
+pub(super) fn sosfreqz_grid<'py>(
+    py: Python<'py>,
+    sos: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray1<'py, f64>,
+    fs: f64,
+) -> PyResult<(Arr1<'py>, CArr1<'py>)> {
+    let sos = sos_from(&sos)?;
+    let f = slice1(&f)?;
+    let (w, h) = py
+        .detach(|| dsp::sosfreqz_values(&sos, f, fs).map(|h| (scipy_grid(f, fs), h)))
+        .map_err(errors::dsp)?;
+    Ok((w.into_pyarray(py), complex(py, h)))
+}
+
 /// `scipy.signal.freqz_sos(sos, worN=f, fs=fs)`: `H` at frequencies `f`.
 #[pyfunction]
 pub(super) fn sosfreqz<'py>(

@@ -63,11 +63,21 @@ def _grid(worN, whole, fs, include_nyquist):
         last = 2 * np.pi if whole else np.pi
         w = np.linspace(0, last, n, endpoint=include_nyquist and not whole)
         return w * (fs / (2 * np.pi))
+    f = _given(worN)
+    w = 2 * np.pi * f / fs
+    return w * (fs / (2 * np.pi))
+
+
+def _given(worN):
+    """An array `worN` (frequencies in the units of fs) as float64."""
     if isinstance(worN, complex):
         worN = worN.real
-    w = np.atleast_1d(real_float64(worN, "worN"))
-    w = 2 * np.pi * w / fs
-    return w * (fs / (2 * np.pi))
+    return np.ascontiguousarray(np.atleast_1d(real_float64(worN, "worN")))
+
+
+def _counted(worN):
+    """Whether `worN` is a number of points (SciPy's grid), not frequencies."""
+    return worN is None or (isinstance(worN, (int, np.integer)) and not isinstance(worN, bool))
 
 
 def freqz(b, a=1, worN=512, whole=False, plot=None, fs=2 * np.pi, include_nyquist=False):
@@ -78,6 +88,9 @@ def freqz(b, a=1, worN=512, whole=False, plot=None, fs=2 * np.pi, include_nyquis
         raise NotImplementedError("plot=: ballpass.signal does not plot")
     b, a = _coefficients(b, "b"), _coefficients(a, "a")
     fs = _fs(fs)
+    if b.size > 0 and not _counted(worN):
+        # Frequencies given: SciPy's returned grid and H at them in one call.
+        return _native.freqz_grid(b, a, _given(worN), fs)
     w = _grid(worN, whole, fs, include_nyquist)
     if b.size == 0:
         return w, np.zeros(w.shape, dtype=complex)
@@ -91,6 +104,8 @@ def freqz_sos(sos, worN=512, whole=False, fs=2 * np.pi):
     sos = _sos(sos)
     if sos.shape[0] == 0:
         raise ValueError("Cannot compute frequencies with no sections")
+    if not _counted(worN):
+        return _native.sosfreqz_grid(sos, _given(worN), fs)
     w = _grid(worN, whole, fs, False)
     return w, _native.sosfreqz(sos, np.ascontiguousarray(w), fs)
 
