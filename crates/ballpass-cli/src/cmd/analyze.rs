@@ -563,7 +563,7 @@ fn parse_max_lag(v: &str) -> std::result::Result<MaxLag, String> {
 }
 
 /// `--load-cell-tau`: seconds, `auto` or `off`.
-fn parse_load_cell(v: &str) -> std::result::Result<LoadCellCorrection, String> {
+pub(crate) fn parse_load_cell(v: &str) -> std::result::Result<LoadCellCorrection, String> {
     match v {
         "auto" => Ok(LoadCellCorrection::Auto),
         "off" | "none" | "dc" => Ok(LoadCellCorrection::Off),

@@ -1,13 +1,16 @@
 //! `ballpass compensate`: a feedforward compensation table from the
-//! synchronous average of recordings, and its predicted benefit (glue over
-//! [`ballpass::model::compensate`]).
+//! synchronous average of recordings, and its predicted benefit; with
+//! `--applied`, the second round from records taken with a table applied
+//! (glue over [`ballpass::model::compensate`]).
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
+use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight;
 use ballpass::analysis::AnalyzeSettings;
+use ballpass::model::compensate::second::{second_from_records, AppliedTable, SecondCompensation};
 use ballpass::model::compensate::{compensate, StageSource};
 use ballpass::model::stage::PdLoop;
 use clap::Args;
@@ -40,6 +43,18 @@ pub struct CompensateArgs {
     /// Loop damping K·K_D, N·s/m (with --mass).
     #[arg(long, value_name = "N·S/M", requires = "mass")]
     kkd: Option<f64>,
+    /// The quartz load cell's discharge time constant in seconds, undone
+    /// before the analysis; `auto` (default) estimates it from each record,
+    /// `off` leaves the friction as recorded (a DC-coupled sensor). A known
+    /// τ makes the table better near stall (docs/methods.md §14).
+    #[arg(long, value_name = "S|auto|off", value_parser = super::analyze::parse_load_cell)]
+    load_cell_tau: Option<LoadCellCorrection>,
+    /// A second round: REC... were taken with the table of this
+    /// compensation.json applied on the machine; the table's fundamental is
+    /// corrected from what they still show (the stage and the std before any
+    /// table are taken from the file).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["mass", "kkp", "kkd"])]
+    applied: Option<PathBuf>,
     /// Print compensation.json to stdout instead of the summary.
     #[arg(long)]
     json: bool,
@@ -59,12 +74,20 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
         (None, None, None) => None,
         _ => bail!("give --mass, --kkp and --kkd together"),
     };
+    let applied = a.applied.as_deref().map(AppliedTable::read).transpose()?;
     let out = output::open_dir(&a.out, "compensate")?;
     let recs = records::load_all(&a.recs, &opts, &a.load.window)?;
     let stated = super::analyze::stated_velocity(a.load.velocity, &recs)?;
     let checked = preflight::check(recs, stated, &geometry, &a.check.preflight())?;
-    let settings = AnalyzeSettings::default();
+    let mut settings = AnalyzeSettings::default();
+    if let Some(t) = a.load_cell_tau {
+        settings.load_cell = t;
+    }
     let prediction = geometry.predict(checked.velocity_mm_s, settings.harmonics)?;
+    if let Some(applied) = applied {
+        let second = second_from_records(&checked.recordings, &prediction, &settings, &applied)?;
+        return finish_second(a, out, &checked.warnings, &second);
+    }
     let comp = compensate(&checked.recordings, &prediction, &settings, gains)?;
     {
         let mut err = std::io::stderr().lock();
@@ -123,6 +146,55 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
                 p.f_c_model_error_um_s
             )?;
         }
+        writeln!(so, "wrote {}", text::path(&dir))?;
+    }
+    so.flush()?;
+    Ok(())
+}
+
+/// Writes and prints a second round (`--applied`).
+fn finish_second(
+    a: &CompensateArgs,
+    out: ballpass::outdir::OutputDir,
+    checks: &[String],
+    second: &SecondCompensation,
+) -> Result<()> {
+    {
+        let mut err = std::io::stderr().lock();
+        for w in checks.iter().chain(&second.warnings) {
+            writeln!(err, "warning: {}", text::line(w))?;
+        }
+    }
+    second.write(out.path())?;
+    let dir = output::commit(out)?;
+    let mut so = output::stdout();
+    if a.json {
+        serde_json::to_writer_pretty(&mut so, second)?;
+        writeln!(so)?;
+    } else {
+        let r = &second.round;
+        writeln!(
+            so,
+            "second round: {} bins per ball-pass period ({:.4} s, {} periods averaged), \
+             fundamental changed by {:.4} N",
+            second.bins, second.period_s, second.periods_used, r.change_n
+        )?;
+        writeln!(
+            so,
+            "applied table: {}",
+            text::path(Path::new(&second.applied_from))
+        )?;
+        writeln!(
+            so,
+            "with the applied table: f_c component {:.2} µm/s, velocity-error std (low-passed) {:.1} µm/s",
+            r.f_c_with_table_um_s, r.std_with_table_um_s
+        )?;
+        writeln!(
+            so,
+            "predicted after this round: f_c component {:.2} µm/s (80 % of simulated second rounds \
+             {:.2}-{:.2}), std {:.1} µm/s",
+            r.f_c_after_um_s[1], r.f_c_after_um_s[0], r.f_c_after_um_s[2], r.std_after_um_s
+        )?;
         writeln!(so, "wrote {}", text::path(&dir))?;
     }
     so.flush()?;

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use ballpass::fsutil::{commit_all, Pending};
+use ballpass::model::compensate::second::AppliedTable;
 use ballpass::recording::{write_csv, write_mat};
 use ballpass::sim::{self, campaign, Condition, SimSettings, Simulation, Start};
 use clap::{Args, ValueEnum};
@@ -91,6 +92,11 @@ pub struct SimFlags {
     /// profile can be given in the --settings file's `profile`).
     #[arg(long)]
     multi_speed: bool,
+    /// Apply a compensation table as a feedforward force, keyed on the
+    /// optical passages: the compensation.json of `ballpass compensate`
+    /// (first or second round). The closed loop a machine would run with it.
+    #[arg(long, value_name = "FILE")]
+    feedforward: Option<PathBuf>,
 }
 
 impl SimFlags {
@@ -141,6 +147,12 @@ impl SimFlags {
         }
         if self.multi_speed {
             s.profile = Some(sim::SpeedProfile::lab_run());
+        }
+        if let Some(p) = &self.feedforward {
+            let ff = AppliedTable::read(p)?.feedforward();
+            ff.validate()
+                .with_context(|| format!("{}: the table as a feedforward", p.display()))?;
+            s.feedforward = Some(ff);
         }
         Ok(s)
     }
