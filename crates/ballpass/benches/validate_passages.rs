@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -16,7 +16,8 @@
 //! gap-following baseline and the overlap flag were frozen), `fresh5` seeds
 //! 15_000_001..=15_000_000+N (never looked at before session 12's passage
 //! rule was frozen; `fresh6`, 15_100_001+, kept for a rule changed after
-//! that). Prints the
+//! that; `fresh7`, 15_200_001+, never looked at before session 14's rule
+//! was frozen). Prints the
 //! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %; `--json` prints every record's score instead of the
@@ -47,9 +48,10 @@ fn main() {
         "fresh4" => 14_000_001,
         "fresh5" => 15_000_001,
         "fresh6" => 15_100_001,
+        "fresh7" => 15_200_001,
         other => {
             eprintln!(
-                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5 or fresh6"
+                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6 or fresh7"
             );
             std::process::exit(2);
         }

@@ -178,3 +178,21 @@ fn a_fast_drift_is_followed_between_the_pulses() {
         }
     }
 }
+
+/// A record between one and two ball-pass periods long can hold two whole
+/// passages a period apart (design benches 14 000 246 and 15 000 481: 1.90
+/// and 1.95 periods, SNR 32 and 24, two required passages each): both are
+/// found and measured. The detector refused every record shorter than two
+/// periods, so both passages counted as missed.
+#[test]
+fn two_passages_in_less_than_two_periods_are_found() {
+    for seed in [14_000_246, 15_000_481] {
+        let s = design_bench(seed);
+        let periods = s.bench.duration_s / s.bench.tau_c_s;
+        assert!((1.0..2.0).contains(&periods), "bench {seed}: {periods}");
+        assert_eq!(s.required, 2, "bench {seed}: {s:?}");
+        assert!(s.count_exact, "bench {seed}: {s:?}");
+        let e = s.width_error.expect("widths measured");
+        assert!(e.abs() < 0.03, "bench {seed}: width error {e}");
+    }
+}

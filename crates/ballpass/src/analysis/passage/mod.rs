@@ -488,9 +488,9 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
             format!("{source}: a ball-pass period of {tau_guide:.4} s is only {tau_samples:.1} samples at {fs} Hz; need at least 8"),
         ));
     }
-    if (n as f64) < 2.0 * tau_samples {
+    if (n as f64) < tau_samples {
         return Err(no_passages(format!(
-            "the record lasts {:.3} s, less than two ball-pass periods ({:.3} s each)",
+            "the record lasts {:.3} s, shorter than one of its ball-pass periods ({:.3} s each): it cannot hold two passages",
             n as f64 / fs,
             tau_guide
         )));
