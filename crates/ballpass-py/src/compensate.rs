@@ -1,8 +1,10 @@
 //! `compensate`: what `ballpass compensate` computes, on recordings already
 //! in memory (glue over [`ballpass::model::compensate`]).
 
+use ballpass::analysis::load_cell::LoadCellCorrection;
 use ballpass::analysis::preflight::{self, PreflightSettings};
 use ballpass::analysis::AnalyzeSettings;
+use ballpass::model::compensate::second::{second_from_records, AppliedTable};
 use ballpass::model::compensate::{compensate as compensation, CompensationTable};
 use ballpass::model::stage::PdLoop;
 use ballpass::recording::Recording;
@@ -26,8 +28,25 @@ fn columns<'py>(py: Python<'py>, t: CompensationTable) -> PyResult<Bound<'py, Py
 /// fails, the loop `gains = (mass kg, K·K_P N/m, K·K_D N·s/m)`. Returns
 /// `(compensation.json as a dict, compensation_phase.csv's columns,
 /// compensation_rail.csv's columns or None, the checks' warnings)`.
+/// The analysis settings of `compensate`: the defaults, with the load
+/// cell's correction when `load_cell` (JSON of `LoadCellCorrection`:
+/// `"auto"`, `"off"` or `{"time_constant": s}`) is given.
+fn settings_with(load_cell: Option<&str>) -> PyResult<AnalyzeSettings> {
+    let mut settings = AnalyzeSettings::default();
+    if let Some(j) = load_cell {
+        let c: LoadCellCorrection = serde_json::from_str(j).map_err(|e| {
+            pyo3::exceptions::PyValueError::new_err(format!(
+                "load_cell: expected a time constant in seconds (> 0), 'auto' or 'off' ({e})"
+            ))
+        })?;
+        c.validate().map_err(errors::domain)?;
+        settings.load_cell = c;
+    }
+    Ok(settings)
+}
+
 #[pyfunction]
-#[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, gains=None, pool=None, force_velocity=false))]
+#[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, gains=None, pool=None, force_velocity=false, load_cell=None))]
 #[allow(clippy::type_complexity)]
 fn compensate<'py>(
     py: Python<'py>,
@@ -37,12 +56,14 @@ fn compensate<'py>(
     gains: Option<(f64, f64, f64)>,
     pool: Option<Bound<'py, ThreadPool>>,
     force_velocity: bool,
+    load_cell: Option<&str>,
 ) -> PyResult<(
     Bound<'py, PyAny>,
     Bound<'py, PyDict>,
     Option<Bound<'py, PyDict>>,
     Vec<String>,
 )> {
+    let settings = settings_with(load_cell)?;
     let (_, g) = bearing_args(bearing)?.resolve(None)?;
     let gains = gains
         .map(|(m, kp, kd)| PdLoop::from_products(m, kp, kd))
@@ -56,7 +77,6 @@ fn compensate<'py>(
     };
     let (comp, warnings) = pool::run(py, pool.as_ref(), || {
         let checked = preflight::check(recs, stated, &g, &pre)?;
-        let settings = AnalyzeSettings::default();
         let prediction = g.predict(checked.velocity_mm_s, settings.harmonics)?;
         let comp = compensation(&checked.recordings, &prediction, &settings, gains)?;
         Ok::<_, ballpass::Error>((comp, checked.warnings))
@@ -71,7 +91,61 @@ fn compensate<'py>(
     ))
 }
 
+/// `ballpass.compensate(..., applied=...)`: the second round, as
+/// `ballpass compensate --applied`: the records were taken with the table
+/// of `applied` (a compensation.json: read from `applied_path`, or its text
+/// `applied_json`, named `applied_name` in errors). Returns
+/// `(compensation.json as a dict, compensation_phase.csv's columns, the
+/// checks' warnings)`.
+#[pyfunction]
+#[pyo3(signature = (recordings, applied_name, applied_path=None, applied_json=None, velocity_mm_s=None, bearing=None, pool=None, force_velocity=false, load_cell=None))]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn compensate_second<'py>(
+    py: Python<'py>,
+    recordings: Vec<PyRef<'py, PyRecording>>,
+    applied_name: &str,
+    applied_path: Option<std::path::PathBuf>,
+    applied_json: Option<&str>,
+    velocity_mm_s: Option<f64>,
+    bearing: Option<&str>,
+    pool: Option<Bound<'py, ThreadPool>>,
+    force_velocity: bool,
+    load_cell: Option<&str>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>, Vec<String>)> {
+    let settings = settings_with(load_cell)?;
+    let applied = match (applied_path, applied_json) {
+        (Some(p), None) => AppliedTable::read(&p),
+        (None, Some(j)) => AppliedTable::parse(std::path::Path::new(applied_name), j),
+        _ => {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "applied: give the compensation.json as a path or as its dict, one of them",
+            ))
+        }
+    }
+    .map_err(errors::domain)?;
+    let (_, g) = bearing_args(bearing)?.resolve(None)?;
+    let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
+    let stated = stated_velocity(&recs, velocity_mm_s)?;
+    let pre = PreflightSettings {
+        force_velocity,
+        ..PreflightSettings::default()
+    };
+    let (second, warnings) = pool::run(py, pool.as_ref(), || {
+        let checked = preflight::check(recs, stated, &g, &pre)?;
+        let prediction = g.predict(checked.velocity_mm_s, settings.harmonics)?;
+        let second = second_from_records(&checked.recordings, &prediction, &settings, &applied)?;
+        Ok::<_, ballpass::Error>((second, checked.warnings))
+    })
+    .map_err(errors::domain)?;
+    Ok((
+        crate::convert::serialize(py, &second)?,
+        columns(py, second.phase_table())?,
+        warnings,
+    ))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compensate, m)?)?;
+    m.add_function(wrap_pyfunction!(compensate_second, m)?)?;
     Ok(())
 }

@@ -203,6 +203,55 @@ def _cli_error(*args) -> str:
     return r.stderr
 
 
+def test_second_round_and_load_cell_equal_the_cli(recs, cli, tmp):
+    """`compensate(..., applied=...)` is `ballpass compensate --applied`
+    (the records taken with the table applied, here by `simulate
+    --feedforward`), with the applied table given as a path, as the first
+    round's result or as its dict; `load_cell` is `--load-cell-tau`; the
+    bad arguments are refused."""
+    stage = read_json(recs / "r3.truth.json")["settings"]["stage"]
+    m, kp, kd = stage["mass_kg"], stage["kkp_n_per_m"], stage["kkd_n_s_per_m"]
+    gains = ("--mass", m, "--kkp", kp, "--kkd", kd)
+    c1 = tmp / "c1"
+    cli("compensate", recs / "r3.csv", "--velocity", "9", *gains, "--load-cell-tau", "10",
+        "--out", c1)
+    first = ballpass.compensate(recs / "r3.csv", velocity_mm_s=9.0, mass_kg=m, kkp=kp, kkd=kd,
+                                load_cell=10)
+    assert first.to_dict() == read_json(c1 / "compensation.json")
+    cli("simulate", "--settings", recs / "r3.truth.json", "--feedforward", c1 / "compensation.json",
+        "--out", tmp / "with_table.csv")
+    c2 = tmp / "c2"
+    cli("compensate", tmp / "with_table.csv", "--velocity", "9", "--load-cell-tau", "10",
+        "--applied", c1 / "compensation.json", "--out", c2)
+    want = read_json(c2 / "compensation.json")
+    assert want["schema"] == "ballpass.compensation-second/1"
+    second = ballpass.compensate(tmp / "with_table.csv", velocity_mm_s=9.0, load_cell=10,
+                                 applied=c1 / "compensation.json")
+    assert second.to_dict() == want
+    assert_table_equals_csv(second.table, c2 / "compensation_phase.csv")
+    np.testing.assert_array_equal(second.applied_force_n, first.force_n)
+    for applied in (first, first.to_dict()):
+        again = ballpass.compensate(tmp / "with_table.csv", velocity_mm_s=9.0, load_cell=10,
+                                    applied=applied)
+        d = again.to_dict()
+        assert d.pop("applied_from") == "<applied table>"
+        assert d == {k: v for k, v in want.items() if k != "applied_from"}
+    with pytest.raises(ValueError, match="applied table's"):
+        ballpass.compensate(tmp / "with_table.csv", velocity_mm_s=9.0, applied=first,
+                            mass_kg=m, kkp=kp, kkd=kd)
+    with pytest.raises(TypeError, match="applied"):
+        ballpass.compensate(tmp / "with_table.csv", velocity_mm_s=9.0, applied=3)
+    with pytest.raises(ValueError, match="load_cell"):
+        ballpass.compensate(recs / "r3.csv", velocity_mm_s=9.0, mass_kg=m, kkp=kp, kkd=kd,
+                            load_cell="sometimes")
+    (tmp / "bad.json").write_text('{"schema": "ballpass.analysis/1"}')
+    stderr = _cli_error("compensate", tmp / "with_table.csv", "--velocity", "9",
+                        "--applied", tmp / "bad.json", "--out", tmp / "z")
+    with pytest.raises(ValueError) as e:
+        ballpass.compensate(tmp / "with_table.csv", velocity_mm_s=9.0, applied=tmp / "bad.json")
+    assert "bad.json" in str(e.value) and str(e.value) in stderr, (str(e.value), stderr)
+
+
 def test_compensate_equals_the_cli(recs, cli, tmp):
     """`ballpass.compensate` is `ballpass compensate`: compensation.json and
     both tables exactly, one record and two repeats; the same errors (a

@@ -341,10 +341,24 @@ def analyze(recordings, *, velocity_mm_s: float | None = None, bearing: str | No
     )
 
 
+def _load_cell_json(load_cell) -> str | None:
+    """``load_cell`` as the library's setting: ``None`` (the default,
+    ``auto``), ``'auto'``, ``'off'`` or a time constant in seconds."""
+    if load_cell is None:
+        return None
+    if isinstance(load_cell, str):
+        if load_cell not in ("auto", "off"):
+            raise ValueError(f"load_cell: expected a time constant in seconds (> 0), 'auto' or 'off', got {load_cell!r}")
+        return json.dumps(load_cell)
+    if isinstance(load_cell, bool):
+        raise ValueError(f"load_cell: expected a time constant in seconds (> 0), 'auto' or 'off', got {load_cell!r}")
+    return json.dumps({"time_constant": float(load_cell)})
+
+
 def compensate(recordings, *, velocity_mm_s: float | None = None, bearing: str | None = None,
                ball_diameter_mm=None, free_space_mm=None, balls_in_race=None,
                mass_kg: float | None = None, kkp: float | None = None, kkd: float | None = None,
-               force_velocity: bool = False, threads=None) -> Result:
+               force_velocity: bool = False, load_cell=None, applied=None, threads=None) -> Result:
     """A feedforward compensation table (force in N against ball-pass
     phase, and against rail position in mm when the passages lock to the
     rail) from the synchronous average of recordings at one velocity, and
@@ -356,7 +370,24 @@ def compensate(recordings, *, velocity_mm_s: float | None = None, bearing: str |
     give the loop as ``mass_kg`` (kg), ``kkp`` (K·K_P, N/m) and ``kkd``
     (K·K_D, N·s/m), all three.
 
-    ``to_dict()`` equals ``compensation.json``; ``table`` equals
+    ``load_cell``: the quartz load cell's discharge time constant in
+    seconds, ``'auto'`` (default: estimated from each record) or ``'off'``
+    (a DC-coupled sensor), as ``--load-cell-tau``. A known time constant
+    makes the table better near stall.
+
+    ``applied``: a second round, as ``--applied``. The recordings were
+    taken on the machine with that table applied; give its
+    ``compensation.json`` as a path, or the result of an earlier
+    :func:`compensate` (or its ``to_dict()``). The table's fundamental is
+    corrected from what the recordings still show; the stage is the
+    applied table's (``mass_kg``/``kkp``/``kkd`` are refused). The result
+    is then a ``SecondCompensation``: ``to_dict()`` equals its
+    ``compensation.json`` (``round`` holds the f_c component and std with
+    the applied table, µm/s, and the predicted f_c component after, with
+    its 10–90 % interval) and ``table`` its ``compensation_phase.csv``
+    (``phase``, ``force_n``, ``applied_force_n``).
+
+    Otherwise ``to_dict()`` equals ``compensation.json``; ``table`` equals
     ``compensation_phase.csv`` (``phase`` in periods after phase 0,
     ``force_n``, ``velocity_error_after_um_s``) and ``rail_table``
     ``compensation_rail.csv`` (``position_mm``, ``force_n``; ``None``
@@ -371,10 +402,29 @@ def compensate(recordings, *, velocity_mm_s: float | None = None, bearing: str |
         gains = tuple(float(g) for g in gains)
     load_opts = {"velocity_mm_s": velocity_mm_s, "bearing": bearing, "min_periods": 2.0}
     recs = _as_recordings(recordings, {k: v for k, v in load_opts.items() if v is not None})
+    bearing_json = _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race)
+    load_cell_json = _load_cell_json(load_cell)
+    if applied is not None:
+        if gains is not None:
+            raise ValueError("applied: the stage is the applied table's; do not give mass_kg, kkp and kkd")
+        if isinstance(applied, Result):
+            applied = applied.to_dict()
+        if isinstance(applied, dict):
+            path, text, name = None, json.dumps(applied), "<applied table>"
+        elif isinstance(applied, (str, os.PathLike)):
+            path, text, name = os.fspath(applied), None, os.fspath(applied)
+        else:
+            raise TypeError(f"applied: expected a compensation.json path, a dict or a compensate() result, got {type(applied).__name__}")
+        data, phase, checks = _native.compensate_second(
+            recs, name, path, text, velocity_mm_s, bearing_json, _pool(threads),
+            bool(force_velocity), load_cell_json,
+        )
+        _warn({"warnings": checks})
+        _warn(data)
+        return Result(data, {"table": Table(phase)}, "SecondCompensation")
     data, phase, rail, checks = _native.compensate(
-        recs, velocity_mm_s,
-        _bearing_json(bearing, ball_diameter_mm, free_space_mm, balls_in_race),
-        gains, _pool(threads), bool(force_velocity),
+        recs, velocity_mm_s, bearing_json, gains, _pool(threads), bool(force_velocity),
+        load_cell_json,
     )
     _warn({"warnings": checks})
     _warn(data)

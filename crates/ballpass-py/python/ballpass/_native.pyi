@@ -135,7 +135,19 @@ def compensate(
     gains: tuple[float, float, float] | None = None,
     pool: ThreadPool | None = None,
     force_velocity: bool = False,
+    load_cell: str | None = None,
 ) -> tuple[dict[str, Any], dict[str, F64], dict[str, F64] | None, list[str]]: ...
+def compensate_second(
+    recordings: list[Recording],
+    applied_name: str,
+    applied_path: str | None = None,
+    applied_json: str | None = None,
+    velocity_mm_s: float | None = None,
+    bearing: str | None = None,
+    pool: ThreadPool | None = None,
+    force_velocity: bool = False,
+    load_cell: str | None = None,
+) -> tuple[dict[str, Any], dict[str, F64], list[str]]: ...
 def passages(
     recordings: list[Recording],
     bearing: str | None = None,

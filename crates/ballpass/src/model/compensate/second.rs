@@ -176,15 +176,24 @@ impl AppliedTable {
     /// second round).
     ///
     /// # Errors
-    /// [`Error::Io`] when unreadable; [`Error::Format`] naming the file
-    /// when it is not such a file, has no table or its table is not finite.
+    /// [`Error::Io`] when unreadable; as [`AppliedTable::parse`] otherwise.
     pub fn read(path: &Path) -> Result<AppliedTable> {
+        let text = crate::fsutil::read_text(path, "compensation.json is JSON text")?;
+        Self::parse(path, &text)
+    }
+
+    /// The table of `text`, the content of a `compensation.json` named
+    /// `path` in errors.
+    ///
+    /// # Errors
+    /// [`Error::Format`] naming `path` when it is not such a file, has no
+    /// table, or its table or velocity is not finite.
+    pub fn parse(path: &Path, text: &str) -> Result<AppliedTable> {
         let bad = |reason: String| Error::Format {
             path: path.to_path_buf(),
             reason,
         };
-        let text = crate::fsutil::read_text(path, "compensation.json is JSON text")?;
-        let f: AppliedFile = serde_json::from_str(&text).map_err(|e| {
+        let f: AppliedFile = serde_json::from_str(text).map_err(|e| {
             bad(format!(
                 "not the compensation.json of `ballpass compensate` ({e})"
             ))
