@@ -47,7 +47,7 @@ fn settings_with(load_cell: Option<&str>) -> PyResult<AnalyzeSettings> {
 
 #[pyfunction]
 #[pyo3(signature = (recordings, velocity_mm_s=None, bearing=None, gains=None, pool=None, force_velocity=false, load_cell=None))]
-#[allow(clippy::type_complexity)]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn compensate<'py>(
     py: Python<'py>,
     recordings: Vec<PyRef<'py, PyRecording>>,
