@@ -8,9 +8,9 @@
 //! friction is left to the position loop), keyed on the travel since the
 //! last optical passage over the ball pitch `2·d_avg`.
 //!
-//! - **Replay** (the table given when it can be made, [`replay::design`]):
-//!   the friction against travel ([`travel`]) is a first table; each of
-//!   [`replay::ROUNDS`] rounds replays the records' friction (a function of
+//! - **Replay** (the table given when it can be made, `replay::design`):
+//!   the friction against travel (`travel`) is a first table; each of
+//!   `replay::ROUNDS` rounds replays the records' friction (a function of
 //!   position) through the stage with the table applied, and takes as the
 //!   next table the friction the stage meets, averaged over time against the
 //!   travel phase (where the stage dwells it weighs more, as in the velocity
@@ -20,14 +20,14 @@
 //!   (what would act at the commanded velocity) and the average over the
 //!   uncompensated, stalling motion.
 //!   Then the table's fundamental is corrected by the replay
-//!   ([`replay::FUNDAMENTAL_STEPS`] steps of `U_1 ← U_1 − R_1 / G_vf(jω_c)`,
+//!   (`replay::FUNDAMENTAL_STEPS` steps of `U_1 ← U_1 − R_1 / G_vf(jω_c)`,
 //!   `R_1` the fundamental of the replayed velocity error with the table):
 //!   the fixed point is not the table that zeroes the f_c component, and
 //!   near stall it missed it by 13–34 % of the fundamental, while the
 //!   stage answers a change of the table's fundamental as the linear loop
 //!   does even there (docs/methods.md §14).
 //!   Each passage is taken at its optical pulse's centre in travel and each
-//!   record's friction level is fitted by the replay ([`replay::fit_levels`])
+//!   record's friction level is fitted by the replay (`replay::fit_levels`)
 //!   unless the velocity-error std exceeds [`SEVERE_STALL_FRACTION`] of the
 //!   velocity (then the friction as restored and the passages' times,
 //!   measured better there).
@@ -209,7 +209,7 @@ pub struct ResidualPrediction {
 #[serde(rename_all = "snake_case")]
 pub enum TableSource {
     /// The friction replayed through the stage with the table applied
-    /// ([`replay`]).
+    /// (`replay`).
     Replay,
     /// The synchronous average of the friction (the replay could not be
     /// made).
@@ -217,7 +217,7 @@ pub enum TableSource {
 }
 
 /// One record's friction level: as restored from the load cell, and as
-/// the replay took it (fitted, [`replay::fit_levels`]).
+/// the replay took it (fitted, `replay::fit_levels`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct FrictionLevel {
     /// Mean friction as restored from the record, N.
@@ -274,7 +274,7 @@ pub struct Compensation {
     pub design_kept: Option<Kept>,
     /// Why no table is given, when the replay says no table it can make
     /// lowers the velocity error (`force_n` is then all zeros and the
-    /// prediction after is the record as it is; [`replay::select`]).
+    /// prediction after is the record as it is; `replay::select`).
     pub table_refused: Option<String>,
     /// The table against rail position, when the passages lock to it.
     pub rail: Option<RailTable>,
