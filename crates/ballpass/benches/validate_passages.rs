@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -25,9 +25,13 @@
 //! coupling or interference, `--fwhm R` with every pulse `R τ_c` wide
 //! (what the detector does where nothing but the pulses' shape and
 //! overlap is in the way). `--seeds a,b,...` scores only those bench
-//! seeds (to look at single records of a design set).
+//! seeds (to look at single records of a design set). `--recorded-width`
+//! prints, per record, the analysis' width error against the FWHM of one
+//! pulse and against the width at half prominence of the sum of the pulses
+//! (SciPy's `peak_widths` on the same bench without noise, drift, coupling
+//! or interference), and the ratio of the two truths.
 
-use ballpass::validate::passages::{score, summarize, PassageScore};
+use ballpass::validate::passages::{score_and_recorded_width, summarize, PassageScore};
 use ballpass::validate::Domain;
 use rayon::prelude::*;
 
@@ -74,7 +78,12 @@ fn main() {
     let domain = Domain::default();
     let t0 = std::time::Instant::now();
     let seeds: Vec<u64> = only.unwrap_or_else(|| (first..first + n).collect());
-    let scores: Vec<PassageScore> = seeds
+    // `--recorded-width`: one line per record with the analysis' width error
+    // against the truth's FWHM of one pulse and against the width at half
+    // prominence of the same pulses (SciPy's `peak_widths` on the bench
+    // simulated again without noise, drift, coupling or interference).
+    let recorded = args.iter().any(|a| a == "--recorded-width");
+    let scored: Vec<(PassageScore, Option<f64>)> = seeds
         .into_par_iter()
         .map(|seed| {
             let mut bench = domain.draw(seed);
@@ -88,9 +97,30 @@ fn main() {
             if let Some(r) = fwhm {
                 bench.optical.width_ratio = r;
             }
-            score(&bench, seed).expect("the default domain draws valid benches")
+            score_and_recorded_width(&bench, seed).expect("the default domain draws valid benches")
         })
         .collect();
+    if recorded {
+        for (s, w) in &scored {
+            println!(
+                "seed {:>8} {:<13} fwhm {:.3} τc snr {:8.1} interference {:<5} widths {:?} | analysis {:+.4} | half prominence / FWHM {:.4} | analysis vs half prominence {:+.4}",
+                s.bench.bench_seed,
+                s.bench.shape.name(),
+                s.bench.fwhm_tau_c,
+                s.bench.snr,
+                s.truth.interference,
+                s.widths_used,
+                s.width_error.unwrap_or(f64::NAN),
+                w.unwrap_or(f64::NAN),
+                match (s.width_error, w) {
+                    (Some(e), Some(r)) => (1.0 + e) / r - 1.0,
+                    _ => f64::NAN,
+                }
+            );
+        }
+        return;
+    }
+    let scores: Vec<PassageScore> = scored.into_iter().map(|(s, _)| s).collect();
     let elapsed = t0.elapsed().as_secs_f64();
     if list {
         for s in &scores {

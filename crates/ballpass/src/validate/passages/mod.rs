@@ -236,6 +236,38 @@ pub fn score(bench: &Bench, seed: u64) -> Result<PassageScore> {
     Ok(s)
 }
 
+/// [`score`], and beside it the width at half prominence of the same
+/// bench's pulses over their FWHM: [`recorded_half_prominence_width_s`] on
+/// the bench simulated again without noise, drift, AC coupling or
+/// interference (same seed, same pulses), over that record's true FWHM.
+/// Below 1 where the tails of neighbouring pulses overlap (the signal never
+/// falls back to the dark level between them); `None` with fewer than three
+/// clean pulses.
+///
+/// # Errors
+/// As [`score`].
+pub fn score_and_recorded_width(bench: &Bench, seed: u64) -> Result<(PassageScore, Option<f64>)> {
+    let s = score(bench, seed)?;
+    let mut clean = bench.clone();
+    let o = &mut clean.optical;
+    o.noise_v = 1e-5 * o.pulse_amplitude_v;
+    o.ac_coupling = false;
+    o.baseline_drift_v = 0.0;
+    o.interference_drift = false;
+    let sim = simulate(&clean.settings(&clean.bearing(0, false), seed))?;
+    let truths = true_passages(&sim.truth);
+    let widths: Vec<f64> = truths
+        .iter()
+        .zip(&half_maximum_times(&sim, &truths))
+        .filter(|(p, _)| p.required)
+        .filter_map(|(_, h)| h.map(|(l, r)| r - l))
+        .collect();
+    let ratio = (!widths.is_empty())
+        .then(|| widths.iter().sum::<f64>() / widths.len() as f64)
+        .and_then(|fwhm| Some(recorded_half_prominence_width_s(&sim)? / fwhm));
+    Ok((s, ratio))
+}
+
 /// One true passage and how it is scored.
 #[derive(Debug, Clone, Copy)]
 struct TruePassage {
@@ -528,6 +560,55 @@ fn half_maximum_times(sim: &Simulation, truths: &[TruePassage]) -> Vec<Option<(f
             Some((l, r))
         })
         .collect()
+}
+
+/// Mean width at half prominence of the recorded optical pulses as SciPy's
+/// `find_peaks` / `peak_widths(rel_height = 0.5)` read it on the record
+/// itself, s: peaks at least 0.7 `τ_c` apart with a prominence of at least
+/// a quarter of the largest, the first and last peak left out (a pulse cut
+/// by the record's end has no base on that side). Meaningful on a noise-free
+/// record (`validate_passages -- --clean`): there it is the width at half
+/// prominence of the *sum* of the pulses, which is narrower than one pulse's
+/// FWHM (the truth) where the tails of neighbouring pulses overlap, because
+/// the signal between two pulses never falls back to the dark level.
+/// `None` with fewer than three peaks or no optical channel.
+pub fn recorded_half_prominence_width_s(sim: &Simulation) -> Option<f64> {
+    use ballpass_dsp::{find_peaks, peak_widths, Bound, FindPeaksSettings, PeakWidthsSettings};
+    let y = sim.recording.channel(Channel::Optical)?;
+    let fs = sim.truth.fs_hz;
+    let distance = (0.7 * sim.truth.tau_c_s * fs).max(1.0);
+    let all = find_peaks(
+        y,
+        &FindPeaksSettings {
+            distance: Some(distance),
+            prominence: Some(Bound::at_least(0.0)),
+            ..Default::default()
+        },
+    )
+    .ok()?;
+    let proms = all.properties.prominences?;
+    let top = proms.iter().copied().fold(0.0, f64::max);
+    let peaks: Vec<usize> = all
+        .indices
+        .iter()
+        .zip(&proms)
+        .filter(|(_, p)| **p >= 0.25 * top)
+        .map(|(i, _)| *i)
+        .collect();
+    if peaks.len() < 3 {
+        return None;
+    }
+    let inner = &peaks[1..peaks.len() - 1];
+    let w = peak_widths(
+        y,
+        inner,
+        &PeakWidthsSettings {
+            rel_height: 0.5,
+            ..Default::default()
+        },
+    )
+    .ok()?;
+    Some(w.widths.iter().sum::<f64>() / w.widths.len() as f64 / fs)
 }
 
 /// Area of a unit-height pulse of the shape over its FWHM.
