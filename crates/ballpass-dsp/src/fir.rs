@@ -11,7 +11,7 @@
 //! terms differently: agreement with it is to rounding, ~1e-16 relative).
 //!
 //! Meant for short kernels (a smoothing window of tens of taps); a long
-//! kernel is cheaper by FFT ([`crate::correlate`]).
+//! kernel is cheaper by FFT ([`crate::correlate()`]).
 
 use crate::error::{DspError, Result};
 

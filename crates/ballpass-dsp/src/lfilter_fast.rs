@@ -1,11 +1,11 @@
-//! [`lfilter`](crate::lfilter) split into chunks run side by side: the
+//! [`lfilter`] split into chunks run side by side: the
 //! Python package's `lfilter`, which promises SciPy's numbers to 1e-9, not
 //! its rounding.
 //!
 //! SciPy's direct form II transposed loop waits, sample after sample, on
 //! the previous output (a multiply, a subtraction and an add): one sample
 //! per ~10 cycles however wide the vectors. Here a long signal is cut into
-//! [`LANES`] chunks, each filtered from rest in one SIMD lane (the same
+//! `LANES` chunks, each filtered from rest in one SIMD lane (the same
 //! recurrence, lanes in lock step), and then each chunk's output is
 //! corrected by the free response of the state it should have started
 //! from (the state the previous chunk ended in), which the filter's
@@ -25,7 +25,7 @@
 //! amplifies its own: filters whose poles make that amplification large
 //! run the plain loop (`MAX_AMPLIFICATION`); the others stay within
 //! ~1e-10 of the output's scale of it (tested below against
-//! [`lfilter`](crate::lfilter), and in the Python package against SciPy
+//! [`lfilter`], and in the Python package against SciPy
 //! at 1e-9).
 
 use crate::error::{check_finite, Result};

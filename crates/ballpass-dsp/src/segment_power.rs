@@ -8,7 +8,7 @@
 //! sample and renormalised every 256 points; per segment the sums
 //! `Σ v·pr` and `−Σ v·pi` run in sample order, and the powers are added
 //! in segment order. Every frequency gets exactly that arithmetic whatever
-//! the lane count or vector width ([`tests::power_alone`] is the
+//! the lane count or vector width (`tests::power_alone` is the
 //! one-frequency reference, checked bit for bit): frequencies run 16 at a
 //! time in lock step, segments up to 4 at a time with the phasors made on
 //! the way and shared by the group (independent sums keep the adder

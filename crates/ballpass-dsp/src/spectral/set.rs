@@ -35,8 +35,8 @@ impl Welch {
     /// `welch` and `csd` are matched.
     ///
     /// # Errors
-    /// As [`Welch::psd`] for every signal; [`DspError::LengthMismatch`] if
-    /// the signals' lengths differ; [`DspError::InvalidSetting`] for a pair
+    /// As [`Welch::psd`] for every signal; [`crate::DspError::LengthMismatch`] if
+    /// the signals' lengths differ; [`crate::DspError::InvalidSetting`] for a pair
     /// index out of range.
     pub fn spectra(
         &mut self,

@@ -44,7 +44,7 @@ impl Prepared {
 
 /// Statistics of the velocity error `v - V`, µm/s.
 ///
-/// Of one record as [`prepare`] computes them; in an [`super::Analysis`] of
+/// Of one record as `prepare` computes them; in an [`super::Analysis`] of
 /// several repeats, each field is the mean over the records of that
 /// record's value (the thesis' Fig. 29 averages the per-test standard
 /// deviations), see [`VelocityErrorStats::mean_of`].

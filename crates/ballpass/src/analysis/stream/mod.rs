@@ -13,10 +13,10 @@
 //!    [`load_cell::fit_discharge`] makes them), or for a given τ the sums
 //!    of its offset fit; the discharge is then fitted as in memory.
 //! 2. **Low-pass and trend**: restoration, velocity error, trim and
-//!    low-pass ([`chain`]); the Welch spectra of the unfiltered signals;
+//!    low-pass (`chain`); the Welch spectra of the unfiltered signals;
 //!    the sums of each low-passed signal's least-squares line; the
 //!    velocity error's sums; the lines of the untrimmed restored friction
-//!    and velocity error for the stage identification ([`stage`]).
+//!    and velocity error for the stage identification (`stage`).
 //! 3. **Correlations and spectra**: the same chain, each low-passed signal
 //!    detrended with its line, into the lag-window correlations
 //!    ([`ballpass_dsp::WindowCorrelation`]), the full-range Welch spectra
@@ -55,7 +55,7 @@
 //! (measured 1.3e-8: central differences of step 1e-6); the signals
 //! figures' samples to the bit.
 //!
-//! The position-domain spectra ([`position`]) ride along: the exact
+//! The position-domain spectra (`position`) ride along: the exact
 //! median speed over the first three passes, the resampling and Welch
 //! segments in the fourth (a fifth pass, of its own, for a record without
 //! friction, which has no load-cell pass); the same numbers as in memory
@@ -64,9 +64,9 @@
 //! the whole-record detection, the same on a record of one window.
 //!
 //! The synchronous average keyed to those passages is summed in pass 3
-//! ([`sync`]); without passages it is keyed on the encoder at the
+//! (`sync`); without passages it is keyed on the encoder at the
 //! predicted ball pitch, as in memory, the keys found in pass 2
-//! ([`EncoderKeys`]). Not computed on a streamed record: only one
+//! (`EncoderKeys`). Not computed on a streamed record: only one
 //! record (no repeats), the decimating high-resolution spectrum (not the
 //! polyphase zoom), and a lag window shorter than the record (not
 //! `--max-lag full`).
