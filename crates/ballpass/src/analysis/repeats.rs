@@ -345,7 +345,7 @@ pub(crate) fn run_staged_above(
         }),
         _ => None,
     };
-    let (main, early_passages, early_position) = if staged {
+    let (main, passages, early_position) = if staged {
         let passages = detect();
         let mut early_position = None;
         let main = restore_all(restored, recs, fs, pred, settings).map(|mut restored| {
@@ -363,46 +363,33 @@ pub(crate) fn run_staged_above(
             let per_record = job.as_ref().map(|j| j.run(recs, frictions));
             (restored, stage, per_record)
         });
-        (main, Some(passages), early_position)
+        (main, passages, early_position)
     } else {
-        // The position-domain spectra read the corrected friction and the
-        // per-record step's low-passed friction and optical, so they run
-        // after that step, beside the stage identification.
+        // The passages (one long sequential job per record) start at once
+        // on one thread; the other runs the load-cell correction and then
+        // each record's preparation, correlations and spectra, leaving the
+        // stage identification (independent of them) to whichever thread
+        // is free first. The position-domain spectra read the per-record
+        // step's low-passed friction and optical, so they run after it,
+        // beside the period and phases and the synchronous average (below).
         let (main, passages) = rayon::join(
             || {
                 let restored = restore_all(restored, recs, fs, pred, settings)?;
-                let (stage, (per_record, position)) = rayon::join(
-                    || identify_stage(recs, &restored, fs, pred),
+                let (per_record, stage) = rayon::join(
                     || {
                         let frictions = restored
                             .iter()
                             .map(|fr| fr.as_ref().map(|(f, _)| Cow::Borrowed(f.as_ref())))
                             .collect();
-                        let per_record = job.as_ref().map(|j| j.run(recs, frictions));
-                        let position = match (wants_position, &filter, &per_record) {
-                            (true, Ok(filter), Some(Ok(per))) => {
-                                let lowpassed: Vec<Option<&super::position::Lowpassed>> =
-                                    per.iter().map(|(.., kept)| Some(kept.as_slice())).collect();
-                                Some(position_of(&restored, filter.as_ref(), &lowpassed))
-                            }
-                            // Otherwise the per-record step failed, or was
-                            // not run (the filter or the plan failed): that
-                            // error is what the analysis reports.
-                            _ => None,
-                        };
-                        (per_record, position)
+                        job.as_ref().map(|j| j.run(recs, frictions))
                     },
+                    || identify_stage(recs, &restored, fs, pred),
                 );
-                Ok::<_, Error>((restored, stage, per_record, position))
+                Ok::<_, Error>((restored, stage, per_record))
             },
-            || Some(detect()),
+            detect,
         );
-        match main {
-            Ok((restored, stage, per_record, position)) => {
-                (Ok((restored, stage, per_record)), passages, position)
-            }
-            Err(e) => (Err(e), passages, None),
-        }
+        (main, passages, None)
     };
     let (restored, stage, per_record) = main?;
     let load_cell: Vec<super::load_cell::DcRestoration> =
@@ -428,12 +415,14 @@ pub(crate) fn run_staged_above(
     let mut fulls = Vec::with_capacity(recs.len());
     let mut hires = Vec::with_capacity(recs.len());
     let mut unfiltered = Vec::with_capacity(recs.len());
-    for (p, c, f, h, u, _) in per_record? {
+    let mut kept = Vec::with_capacity(recs.len());
+    for (p, c, f, h, u, k) in per_record? {
         prepared.push(p);
         corrs.push(c);
         fulls.push(f);
         hires.push(h);
         unfiltered.push(u);
+        kept.push(k);
     }
     let mut unfiltered = average_spectra(&unfiltered);
     // One record: its correlations are the result (no copy).
@@ -454,44 +443,81 @@ pub(crate) fn run_staged_above(
             hr.info.n_segments
         ));
     }
-    let mut findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
-    let lines: Vec<LineSpectra> = prepared
-        .par_iter()
-        .map(|p| LineSpectra::of(p, findings.f_used))
-        .collect();
-    fill_phases(
-        &mut findings.phases,
-        &LineSpectra::merge(&lines),
-        findings.f_used,
-        settings.confidence,
+    let (passages, passage_times): (Vec<_>, Vec<_>) = passages.into_iter().unzip();
+    // Three independent parts, run in parallel: the position-domain
+    // spectra (the longest; a staged run made them before its
+    // correlations), the synchronous average, and the period, phases and
+    // repeats. Their warnings and notes are added below in the order of a
+    // sequential pass.
+    let (position, ((findings, repeats), sync)) = rayon::join(
+        || {
+            // For `analyze` itself: the campaigns (which detect the
+            // passages themselves, `with_passages` false) do not use them
+            // and skip their cost.
+            wants_position.then(|| {
+                early_position.unwrap_or_else(|| {
+                    let lowpassed: Vec<Option<&super::position::Lowpassed>> =
+                        kept.iter().map(|k| Some(k.as_slice())).collect();
+                    position_of(&restored, filter.as_ref(), &lowpassed)
+                })
+            })
+        },
+        || {
+            rayon::join(
+                || {
+                    let mut findings = evaluate(&corr, &hr, pred, settings, &mut warnings);
+                    let lines: Vec<LineSpectra> = prepared
+                        .par_iter()
+                        .map(|p| LineSpectra::of(p, findings.f_used))
+                        .collect();
+                    fill_phases(
+                        &mut findings.phases,
+                        &LineSpectra::merge(&lines),
+                        findings.f_used,
+                        settings.confidence,
+                    );
+                    let repeats = (recs.len() > 1).then(|| {
+                        let mut records = Vec::new();
+                        for ((r, p), (c, h)) in
+                            recs.iter().zip(&prepared).zip(corrs.iter().zip(&hires))
+                        {
+                            let mut w = Vec::new();
+                            let mut f = evaluate(c, h, pred, settings, &mut w);
+                            let own = LineSpectra::of(p, f.f_used);
+                            fill_phases(&mut f.phases, &own, f.f_used, settings.confidence);
+                            records.push(scalars(r.source_name(), &f, p));
+                        }
+                        let spread = spreads(&records);
+                        Repeats {
+                            count: recs.len(),
+                            records,
+                            spread,
+                        }
+                    });
+                    (findings, repeats)
+                },
+                || {
+                    with_passages.then(|| {
+                        super::sync::records::for_records(
+                            recs,
+                            &prepared,
+                            &passage_times,
+                            pred,
+                            trim,
+                            &super::sync::SyncSettings::default(),
+                        )
+                    })
+                },
+            )
+        },
     );
-    let repeats = if recs.len() > 1 {
-        let mut records = Vec::new();
-        for ((r, p), (c, h)) in recs.iter().zip(&prepared).zip(corrs.iter().zip(&hires)) {
-            let mut w = Vec::new();
-            let mut f = evaluate(c, h, pred, settings, &mut w);
-            let own = LineSpectra::of(p, f.f_used);
-            fill_phases(&mut f.phases, &own, f.f_used, settings.confidence);
-            records.push(scalars(r.source_name(), &f, p));
-        }
-        let spread = spreads(&records);
-        Some(Repeats {
-            count: recs.len(),
-            records,
-            spread,
-        })
-    } else {
-        None
-    };
+    drop(kept);
     let velocity_error = VelocityErrorStats::mean_of(
         &prepared
             .iter()
             .filter_map(|p| p.velocity_error.as_ref())
             .collect::<Vec<_>>(),
     );
-    // (The prepared signals stay: the synchronous average below reads them
-    // with the passages.)
-    let passages = early_passages.unwrap_or_else(detect);
     common_notes(&mut notes, &hr, &plan, &corr, settings, pred, n, fs);
     let correlation_window = super::CorrelationWindow::of(&corr, settings.max_lag, pred.tau_c_s);
     if recs.len() > 1 {
@@ -501,46 +527,22 @@ pub(crate) fn run_staged_above(
                 .into(),
         );
     }
-    let (passages, passage_times): (Vec<_>, Vec<_>) = passages.into_iter().unzip();
-    let sync = if with_passages {
-        let sync_settings = super::sync::SyncSettings::default();
-        match super::sync::records::for_records(
-            recs,
-            &prepared,
-            &passage_times,
-            pred,
-            trim,
-            &sync_settings,
-        ) {
-            Ok(s) => Some(s),
-            Err(e) => {
-                warnings.push(format!("no synchronous average: {e}"));
-                None
-            }
-        }
-    } else {
-        None
-    };
+    let sync = sync.and_then(|s| {
+        s.map_err(|e| warnings.push(format!("no synchronous average: {e}")))
+            .ok()
+    });
     drop(prepared);
     let verdict = verdict(pred, &findings);
-    // Position-domain spectra for `analyze` itself (a staged run made them
-    // before its correlations); the campaigns (which detect the passages
-    // themselves, `with_passages` false) do not use them and skip their
-    // cost.
-    let position = if wants_position {
-        match early_position.unwrap_or_else(|| position_of(&restored, filter.as_ref(), &[])) {
-            Ok(p) => {
-                notes.push(super::position::note(&p));
-                Some(p)
-            }
-            Err(e) => {
-                warnings.push(super::position::failure(&e));
-                None
-            }
+    let position = position.and_then(|p| match p {
+        Ok(p) => {
+            notes.push(super::position::note(&p));
+            Some(p)
         }
-    } else {
-        None
-    };
+        Err(e) => {
+            warnings.push(super::position::failure(&e));
+            None
+        }
+    });
     Ok(Analysis {
         schema: SCHEMA,
         version: crate::VERSION,
