@@ -382,16 +382,6 @@ impl SecondCompensation {
     /// # Errors
     /// [`Error::Io`] when a file cannot be written.
     pub fn write(&self, dir: &Path) -> Result<Vec<std::path::PathBuf>> {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
-        let out = vec![
-            dir.join("compensation.json"),
-            dir.join("compensation_phase.csv"),
-        ];
-        crate::fsutil::write_json_pretty(&out[0], self)?;
-        self.phase_table().write(&out[1])?;
-        Ok(out)
+        super::write_outputs(dir, self, self.phase_table(), None)
     }
 }
