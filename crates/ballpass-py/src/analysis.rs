@@ -107,6 +107,44 @@ fn analyze<'py>(
     let s: AnalyzeSettings =
         convert::settings(&AnalyzeSettings::default(), settings, "analysis settings")?;
     s.validate().map_err(errors::domain)?;
+    let (mut a, checked) = checked_run(
+        py,
+        &recordings,
+        velocity_mm_s,
+        bearing,
+        pool.as_ref(),
+        force_velocity,
+        s.harmonics,
+        |recs, prediction| analysis::analyze(recs, prediction, &s),
+    )?;
+    a.warnings.splice(0..0, checked.warnings);
+    a.method_notes.extend(checked.notes);
+    results(py, a)
+}
+
+/// What the command line's checks said of the records: prominent warnings
+/// and notes.
+pub(crate) struct CheckNotes {
+    pub warnings: Vec<String>,
+    pub notes: Vec<String>,
+}
+
+/// The command line's checks on `recordings` (the velocity given, else
+/// the recordings' own, against the encoder; dead channels left out), then
+/// `work` on the records they pass and the prediction at their velocity
+/// with `harmonics` harmonics, in `pool` with the GIL released: `work`'s
+/// answer and what the checks said.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn checked_run<'py, T: Send>(
+    py: Python<'py>,
+    recordings: &[PyRef<'py, PyRecording>],
+    velocity_mm_s: Option<f64>,
+    bearing: Option<&str>,
+    pool: Option<&Bound<'py, ThreadPool>>,
+    force_velocity: bool,
+    harmonics: usize,
+    work: impl FnOnce(&[Recording], &bearing::Prediction) -> ballpass::Result<T> + Send,
+) -> PyResult<(T, CheckNotes)> {
     let (_, g) = bearing_args(bearing)?.resolve(None)?;
     let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
     let stated = stated_velocity(&recs, velocity_mm_s)?;
@@ -114,16 +152,19 @@ fn analyze<'py>(
         force_velocity,
         ..PreflightSettings::default()
     };
-    let a = pool::run(py, pool.as_ref(), || {
+    pool::run(py, pool, || {
         let checked = preflight::check(recs, stated, &g, &pre)?;
-        let prediction = g.predict(checked.velocity_mm_s, s.harmonics)?;
-        let mut a = analysis::analyze(&checked.recordings, &prediction, &s)?;
-        a.warnings.splice(0..0, checked.warnings);
-        a.method_notes.extend(checked.notes);
-        Ok::<_, ballpass::Error>(a)
+        let prediction = g.predict(checked.velocity_mm_s, harmonics)?;
+        let out = work(&checked.recordings, &prediction)?;
+        Ok::<_, ballpass::Error>((
+            out,
+            CheckNotes {
+                warnings: checked.warnings,
+                notes: checked.notes,
+            },
+        ))
     })
-    .map_err(errors::domain)?;
-    results(py, a)
+    .map_err(errors::domain)
 }
 
 /// `analyze`'s results: `(analysis.json as a dict, correlations, spectra,

@@ -2,18 +2,16 @@
 //! in memory (glue over [`ballpass::model::compensate`]).
 
 use ballpass::analysis::load_cell::LoadCellCorrection;
-use ballpass::analysis::preflight::{self, PreflightSettings};
 use ballpass::analysis::AnalyzeSettings;
 use ballpass::model::compensate::second::{second_from_records, AppliedTable};
 use ballpass::model::compensate::{compensate as compensation, CompensationTable};
 use ballpass::model::stage::PdLoop;
-use ballpass::recording::Recording;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::analysis::{bearing_args, stated_velocity, table};
+use crate::analysis::{checked_run, table};
 use crate::errors;
-use crate::pool::{self, ThreadPool};
+use crate::pool::ThreadPool;
 use crate::recording::PyRecording;
 
 fn columns<'py>(py: Python<'py>, t: CompensationTable) -> PyResult<Bound<'py, PyDict>> {
@@ -64,30 +62,26 @@ fn compensate<'py>(
     Vec<String>,
 )> {
     let settings = settings_with(load_cell)?;
-    let (_, g) = bearing_args(bearing)?.resolve(None)?;
     let gains = gains
         .map(|(m, kp, kd)| PdLoop::from_products(m, kp, kd))
         .transpose()
         .map_err(errors::domain)?;
-    let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
-    let stated = stated_velocity(&recs, velocity_mm_s)?;
-    let pre = PreflightSettings {
+    let (comp, checks) = checked_run(
+        py,
+        &recordings,
+        velocity_mm_s,
+        bearing,
+        pool.as_ref(),
         force_velocity,
-        ..PreflightSettings::default()
-    };
-    let (comp, warnings) = pool::run(py, pool.as_ref(), || {
-        let checked = preflight::check(recs, stated, &g, &pre)?;
-        let prediction = g.predict(checked.velocity_mm_s, settings.harmonics)?;
-        let comp = compensation(&checked.recordings, &prediction, &settings, gains)?;
-        Ok::<_, ballpass::Error>((comp, checked.warnings))
-    })
-    .map_err(errors::domain)?;
+        settings.harmonics,
+        |recs, prediction| compensation(recs, prediction, &settings, gains),
+    )?;
     let rail = comp.rail_table().map(|t| columns(py, t)).transpose()?;
     Ok((
         crate::convert::serialize(py, &comp)?,
         columns(py, comp.phase_table())?,
         rail,
-        warnings,
+        checks.warnings,
     ))
 }
 
@@ -123,24 +117,20 @@ fn compensate_second<'py>(
         }
     }
     .map_err(errors::domain)?;
-    let (_, g) = bearing_args(bearing)?.resolve(None)?;
-    let recs: Vec<Recording> = recordings.iter().map(|r| r.rec.clone()).collect();
-    let stated = stated_velocity(&recs, velocity_mm_s)?;
-    let pre = PreflightSettings {
+    let (second, checks) = checked_run(
+        py,
+        &recordings,
+        velocity_mm_s,
+        bearing,
+        pool.as_ref(),
         force_velocity,
-        ..PreflightSettings::default()
-    };
-    let (second, warnings) = pool::run(py, pool.as_ref(), || {
-        let checked = preflight::check(recs, stated, &g, &pre)?;
-        let prediction = g.predict(checked.velocity_mm_s, settings.harmonics)?;
-        let second = second_from_records(&checked.recordings, &prediction, &settings, &applied)?;
-        Ok::<_, ballpass::Error>((second, checked.warnings))
-    })
-    .map_err(errors::domain)?;
+        settings.harmonics,
+        |recs, prediction| second_from_records(recs, prediction, &settings, &applied),
+    )?;
     Ok((
         crate::convert::serialize(py, &second)?,
         columns(py, second.phase_table())?,
-        warnings,
+        checks.warnings,
     ))
 }
 
