@@ -115,7 +115,7 @@ pub(super) fn gap_lines(
         // the record's end: the running quantile there, which a pulse it
         // has not found covers at most half of (its lines otherwise).
         if len as f64 > pd {
-            let lv = level.get_or_insert_with(|| gap_level(r, &dark, shape, block_noise, pd));
+            let lv = level.get_or_insert_with(|| gap_level(r, &dark, fwhm, block_noise, pd));
             if let Some(lv) = lv {
                 let b = i - 1;
                 lines.push(Line {
@@ -279,18 +279,11 @@ const GAP_QUANTILE: f64 = 0.25;
 /// pulse widths, where a running mean over a period cannot. `None` when
 /// some window holds too few dark samples (pulses that fill most of the
 /// period: the period mean is used then).
-fn gap_level(
-    r: &[f64],
-    dark: &[bool],
-    shape: &Shape,
-    block_noise: f64,
-    pd: f64,
-) -> Option<Vec<f64>> {
+///
+/// `fwhm`: the template's, positive and finite, and `r` not empty (as
+/// [`gap_lines`] checks before calling).
+fn gap_level(r: &[f64], dark: &[bool], fwhm: f64, block_noise: f64, pd: f64) -> Option<Vec<f64>> {
     let n = r.len();
-    let fwhm = shape.fwhm();
-    if n == 0 || fwhm.is_nan() || fwhm <= 0.0 {
-        return None;
-    }
     let w = (GAP_WINDOW_FWHM * fwhm).min(pd).max(4.0).round() as usize;
     // −Φ⁻¹(GAP_QUANTILE): the noise's quantile below its median.
     let lift = 0.674_489_750_196_081_7 * block_noise;
