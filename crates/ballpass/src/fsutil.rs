@@ -128,18 +128,42 @@ pub fn interrupt() -> usize {
     n
 }
 
-/// A small text file read whole (a manifest, a profile): its bytes as
-/// UTF-8 text. `what` says what the file should be ("a manifest is CSV text"):
-/// the error for bytes that are not UTF-8 ends with it.
+/// Largest small text file [`read_text`] reads: 64 MiB (a manifest of
+/// about 800 000 records; profiles and `compensation.json` are kilobytes).
+pub(crate) const MAX_TEXT_BYTES: u64 = 64 << 20;
+
+/// A small text file read whole (a manifest, a profile, a
+/// `compensation.json`): its bytes as UTF-8 text. `what` says what the
+/// file should be ("a manifest is CSV text"): the errors for a file too
+/// large or not UTF-8 end with it.
 ///
 /// # Errors
-/// [`Error::Io`] when unreadable; [`Error::Parse`] naming the line of the
-/// first byte that is not UTF-8.
+/// [`Error::Io`] when unreadable; [`Error::Format`] for more than
+/// [`MAX_TEXT_BYTES`] (also what never ends, like `/dev/zero`);
+/// [`Error::Parse`] naming the line of the first byte that is not UTF-8.
 pub(crate) fn read_text(path: &Path, what: &str) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    read_text_max(path, what, MAX_TEXT_BYTES)
+}
+
+/// [`read_text`] with the limit `max` bytes.
+fn read_text_max(path: &Path, what: &str, max: u64) -> Result<String> {
+    use std::io::Read;
+    let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let mut bytes = Vec::new();
+    File::open(path)
+        .map_err(io)?
+        .take(max + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > max {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            reason: format!("more than {max} bytes; {what}"),
+        });
+    }
     String::from_utf8(bytes).map_err(|e| Error::Parse {
         path: path.to_path_buf(),
         line: 1 + e.as_bytes()[..e.utf8_error().valid_up_to()]
@@ -547,6 +571,32 @@ mod tests {
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    /// A small text file is read up to its limit: one byte more, or a file
+    /// that never ends, is an error naming it, read no further.
+    #[test]
+    fn a_text_file_over_its_limit_is_refused() {
+        let d = dir("read-text");
+        let p = d.join("m.csv");
+        std::fs::write(&p, "path,bearing\nr.csv,b\n").unwrap();
+        assert_eq!(
+            read_text_max(&p, "CSV", 21).unwrap(),
+            "path,bearing\nr.csv,b\n"
+        );
+        let e = read_text_max(&p, "CSV", 20).unwrap_err().to_string();
+        assert!(
+            e.contains("m.csv") && e.contains("more than 20 bytes; CSV"),
+            "{e}"
+        );
+        #[cfg(unix)]
+        {
+            let e = read_text(Path::new("/dev/zero"), "CSV")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("/dev/zero") && e.contains("more than"), "{e}");
+        }
+        let _ = std::fs::remove_dir_all(&d);
     }
 
     fn leftovers(d: &Path) -> Vec<String> {
