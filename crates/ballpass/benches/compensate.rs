@@ -66,7 +66,37 @@
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
 //! component and std after each.
 
-use ballpass::validate::compensation::{bench, check, rail_check, rounds, RailCheck};
+use ballpass::sim::SimSettings;
+use ballpass::validate::compensation::{bench_load_cell, check, rail_check, rounds, RailCheck};
+
+/// The bench of draw `i` of seed `seed`: the load cell drawn over the
+/// verdicts' domain (session 15, [`bench_load_cell`]), or with `--tau-10`
+/// the simulator's τ = 10 s on every bench (the benches up to session 14).
+fn bench(seed: u64, i: u64) -> SimSettings {
+    if std::env::args().any(|a| a == "--tau-10") {
+        ballpass::validate::compensation::bench(seed, i)
+    } else {
+        bench_load_cell(seed, i)
+    }
+}
+
+/// `--tau-given=K`: the analysis of the first round's records given the
+/// load cell's τ as K times the simulated one (`Off` for a DC-coupled
+/// bench), to measure how precisely τ must be known (session 15).
+fn tau_given(s: &SimSettings) -> Option<ballpass::analysis::AnalyzeSettings> {
+    use ballpass::analysis::load_cell::LoadCellCorrection;
+    let k: f64 = std::env::args()
+        .find_map(|a| a.strip_prefix("--tau-given=").map(str::to_owned))?
+        .parse()
+        .expect("--tau-given=K takes a number");
+    Some(ballpass::analysis::AnalyzeSettings {
+        load_cell: match s.load_cell.time_constant_s {
+            Some(t) => LoadCellCorrection::TimeConstant(k * t),
+            None => LoadCellCorrection::Off,
+        },
+        ..Default::default()
+    })
+}
 
 fn main() {
     if std::env::args().any(|a| a == "--rail") {
@@ -384,7 +414,7 @@ fn stall() {
             .join(" ")
     };
     for i in 0..n {
-        let s = ballpass::validate::compensation::bench(seed, i);
+        let s = bench(seed, i);
         if s.condition != ballpass::sim::Condition::Sticking || s.velocity_mm_s > 6.0 {
             continue;
         }
@@ -746,15 +776,16 @@ fn runaway() {
 /// product's table, then with the table corrected from the run made with
 /// it (`-- --second N SEED [FIRST]`: draws FIRST..N).
 fn second() {
-    use ballpass::validate::compensation_second::second_round_check;
+    use ballpass::validate::compensation_second::second_round_check_with;
     let (n, seed, first) = n_seed_first(20_000_000);
     println!(
         "i,v_mm_s,condition,std_over_v,fc_before,std_before,fc_1,std_1,fc_pred_1,std_pred_1,refused,\
-fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
+fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n,tau_true_s"
     );
     for i in first..n {
         let s = bench(seed, i);
-        match second_round_check(&s) {
+        let settings = tau_given(&s).unwrap_or_default();
+        match second_round_check_with(&s, &settings) {
             Ok(c) => {
                 let p = &c.first;
                 let two = match &c.second {
@@ -771,7 +802,7 @@ fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
                     Err(_) => ",,,,,,".into(),
                 };
                 println!(
-                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two}",
+                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two},{}",
                     p.velocity_mm_s,
                     p.condition.name(),
                     c.std_over_v,
@@ -782,6 +813,9 @@ fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
                     p.f_c_predicted_um_s,
                     p.std_predicted_um_s,
                     p.refused,
+                    s.load_cell
+                        .time_constant_s
+                        .map_or("dc".to_string(), |t| format!("{t:.3}")),
                 );
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
