@@ -139,6 +139,10 @@ fn main() {
         second();
         return;
     }
+    if std::env::args().any(|a| a == "--tau-scan") {
+        tau_scan();
+        return;
+    }
     let (n, seed) = n_and_seed(7_000_000);
     println!(
         "v_mm_s,condition,stage,fc_before_um_s,fc_after_um_s,fc_pred_um_s,reduction,std_before_um_s,std_after_um_s,std_pred_um_s,fc_pred_err,std_pred_err"
@@ -780,7 +784,7 @@ fn second() {
     let (n, seed, first) = n_seed_first(20_000_000);
     println!(
         "i,v_mm_s,condition,std_over_v,fc_before,std_before,fc_1,std_1,fc_pred_1,std_pred_1,refused,\
-fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n,tau_true_s"
+fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n,tau_true_s,tau_used_s,tau_determined"
     );
     for i in first..n {
         let s = bench(seed, i);
@@ -802,7 +806,7 @@ fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n,tau_true_s"
                     Err(_) => ",,,,,,".into(),
                 };
                 println!(
-                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two},{}",
+                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two},{},{},{}",
                     p.velocity_mm_s,
                     p.condition.name(),
                     c.std_over_v,
@@ -816,6 +820,52 @@ fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n,tau_true_s"
                     s.load_cell
                         .time_constant_s
                         .map_or("dc".to_string(), |t| format!("{t:.3}")),
+                    p.load_cell_tau_s
+                        .0
+                        .map_or("dc".to_string(), |t| format!("{t:.3}")),
+                    p.load_cell_tau_s.1,
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+}
+
+/// The `--tau-scan` measurement (session 15,
+/// [`ballpass::validate::compensation_tau`]): per bench the simulated τ,
+/// the analysis' and the replay's agreement with the records for the
+/// friction as recorded and each τ of the grid (`-- --tau-scan N SEED
+/// [FIRST]`).
+fn tau_scan() {
+    use ballpass::validate::compensation_tau::tau_scan;
+    let (n, seed, first) = n_seed_first(22_000_000);
+    println!("i,v_mm_s,condition,std_over_v,tau_true_s,tau_analysis_s,tau_chosen_s,then per candidate tau:f_c_miss:waveform_miss");
+    for i in first..n {
+        let s = bench(seed, i);
+        match tau_scan(&s) {
+            Ok(c) => {
+                let t = |x: Option<f64>| x.map_or("dc".to_string(), |t| format!("{t:.3}"));
+                let cands: Vec<String> = c
+                    .candidates
+                    .iter()
+                    .map(|k| {
+                        format!(
+                            "{}:{:.3}:{:.3}",
+                            t(k.tau_s),
+                            k.f_c_miss_um_s,
+                            k.waveform_miss_um_s
+                        )
+                    })
+                    .collect();
+                println!(
+                    "{i},{:.3},{},{:.3},{},{},{},{}",
+                    s.velocity_mm_s,
+                    s.condition.name(),
+                    c.std_over_v,
+                    t(c.true_tau_s),
+                    t(c.analysis_tau_s),
+                    t(c.chosen_tau_s),
+                    cands.join(",")
                 );
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),

@@ -49,6 +49,9 @@ pub struct CompensationCheck {
     pub std_after_um_s: f64,
     /// The same with the table, predicted, µm/s.
     pub std_predicted_um_s: f64,
+    /// The load cell's τ the table was built with, s (`None`: the
+    /// friction as recorded), and whether the records decided it.
+    pub load_cell_tau_s: (Option<f64>, bool),
 }
 
 impl CompensationCheck {
@@ -184,6 +187,7 @@ fn check_of(
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: std_after,
         std_predicted_um_s: p.std_after_um_s,
+        load_cell_tau_s: (comp.load_cell.tau_s, comp.load_cell.determined),
     }
 }
 
