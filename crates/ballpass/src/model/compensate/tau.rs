@@ -28,7 +28,7 @@
 //! The table is then built from the records analysed with `τ*`. Above
 //! [`super::SEVERE_STALL_FRACTION`] of the velocity the replay does not
 //! stand for the stage well enough to decide τ (on the design benches its
-//! choice was 5–20 times off the simulated one): there τ stays as the
+//! choice was 2–20 times off the simulated one on 5 of 6): there τ stays as the
 //! analysis decided, and a warning says that τ is not decided by the
 //! records and should be given.
 
