@@ -66,7 +66,37 @@
 //! ([`ballpass::validate::compensation::rounds`]), and prints the f_c
 //! component and std after each.
 
-use ballpass::validate::compensation::{bench, check, rail_check, rounds, RailCheck};
+use ballpass::sim::SimSettings;
+use ballpass::validate::compensation::{bench_load_cell, check, rail_check, rounds, RailCheck};
+
+/// The bench of draw `i` of seed `seed`: the load cell drawn over the
+/// verdicts' domain (session 15, [`bench_load_cell`]), or with `--tau-10`
+/// the simulator's τ = 10 s on every bench (the benches up to session 14).
+fn bench(seed: u64, i: u64) -> SimSettings {
+    if std::env::args().any(|a| a == "--tau-10") {
+        ballpass::validate::compensation::bench(seed, i)
+    } else {
+        bench_load_cell(seed, i)
+    }
+}
+
+/// `--tau-given=K`: the analysis of the first round's records given the
+/// load cell's τ as K times the simulated one (`Off` for a DC-coupled
+/// bench), to measure how precisely τ must be known (session 15).
+fn tau_given(s: &SimSettings) -> Option<ballpass::analysis::AnalyzeSettings> {
+    use ballpass::analysis::load_cell::LoadCellCorrection;
+    let k: f64 = std::env::args()
+        .find_map(|a| a.strip_prefix("--tau-given=").map(str::to_owned))?
+        .parse()
+        .expect("--tau-given=K takes a number");
+    Some(ballpass::analysis::AnalyzeSettings {
+        load_cell: match s.load_cell.time_constant_s {
+            Some(t) => LoadCellCorrection::TimeConstant(k * t),
+            None => LoadCellCorrection::Off,
+        },
+        ..Default::default()
+    })
+}
 
 fn main() {
     if std::env::args().any(|a| a == "--rail") {
@@ -107,6 +137,10 @@ fn main() {
     }
     if std::env::args().any(|a| a == "--second") {
         second();
+        return;
+    }
+    if std::env::args().any(|a| a == "--tau-scan") {
+        tau_scan();
         return;
     }
     let (n, seed) = n_and_seed(7_000_000);
@@ -384,7 +418,7 @@ fn stall() {
             .join(" ")
     };
     for i in 0..n {
-        let s = ballpass::validate::compensation::bench(seed, i);
+        let s = bench(seed, i);
         if s.condition != ballpass::sim::Condition::Sticking || s.velocity_mm_s > 6.0 {
             continue;
         }
@@ -746,15 +780,16 @@ fn runaway() {
 /// product's table, then with the table corrected from the run made with
 /// it (`-- --second N SEED [FIRST]`: draws FIRST..N).
 fn second() {
-    use ballpass::validate::compensation_second::second_round_check;
+    use ballpass::validate::compensation_second::second_round_check_with;
     let (n, seed, first) = n_seed_first(20_000_000);
     println!(
         "i,v_mm_s,condition,std_over_v,fc_before,std_before,fc_1,std_1,fc_pred_1,std_pred_1,refused,\
-fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
+fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n,tau_true_s,tau_used_s,tau_determined"
     );
     for i in first..n {
         let s = bench(seed, i);
-        match second_round_check(&s) {
+        let settings = tau_given(&s).unwrap_or_default();
+        match second_round_check_with(&s, &settings) {
             Ok(c) => {
                 let p = &c.first;
                 let two = match &c.second {
@@ -771,7 +806,7 @@ fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
                     Err(_) => ",,,,,,".into(),
                 };
                 println!(
-                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two}",
+                    "{i},{:.3},{},{:.3},{:.3},{:.1},{:.3},{:.1},{:.3},{:.1},{},{two},{},{},{}",
                     p.velocity_mm_s,
                     p.condition.name(),
                     c.std_over_v,
@@ -782,6 +817,55 @@ fc_2,std_2,fc_pred_lo_2,fc_pred_2,fc_pred_hi_2,std_pred_2,change_n"
                     p.f_c_predicted_um_s,
                     p.std_predicted_um_s,
                     p.refused,
+                    s.load_cell
+                        .time_constant_s
+                        .map_or("dc".to_string(), |t| format!("{t:.3}")),
+                    p.load_cell_tau_s
+                        .0
+                        .map_or("dc".to_string(), |t| format!("{t:.3}")),
+                    p.load_cell_tau_s.1,
+                );
+            }
+            Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),
+        }
+    }
+}
+
+/// The `--tau-scan` measurement (session 15,
+/// [`ballpass::validate::compensation_tau`]): per bench the simulated τ,
+/// the analysis' and the replay's agreement with the records for the
+/// friction as recorded and each τ of the grid (`-- --tau-scan N SEED
+/// [FIRST]`).
+fn tau_scan() {
+    use ballpass::validate::compensation_tau::tau_scan;
+    let (n, seed, first) = n_seed_first(22_000_000);
+    println!("i,v_mm_s,condition,std_over_v,tau_true_s,tau_analysis_s,tau_chosen_s,then per candidate tau:f_c_miss:waveform_miss");
+    for i in first..n {
+        let s = bench(seed, i);
+        match tau_scan(&s) {
+            Ok(c) => {
+                let t = |x: Option<f64>| x.map_or("dc".to_string(), |t| format!("{t:.3}"));
+                let cands: Vec<String> = c
+                    .candidates
+                    .iter()
+                    .map(|k| {
+                        format!(
+                            "{}:{:.3}:{:.3}",
+                            t(k.tau_s),
+                            k.f_c_miss_um_s,
+                            k.waveform_miss_um_s
+                        )
+                    })
+                    .collect();
+                println!(
+                    "{i},{:.3},{},{:.3},{},{},{},{}",
+                    s.velocity_mm_s,
+                    s.condition.name(),
+                    c.std_over_v,
+                    t(c.true_tau_s),
+                    t(c.analysis_tau_s),
+                    t(c.chosen_tau_s),
+                    cands.join(",")
                 );
             }
             Err(e) => println!("# bench {i} ({} mm/s): {e}", s.velocity_mm_s),

@@ -49,6 +49,9 @@ pub struct CompensationCheck {
     pub std_after_um_s: f64,
     /// The same with the table, predicted, µm/s.
     pub std_predicted_um_s: f64,
+    /// The load cell's τ the table was built with, s (`None`: the
+    /// friction as recorded), and whether the records decided it.
+    pub load_cell_tau_s: (Option<f64>, bool),
 }
 
 impl CompensationCheck {
@@ -82,13 +85,23 @@ pub fn check(s: &SimSettings) -> Result<CompensationCheck> {
 /// The compensation `ballpass compensate` builds for bench `s`, and the
 /// prediction it used.
 pub(crate) fn table_for(s: &SimSettings) -> Result<(Compensation, Prediction)> {
+    table_for_with(s, &AnalyzeSettings::default())
+}
+
+/// [`table_for`] with the records analysed with `settings` (the load
+/// cell's τ given, for the validation's look at how well it must be
+/// known).
+pub(crate) fn table_for_with(
+    s: &SimSettings,
+    settings: &AnalyzeSettings,
+) -> Result<(Compensation, Prediction)> {
     let sim = simulate(s)?;
     let pred = s.geometry.predict(s.velocity_mm_s, 5)?;
     let gains = PdLoop::from_products(s.stage.mass_kg, s.stage.kkp_n_per_m, s.stage.kkd_n_s_per_m)?;
     let comp = compensate(
         std::slice::from_ref(&sim.recording),
         &pred,
-        &AnalyzeSettings::default(),
+        settings,
         Some(gains),
     )?;
     Ok((comp, pred))
@@ -174,6 +187,7 @@ fn check_of(
         std_before_um_s: p.std_before_um_s,
         std_after_um_s: std_after,
         std_predicted_um_s: p.std_after_um_s,
+        load_cell_tau_s: (comp.load_cell.tau_s, comp.load_cell.determined),
     }
 }
 
@@ -193,9 +207,35 @@ fn velocity_error_f_c(
         })
 }
 
-/// The bench of draw `i` of a run seeded `seed`: velocity log-uniform in
-/// 1–20 mm/s, good and sticking alternately, at least 30 s and 40
-/// ball-pass periods.
+/// Share of the compensation benches whose force sensor is DC coupled
+/// (no discharge), as in the verdict suite's domain
+/// ([`super::bench::Domain`]'s `load_cell_dc_probability`).
+pub const BENCH_DC_SHARE: f64 = 0.2;
+
+/// The load-cell time constant of the other benches, s: log-uniform over
+/// this range, the verdict suite's (`load_cell_tau_s`), which covers the
+/// verdicts issue's "0.3 s to none".
+pub const BENCH_TAU_RANGE_S: (f64, f64) = (0.3, 100.0);
+
+/// [`bench`] with the load cell drawn over the verdicts' domain (session
+/// 15; the validation's benches from then on): DC coupled
+/// ([`BENCH_DC_SHARE`]) or discharging with τ log-uniform over
+/// [`BENCH_TAU_RANGE_S`]. The load cell is drawn from its own stream, so
+/// the rest of the bench (velocity, condition, seed) is [`bench`]'s draw.
+pub fn bench_load_cell(seed: u64, i: u64) -> SimSettings {
+    let mut s = bench(seed, i);
+    let mut r = crate::sim::rng::Rng::stream(crate::sim::rng::derive_seed(seed, i), 78);
+    let dc = r.uniform() < BENCH_DC_SHARE;
+    let (lo, hi) = BENCH_TAU_RANGE_S;
+    let tau = (lo.ln() + (hi / lo).ln() * r.uniform()).exp();
+    s.load_cell.time_constant_s = (!dc).then_some(tau);
+    s
+}
+
+/// The bench of draw `i` of a run seeded `seed` as up to session 14:
+/// velocity log-uniform in 1–20 mm/s, good and sticking alternately, at
+/// least 30 s and 40 ball-pass periods, the load cell's τ the simulator's
+/// default (10 s) on every bench ([`bench_load_cell`] draws it).
 pub fn bench(seed: u64, i: u64) -> SimSettings {
     let mut rng = crate::sim::rng::Rng::stream(crate::sim::rng::derive_seed(seed, i), 77);
     let v = (20f64.ln() * rng.uniform()).exp();

@@ -12,7 +12,7 @@ use crate::model::compensate::second::second_round;
 use crate::sim::feedforward::{Feedforward, FeedforwardKey};
 use crate::sim::{simulate, SimSettings};
 
-use super::compensation::{closed_loop, table_for, CompensationCheck};
+use super::compensation::{closed_loop, table_for_with, CompensationCheck};
 
 /// One bench's two rounds.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -46,7 +46,20 @@ pub struct SecondRun {
 /// # Errors
 /// The simulator's, the analysis' and the compensation's errors.
 pub fn second_round_check(s: &SimSettings) -> Result<SecondRoundCheck> {
-    let (comp, pred) = table_for(s)?;
+    second_round_check_with(s, &AnalyzeSettings::default())
+}
+
+/// [`second_round_check`] with the first round's records analysed with
+/// `settings` (e.g. the load cell's τ given; session 15). The second
+/// round's records are analysed as the product does.
+///
+/// # Errors
+/// As [`second_round_check`].
+pub fn second_round_check_with(
+    s: &SimSettings,
+    settings: &AnalyzeSettings,
+) -> Result<SecondRoundCheck> {
+    let (comp, pred) = table_for_with(s, settings)?;
     let mut s1 = s.clone();
     s1.feedforward = Some(comp.feedforward());
     let sim1 = simulate(&s1)?;

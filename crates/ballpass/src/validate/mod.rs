@@ -10,6 +10,7 @@ pub mod compensation_guard;
 pub mod compensation_near_stall;
 pub mod compensation_second;
 pub mod compensation_stall;
+pub mod compensation_tau;
 pub mod estimate;
 pub mod fleets;
 pub mod passages;

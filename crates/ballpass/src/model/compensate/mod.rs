@@ -76,6 +76,7 @@ mod output;
 mod rail;
 pub(crate) mod replay;
 pub mod second;
+pub mod tau;
 mod travel;
 
 use output::write_outputs;
@@ -87,6 +88,7 @@ pub use replay::Kept;
 use rail::rail_grid;
 use rail::rail_table;
 
+use crate::analysis::load_cell::LoadCellCorrection;
 use crate::analysis::sync::{coefficient, SyncKey};
 use crate::analysis::{analyze, Analysis, AnalyzeSettings, Signal};
 use crate::bearing::Prediction;
@@ -292,6 +294,9 @@ pub struct Compensation {
     pub stage: PdLoop,
     /// The stage in words.
     pub stage_text: String,
+    /// The load cell's time constant undone in the records' friction, and
+    /// how it was decided ([`tau`]).
+    pub load_cell: tau::LoadCellUsed,
     /// What the table is predicted to do.
     pub prediction: ResidualPrediction,
     /// Warnings: the analysis' and, first, whether the prediction can be
@@ -314,7 +319,69 @@ pub fn compensate(
     gains: Option<PdLoop>,
 ) -> Result<Compensation> {
     let a = analyze(recs, pred, settings)?;
-    from_analysis(&a, recs, gains)
+    if settings.load_cell != LoadCellCorrection::Auto {
+        return from_analysis(&a, recs, gains);
+    }
+    // τ not given: the one whose replay agrees best with the records
+    // ([`tau`]), the records analysed again with it.
+    let stage = stage_of(&a, gains, &|reason| Error::InvalidRecording {
+        source_name: recs
+            .iter()
+            .map(Recording::source_name)
+            .collect::<Vec<_>>()
+            .join(", "),
+        reason,
+    })?
+    .0;
+    let stall = stall_of(&a);
+    if stall.is_none_or(|x| x > SEVERE_STALL_FRACTION) {
+        let mut c = from_analysis(&a, recs, gains)?;
+        c.load_cell = tau::LoadCellUsed::of_analysis(
+            &a,
+            tau::TauSource::Analysis,
+            &format!(
+                "; the stage nearly stops (velocity-error std over {:.0} % of the velocity): \
+                 the replay does not decide the load cell's τ there; give it if it is known",
+                100.0 * SEVERE_STALL_FRACTION
+            ),
+        );
+        c.load_cell.determined = false;
+        c.warnings.insert(0, c.load_cell.note.clone());
+        return Ok(c);
+    }
+    let scanned = tau::scan(&a, recs, &stage, true, &tau::candidates());
+    let chosen = scanned.as_ref().ok().and_then(tau::choose);
+    let (Ok(sc), Some(tau_s)) = (scanned.clone(), chosen) else {
+        let why = scanned
+            .err()
+            .unwrap_or_else(|| "no candidate could be replayed".into());
+        let mut c = from_analysis(&a, recs, gains)?;
+        c.load_cell = tau::LoadCellUsed::of_analysis(
+            &a,
+            tau::TauSource::Analysis,
+            &format!("; τ not chosen by the replay: {why}"),
+        );
+        return Ok(c);
+    };
+    let again = AnalyzeSettings {
+        load_cell: tau::correction(tau_s),
+        ..settings.clone()
+    };
+    let a2 = analyze(recs, pred, &again)?;
+    let mut c = from_analysis(&a2, recs, gains)?;
+    let analysis_tau_s = a
+        .load_cell
+        .first()
+        .and_then(|d| d.fit.as_ref().filter(|f| f.identified).map(|f| f.tau_s));
+    c.load_cell = tau::LoadCellUsed::chosen(tau_s, true, analysis_tau_s, sc.candidates);
+    Ok(c)
+}
+
+/// The velocity-error std over the velocity of the analysis `a`.
+fn stall_of(a: &Analysis) -> Option<f64> {
+    a.velocity_error
+        .as_ref()
+        .map(|v| v.lowpassed_std_um_s * 1e-3 / a.prediction.velocity_mm_s)
 }
 
 /// [`compensate`] from an analysis already made of `recs`.
@@ -373,41 +440,7 @@ pub(crate) fn designed(
             "compensation needs both friction and encoder position".into()
         ));
     };
-    let (stage, stage_source, stage_text) = match (&a.stage, gains) {
-        (Some(id), _) if id.identified => {
-            let (Some(m), Some(kd), Some(kp)) = (id.mass_kg, id.kkd_n_s_per_m, id.kkp_n_per_m)
-            else {
-                return Err(bad("identified stage without its parameters".into()));
-            };
-            (
-                PdLoop::from_products(m.value, kp.value, kd.value)?,
-                StageSource::Identified,
-                format!("identified from the records: {}", id.text),
-            )
-        }
-        (id, Some(g)) => (
-            g,
-            StageSource::GivenGains,
-            format!(
-                "loop gains given ({}), the stage not identified from the data{}",
-                describe(&g),
-                id.as_ref()
-                    .map(|i| format!(": {}", i.text))
-                    .unwrap_or_default()
-            ),
-        ),
-        (id, None) => {
-            return Err(Error::setting(
-                "stage",
-                format!(
-                    "the stage could not be identified from the records ({}); give the loop \
-                     gains (mass, K*KP, K*KD)",
-                    id.as_ref()
-                        .map_or("no friction and position".into(), |i| i.text.clone())
-                ),
-            ))
-        }
-    };
+    let (stage, stage_source, stage_text) = stage_of(a, gains, &bad)?;
     let mean_f = f.mean.iter().sum::<f64>() / f.mean.len() as f64;
     let force_sync_n: Vec<f64> = f.mean.iter().map(|x| x - mean_f).collect();
     let b = s.bins;
@@ -641,11 +674,64 @@ pub(crate) fn designed(
             stage_source,
             stage,
             stage_text,
+            load_cell: tau::LoadCellUsed::of_analysis(
+                a,
+                if a.settings.load_cell == LoadCellCorrection::Auto {
+                    tau::TauSource::Analysis
+                } else {
+                    tau::TauSource::Given
+                },
+                "",
+            ),
             prediction,
             warnings,
         },
         design,
     ))
+}
+
+/// The stage the table is designed and predicted with: the one identified
+/// from the records, else the loop gains given; its source and in words.
+fn stage_of(
+    a: &Analysis,
+    gains: Option<PdLoop>,
+    bad: &dyn Fn(String) -> Error,
+) -> Result<(PdLoop, StageSource, String)> {
+    Ok(match (&a.stage, gains) {
+        (Some(id), _) if id.identified => {
+            let (Some(m), Some(kd), Some(kp)) = (id.mass_kg, id.kkd_n_s_per_m, id.kkp_n_per_m)
+            else {
+                return Err(bad("identified stage without its parameters".into()));
+            };
+            (
+                PdLoop::from_products(m.value, kp.value, kd.value)?,
+                StageSource::Identified,
+                format!("identified from the records: {}", id.text),
+            )
+        }
+        (id, Some(g)) => (
+            g,
+            StageSource::GivenGains,
+            format!(
+                "loop gains given ({}), the stage not identified from the data{}",
+                describe(&g),
+                id.as_ref()
+                    .map(|i| format!(": {}", i.text))
+                    .unwrap_or_default()
+            ),
+        ),
+        (id, None) => {
+            return Err(Error::setting(
+                "stage",
+                format!(
+                    "the stage could not be identified from the records ({}); give the loop \
+                     gains (mass, K*KP, K*KD)",
+                    id.as_ref()
+                        .map_or("no friction and position".into(), |i| i.text.clone())
+                ),
+            ))
+        }
+    })
 }
 
 /// The replay's design of `comp` (made by [`from_analysis`] from `a` and

@@ -91,40 +91,16 @@ pub(crate) fn record_keys(
         let Some(x) = r.channel(Channel::Position) else {
             return Err(format!("no encoder position in {name}"));
         };
-        let Some(f) = r.channel(Channel::Friction) else {
+        if r.channel(Channel::Friction).is_none() {
             return Err(format!("no friction in {name}"));
-        };
+        }
         if x.len() < 2 {
             return Err(format!("{name}: fewer than 2 samples"));
         }
         let fs = r.fs_hz();
-        let (restored, _) = crate::analysis::load_cell::restore_friction(
-            f,
-            fs,
-            a.prediction.tau_c_s,
-            a.settings.load_cell,
-        )
-        .map_err(|e| format!("{name}: {e}"))?;
+        let friction_n = friction_of(r, a, a.settings.load_cell, refined)?;
         let lowpass = crate::analysis::preprocess::lowpass_filter(&a.settings, fs)
             .map_err(|e| e.to_string())?;
-        let friction = match &lowpass {
-            Some(lp) => lp
-                .apply(&restored)
-                .map_err(|e| format!("{name}: low-pass of the friction: {e}"))?,
-            None => restored.into_owned(),
-        };
-        // A periodic friction has no trend; a trend is the discharge undone
-        // with the wrong time constant or start (its level is fitted later).
-        let level = friction.iter().sum::<f64>() / friction.len() as f64;
-        let friction_n: Vec<f64> = if refined {
-            ballpass_dsp::detrend(&friction, ballpass_dsp::DetrendType::Linear)
-                .map_err(|e| format!("{name}: detrend of the friction: {e}"))?
-                .iter()
-                .map(|f| f + level)
-                .collect()
-        } else {
-            friction
-        };
         // The velocity error as the analysis takes it (numpy.gradient of the
         // encoder, low-passed), along the motion.
         let speed = ballpass_dsp::gradient(x, ballpass_dsp::Spacing::Uniform(1.0 / fs))
@@ -174,6 +150,46 @@ pub(crate) fn record_keys(
         });
     }
     Ok(out)
+}
+
+/// The friction of record `r` as the replay takes it: the load cell's
+/// discharge undone as `correction` says, low-passed as the analysis `a`
+/// does and, when `refined`, its linear trend removed (its level kept).
+pub(crate) fn friction_of(
+    r: &Recording,
+    a: &Analysis,
+    correction: crate::analysis::load_cell::LoadCellCorrection,
+    refined: bool,
+) -> Result<Vec<f64>, String> {
+    let name = r.source_name();
+    let f = r
+        .channel(Channel::Friction)
+        .ok_or_else(|| format!("no friction in {name}"))?;
+    let fs = r.fs_hz();
+    let (restored, _) =
+        crate::analysis::load_cell::restore_friction(f, fs, a.prediction.tau_c_s, correction)
+            .map_err(|e| format!("{name}: {e}"))?;
+    let lowpass =
+        crate::analysis::preprocess::lowpass_filter(&a.settings, fs).map_err(|e| e.to_string())?;
+    let friction = match &lowpass {
+        Some(lp) => lp
+            .apply(&restored)
+            .map_err(|e| format!("{name}: low-pass of the friction: {e}"))?,
+        None => restored.into_owned(),
+    };
+    if !refined {
+        return Ok(friction);
+    }
+    // A periodic friction has no trend; a trend is the discharge undone
+    // with the wrong time constant or start (its level is fitted later).
+    let level = friction.iter().sum::<f64>() / friction.len() as f64;
+    Ok(
+        ballpass_dsp::detrend(&friction, ballpass_dsp::DetrendType::Linear)
+            .map_err(|e| format!("{name}: detrend of the friction: {e}"))?
+            .iter()
+            .map(|f| f + level)
+            .collect(),
+    )
 }
 
 /// Half-width of the window around a passage in which its pulse's centre
