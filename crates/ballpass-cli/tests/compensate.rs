@@ -26,6 +26,9 @@ fn writes_the_table_and_states_the_stage_it_used() {
     assert!(ok, "{stderr}");
     assert!(stdout.contains("bins per ball-pass period"), "{stdout}");
     assert!(stdout.contains("stage: "), "{stdout}");
+    // The τ the table was built with is said, in the words of
+    // compensation.json's `load_cell.note`.
+    assert!(stdout.contains("load cell: "), "{stdout}");
     assert!(stdout.contains("predicted: f_c component"), "{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("compensation.json")).unwrap())

@@ -44,9 +44,12 @@ pub struct CompensateArgs {
     #[arg(long, value_name = "N·S/M", requires = "mass")]
     kkd: Option<f64>,
     /// The quartz load cell's discharge time constant in seconds, undone
-    /// before the analysis; `auto` (default) estimates it from each record,
-    /// `off` leaves the friction as recorded (a DC-coupled sensor). A known
-    /// τ makes the table better near stall (docs/methods.md §14).
+    /// before the analysis; `auto` (default) takes the τ with which the
+    /// replay through the stage gives the records' velocity error best
+    /// (compensation.json `load_cell` says which), `off` leaves the
+    /// friction as recorded (a DC-coupled sensor). Near stall the records
+    /// do not decide τ: a known τ makes the table better there
+    /// (docs/methods.md §14).
     #[arg(long, value_name = "S|auto|off", value_parser = super::analyze::parse_load_cell)]
     load_cell_tau: Option<LoadCellCorrection>,
     /// A second round: REC... were taken with the table of this
@@ -123,6 +126,7 @@ pub fn run(a: &CompensateArgs) -> Result<()> {
             )?,
         }
         writeln!(so, "phase 0: {}", comp.phase_reference)?;
+        writeln!(so, "load cell: {}", text::line(&comp.load_cell.note))?;
         writeln!(so, "table from: {}", comp.table_text)?;
         writeln!(so, "rail: {}", comp.rail_note)?;
         writeln!(

@@ -371,9 +371,12 @@ def compensate(recordings, *, velocity_mm_s: float | None = None, bearing: str |
     (K·K_D, N·s/m), all three.
 
     ``load_cell``: the quartz load cell's discharge time constant in
-    seconds, ``'auto'`` (default: estimated from each record) or ``'off'``
-    (a DC-coupled sensor), as ``--load-cell-tau``. A known time constant
-    makes the table better near stall.
+    seconds, ``'auto'`` (default) or ``'off'`` (a DC-coupled sensor), as
+    ``--load-cell-tau``. With ``'auto'`` the time constant is the one with
+    which the replay through the stage gives the records' velocity error
+    best (``to_dict()['load_cell']`` says which and why); near stall the
+    records do not decide it and a warning says so: there a known time
+    constant makes the table better.
 
     ``applied``: a second round, as ``--applied``. The recordings were
     taken on the machine with that table applied; give its
