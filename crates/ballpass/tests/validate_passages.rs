@@ -111,8 +111,9 @@ fn clean_bench(seed: u64, shape: ballpass::sim::PulseShape, width: f64) -> Bench
     bench
 }
 
-/// The scorer's width truth is the FWHM of one pulse alone (the simulated
-/// shape's own half-maximum points, through the recorded stage position).
+/// The scorer's second width truth is the FWHM of one pulse alone (the
+/// simulated shape's own half-maximum points, through the recorded stage
+/// position; `width_error_fwhm`).
 /// The analysis reports the width at half prominence of the pulses as
 /// recorded, which is the same where pulses do not overlap: clean records
 /// of pulses that cannot overlap (raised cosine, zero past one FWHM from
@@ -133,14 +134,14 @@ fn clean_widths_are_scored_against_the_isolated_pulse() {
     for seed in [3, 7, 19] {
         let s = clean(seed, PulseShape::RaisedCosine, 0.2);
         assert!(s.count_exact && s.required >= 20, "bench {seed}: {s:?}");
-        let w = s.width_error.expect("widths measured");
+        let w = s.width_error_fwhm.expect("widths measured");
         assert!(
             w.abs() <= 0.01,
             "bench {seed}: raised cosine width error {w}"
         );
         let s = clean(seed, PulseShape::Gaussian, 0.44);
         assert!(s.count_exact, "bench {seed}: {s:?}");
-        let w = s.width_error.expect("widths measured");
+        let w = s.width_error_fwhm.expect("widths measured");
         assert!(
             (-0.06..=-0.02).contains(&w),
             "bench {seed}: Gaussian width error {w}"
@@ -160,11 +161,12 @@ fn clean_widths_are_scored_against_the_isolated_pulse() {
 /// exactly regular, hence ±0.5 % (measured on 12 Gaussian design benches:
 /// −4.6 to −4.8 %). The analysis of the same clean records reads within
 /// 1 % of the width at half prominence (measured: −0.1 to +0.5 %), not of
-/// the FWHM.
+/// the FWHM. That width is the score's headline truth (`width_error`,
+/// `width_truth: half_prominence`).
 #[test]
 fn overlapping_pulses_read_the_width_at_half_prominence_of_their_sum() {
     use ballpass::sim::PulseShape;
-    use ballpass::validate::passages::score_and_recorded_width;
+    use ballpass::validate::passages::{score_and_recorded_width, WidthTruth};
     let clean = |seed: u64, shape: PulseShape| -> (PassageScore, f64) {
         let (s, r) = score_and_recorded_width(&clean_bench(seed, shape, 0.45), seed)
             .expect("the default domain draws valid benches");
@@ -178,10 +180,16 @@ fn overlapping_pulses_read_the_width_at_half_prominence_of_their_sum() {
         assert!((r - 0.9576).abs() <= 0.005, "bench {seed}: skewed {r}");
         let (s, r) = clean(seed, PulseShape::Gaussian);
         assert!((r - 0.9536).abs() <= 0.005, "bench {seed}: Gaussian {r}");
-        let e = s.width_error.expect("widths measured");
+        let e = s.width_error_fwhm.expect("widths measured");
         assert!(
             ((1.0 + e) / r - 1.0).abs() <= 0.01,
             "bench {seed}: analysis {e} against half prominence {r}"
+        );
+        assert_eq!(s.width_truth, WidthTruth::HalfProminence);
+        let h = s.width_error.expect("widths measured");
+        assert!(
+            (h - ((1.0 + e) / r - 1.0)).abs() <= 1e-12,
+            "bench {seed}: headline {h}"
         );
     }
 }
@@ -228,9 +236,12 @@ fn a_fast_drift_is_followed_between_the_pulses() {
 /// passages a period apart (design benches 14 000 246 and 15 000 481: 1.90
 /// and 1.95 periods, SNR 32 and 24, two required passages each): both are
 /// found and measured. The detector refused every record shorter than two
-/// periods, so both passages counted as missed.
+/// periods, so both passages counted as missed. Two pulses give
+/// `peak_widths` no pulse with a neighbour on each side, so their width is
+/// scored against one pulse's FWHM, and the score says so.
 #[test]
 fn two_passages_in_less_than_two_periods_are_found() {
+    use ballpass::validate::passages::WidthTruth;
     for seed in [14_000_246, 15_000_481] {
         let s = design_bench(seed);
         let periods = s.bench.duration_s / s.bench.tau_c_s;
@@ -239,5 +250,30 @@ fn two_passages_in_less_than_two_periods_are_found() {
         assert!(s.count_exact, "bench {seed}: {s:?}");
         let e = s.width_error.expect("widths measured");
         assert!(e.abs() < 0.03, "bench {seed}: width error {e}");
+        assert_eq!(s.width_truth, WidthTruth::OnePulseFwhm, "bench {seed}");
+        assert_eq!(s.width_error, s.width_error_fwhm, "bench {seed}");
+    }
+}
+
+/// Where the level under the pulses moves as fast as the pulses (design
+/// benches 14 000 367 and 15 100 442: drifts of 0.43 and 0.87 pulse heights
+/// whose faster component has a period of 0.43 and 1.3 τ_c), a width cannot
+/// be told from the drift: the previous detector read them 13 % and 100 %
+/// wide. The analysis now withholds them and says why
+/// (`widths_withheld`); the scorer counts the record as withheld, not as
+/// measured.
+#[test]
+fn widths_under_a_drift_as_fast_as_the_pulses_are_withheld() {
+    for seed in [14_000_367, 15_100_442] {
+        let s = design_bench(seed);
+        assert!(s.truth.drift_fraction > 0.4, "bench {seed}");
+        assert!(s.reported.widths_withheld, "bench {seed}: {:?}", s.reported);
+        let bend = s.reported.baseline_bend.expect("a bend measured");
+        assert!(bend > 0.15, "bench {seed}: bend {bend}");
+        assert!(
+            s.width_withheld && s.width_s.is_none(),
+            "bench {seed}: {s:?}"
+        );
+        assert_eq!(s.widths_used, Some(0), "bench {seed}");
     }
 }

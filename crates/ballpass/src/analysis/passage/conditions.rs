@@ -25,6 +25,9 @@ pub(super) struct Inputs<'a> {
     /// Measured and predicted ball-pass frequencies, Hz.
     pub f_c: f64,
     pub f_c_predicted: Option<f64>,
+    /// The widths were withheld: the median bend of the baseline under a
+    /// pulse, in pulse heights (`withhold.rs`).
+    pub withheld_bend: Option<f64>,
 }
 
 /// Smallest dip per pulse, in pulse heights, for the AC coupling to be
@@ -64,6 +67,18 @@ pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
                 advice: "pulses were measured against the fitted baseline, so counts and widths hold; a wandering level with a laser source is the strain-dependent interference of thesis §5.2 (Figs. 32, 36): use an incoherent source (LED, thesis §5.3) and keep the fibre still".into(),
             });
         }
+    }
+
+    if let Some(bend) = c.withheld_bend {
+        out.push(Condition {
+            kind: ConditionKind::WidthsWithheld,
+            measure: bend,
+            message: format!(
+                "the level under the pulses bends by {:.0}% of a pulse across a pulse (median over the pulses): the baseline moves as fast as the pulses, and a width cannot be told from it; the widths tau_p are withheld (counts and times hold)",
+                100.0 * bend
+            ),
+            advice: "a level that moves within a pulse with a laser source is the strain-dependent interference of thesis §5.2 (Figs. 32, 36): use an incoherent source (LED, thesis §5.3), keep the fibre still, and record again to measure widths".into(),
+        });
     }
 
     if let Some((tau, dip)) = c.ac {
@@ -177,6 +192,7 @@ mod tests {
             f_c: 1.0,
             // Predicted 1.4 Hz: the measured period is 40 % long.
             f_c_predicted: Some(1.4),
+            withheld_bend: None,
         });
         let m = out
             .iter()

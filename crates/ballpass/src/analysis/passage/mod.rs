@@ -94,6 +94,11 @@
 //!   interference with a coherent source (thesis Fig. 32, §5.2).
 //! - [`ConditionKind::MissedPassages`]: gaps longer than 1.6 τ_c.
 //! - [`ConditionKind::PeriodMismatch`]: measured `τ_c` far from the prediction.
+//! - [`ConditionKind::WidthsWithheld`]: the baseline bends under the pulses
+//!   by more than 15 % of a pulse (median over the pulses): a drift as fast
+//!   as the pulses, which a width cannot be told from. No width is reported
+//!   (`tau_p_s` is NaN, no passage has `width_used`); counts and times are
+//!   kept (`withhold.rs`).
 //!
 //! How often each is right on benches it was never tuned on is measured by
 //! [`crate::validate::passages`].
@@ -119,6 +124,7 @@ mod signal;
 mod template;
 #[cfg(test)]
 mod tests;
+mod withhold;
 
 pub use overlap::PulseOverlap;
 pub use settings::PassageSettings;
@@ -197,6 +203,9 @@ pub enum ConditionKind {
     MissedPassages,
     /// The measured period is far from the predicted one.
     PeriodMismatch,
+    /// The baseline bends under the pulses too much for their widths to be
+    /// measured: the widths are withheld.
+    WidthsWithheld,
 }
 
 impl ConditionKind {
@@ -208,6 +217,7 @@ impl ConditionKind {
             ConditionKind::InvertedPulses => "inverted_pulses",
             ConditionKind::MissedPassages => "missed_passages",
             ConditionKind::PeriodMismatch => "period_mismatch",
+            ConditionKind::WidthsWithheld => "widths_withheld",
         }
     }
 }
@@ -368,6 +378,12 @@ pub struct PassageAnalysis {
     /// Full width at half maximum of the record's mean pulse (the template), s.
     #[serde(default)]
     pub template_fwhm_s: f64,
+    /// Median, over the passages whose width is measured, of how far the
+    /// baseline bends under a pulse, in pulse heights (`None` when no
+    /// passage's width is measured); above 0.15 the widths are withheld
+    /// ([`ConditionKind::WidthsWithheld`]).
+    #[serde(default)]
+    pub baseline_bend: Option<f64>,
     /// How much the pulses overlap and how far low that can leave the
     /// widths (`None` when the mean pulse gives no answer).
     #[serde(default)]
@@ -562,7 +578,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         .iter()
         .map(|f| t_of(to_sample(f.pulse.c + f.pulse.s * m.shape.mid_u())))
         .collect();
-    let passages: Vec<Passage> = kept
+    let mut passages: Vec<Passage> = kept
         .iter()
         .enumerate()
         .map(|(k, f)| {
@@ -593,6 +609,11 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         })
         .collect();
     let inverted = passages.iter().filter(|p| p.polarity < 0).count();
+    let bends: Vec<Option<f64>> = kept
+        .iter()
+        .map(|f| withhold::baseline_bend(&m.baseline, &f.pulse, &m.shape))
+        .collect();
+    let (baseline_bend, widths_withheld) = withhold::withhold(&mut passages, &bends);
 
     let TrainStats {
         tau_c_all,
@@ -625,6 +646,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         ac,
         f_c,
         f_c_predicted,
+        withheld_bend: baseline_bend.filter(|_| widths_withheld),
     });
     // Overlap of pulses one median period apart (the template's units are
     // blocks, its stretch the pulses' mean).
@@ -706,6 +728,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         false_detections_per_record: alpha,
         ac_time_constant_s: ac.map(|a| a.0),
         template_fwhm_s: fwhm_s,
+        baseline_bend,
         overlap,
         count: passages.len(),
         count_inverted: inverted,

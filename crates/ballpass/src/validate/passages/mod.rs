@@ -32,10 +32,25 @@
 //! the skewed pulse's midpoint lies FWHM/6 after it, a constant that every
 //! `τ_c` cancels.
 //!
-//! The width error is `mean τ_p / FWHM − 1`, with `mean τ_p` the analysis'
-//! [`PassageAnalysis::tau_p_s`] mean (the passages it uses for widths) and
-//! FWHM the mean, over the required passages, of the time each pulse takes
-//! to pass between its two half-maximum points: the simulated shape's
+//! The width error is `mean τ_p / truth − 1`, with `mean τ_p` the analysis'
+//! [`PassageAnalysis::tau_p_s`] mean (the passages it uses for widths). The
+//! headline truth ([`WidthTruth::HalfProminence`]) is what ballpass promises
+//! `τ_p` to be: the width at half prominence of the pulses **as recorded**
+//! (SciPy's `peak_widths(rel_height = 0.5)`), read by
+//! [`recorded_half_prominence_width_s`] on the same bench simulated again
+//! without noise, drift, AC coupling or interference (same seed, same
+//! pulses). Where the tails of neighbouring pulses overlap, the light never
+//! falls back to the dark level between them, and that width is narrower
+//! than one pulse's FWHM (4.6 % for a Gaussian of 0.45 τ_c). It is applied
+//! as a ratio: the FWHM truth below times (half-prominence width / FWHM) of
+//! the noise-free record. Where the noise-free record holds fewer than three
+//! pulses (`peak_widths` needs a pulse with a neighbour on each side), the
+//! truth is the FWHM of one pulse ([`WidthTruth::OnePulseFwhm`]), and the
+//! score says so.
+//!
+//! The second truth, kept beside (`width_error_fwhm`), is the FWHM of one
+//! pulse: the mean, over the required passages, of the time each pulse
+//! takes to pass between its two half-maximum points: the simulated shape's
 //! half-maximum points in ball travel (`±FWHM/2`, or `−FWHM/3, +2 FWHM/3`
 //! for the skewed shape, with FWHM = `width_ratio × d_avg`), turned into
 //! times by the recorded stage position (the balls travel half as far as
@@ -45,6 +60,10 @@
 //! faster or slower than its mean speed, and the pulses in the record are
 //! that much narrower or wider. The error against the stated
 //! `optical_pulse_fwhm_s` is kept too (`width_error_stated`).
+//!
+//! A record whose analysis succeeded but reported no width (every pulse
+//! cut by an end, or the widths withheld by the analysis) is *withheld*: it counts in the width rates' denominators as not within
+//! 3 %, and the summary counts it on a line of its own.
 //!
 //! Conditions are scored as verdicts: each condition the analysis reports
 //! is held against what the bench simulated ([`ConditionTruth`]).
@@ -74,6 +93,20 @@ pub const FLAGGED_SHORTFALL: f64 = 0.01;
 
 /// Under interference, pulses scaled below this fraction are optional.
 pub const FADED_FRACTION: f64 = 0.5;
+
+/// Which truth a record's headline width error is against (module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WidthTruth {
+    /// The width at half prominence of the pulses as recorded (SciPy's
+    /// `peak_widths` on the noise-free record): what `τ_p` promises.
+    HalfProminence,
+    /// The FWHM of one pulse: the noise-free record held fewer than three
+    /// pulses to read the half-prominence width on (and the truth of
+    /// scores written before session 15).
+    #[default]
+    OnePulseFwhm,
+}
 
 /// What the bench simulated that the detector should say.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -111,6 +144,13 @@ pub struct ConditionsReported {
     pub missed_passages: bool,
     /// [`ConditionKind::PeriodMismatch`].
     pub period_mismatch: bool,
+    /// [`ConditionKind::WidthsWithheld`].
+    #[serde(default)]
+    pub widths_withheld: bool,
+    /// The analysis' median bend of the baseline under a pulse, in pulse
+    /// heights ([`PassageAnalysis::baseline_bend`]).
+    #[serde(default)]
+    pub baseline_bend: Option<f64>,
     /// The baseline drift's measure (its range over the median pulse) when reported.
     pub baseline_drift_measure: Option<f64>,
     /// The AC coupling's time constant found (and undone), s.
@@ -126,6 +166,8 @@ impl ConditionsReported {
             inverted_pulses: has(ConditionKind::InvertedPulses),
             missed_passages: has(ConditionKind::MissedPassages),
             period_mismatch: has(ConditionKind::PeriodMismatch),
+            widths_withheld: has(ConditionKind::WidthsWithheld),
+            baseline_bend: a.baseline_bend,
             baseline_drift_measure: a
                 .conditions
                 .iter()
@@ -190,12 +232,26 @@ pub struct PassageScore {
     pub too_short: bool,
     /// Analysis' mean `τ_p`, s.
     pub width_s: Option<f64>,
-    /// True FWHM of the recorded pulses (module docs), s.
+    /// The analysis succeeded but reported no width (module docs).
+    #[serde(default)]
+    pub width_withheld: bool,
+    /// The headline width truth (module docs), s: the width at half
+    /// prominence of the pulses as recorded, or one pulse's FWHM when
+    /// `width_truth` says so.
     pub true_width_s: f64,
+    /// Which truth `true_width_s` is.
+    #[serde(default)]
+    pub width_truth: WidthTruth,
+    /// True FWHM of one recorded pulse (module docs), s.
+    #[serde(default)]
+    pub fwhm_width_s: f64,
     /// The truth's stated FWHM, `width_ratio × τ_c`, s.
     pub stated_width_s: f64,
-    /// `width_s / true_width_s − 1`.
+    /// `width_s / true_width_s − 1` (the headline).
     pub width_error: Option<f64>,
+    /// `width_s / fwhm_width_s − 1`.
+    #[serde(default)]
+    pub width_error_fwhm: Option<f64>,
     /// `width_s / stated_width_s − 1`.
     pub width_error_stated: Option<f64>,
     /// Passages whose width entered the mean.
@@ -237,35 +293,44 @@ pub fn score(bench: &Bench, seed: u64) -> Result<PassageScore> {
 }
 
 /// [`score`], and beside it the width at half prominence of the same
-/// bench's pulses over their FWHM: [`recorded_half_prominence_width_s`] on
-/// the bench simulated again without noise, drift, AC coupling or
-/// interference (same seed, same pulses), over that record's true FWHM.
-/// Below 1 where the tails of neighbouring pulses overlap (the signal never
-/// falls back to the dark level between them); `None` with fewer than three
-/// clean pulses.
+/// bench's pulses over their FWHM ([`half_prominence_ratio`]); `None` with
+/// fewer than three clean pulses. Kept for the bench's `--recorded-width`
+/// lines: the score's `true_width_s` is that width already.
 ///
 /// # Errors
 /// As [`score`].
 pub fn score_and_recorded_width(bench: &Bench, seed: u64) -> Result<(PassageScore, Option<f64>)> {
     let s = score(bench, seed)?;
-    let mut clean = bench.clone();
-    let o = &mut clean.optical;
+    let ratio = (s.width_truth == WidthTruth::HalfProminence && s.fwhm_width_s > 0.0)
+        .then(|| s.true_width_s / s.fwhm_width_s);
+    Ok((s, ratio))
+}
+
+/// The width at half prominence of `sim`'s pulses as recorded over their
+/// FWHM: [`recorded_half_prominence_width_s`] on `sim`'s settings simulated
+/// again without noise, drift, AC coupling or interference (same seed, same
+/// pulses), over that record's mean one-pulse FWHM (its required passages).
+/// Below 1 where the tails of neighbouring pulses overlap (the signal never
+/// falls back to the dark level between them); `None` with fewer than three
+/// clean pulses, or when the settings cannot be simulated again.
+pub fn half_prominence_ratio(sim: &Simulation) -> Option<f64> {
+    let mut settings = sim.truth.settings.clone();
+    let o = &mut settings.optical;
     o.noise_v = 1e-5 * o.pulse_amplitude_v;
     o.ac_coupling = false;
     o.baseline_drift_v = 0.0;
     o.interference_drift = false;
-    let sim = simulate(&clean.settings(&clean.bearing(0, false), seed))?;
-    let truths = true_passages(&sim.truth);
+    let clean = simulate(&settings).ok()?;
+    let truths = true_passages(&clean.truth);
     let widths: Vec<f64> = truths
         .iter()
-        .zip(&half_maximum_times(&sim, &truths))
+        .zip(&half_maximum_times(&clean, &truths))
         .filter(|(p, _)| p.required)
         .filter_map(|(_, h)| h.map(|(l, r)| r - l))
         .collect();
-    let ratio = (!widths.is_empty())
+    (!widths.is_empty())
         .then(|| widths.iter().sum::<f64>() / widths.len() as f64)
-        .and_then(|fwhm| Some(recorded_half_prominence_width_s(&sim)? / fwhm));
-    Ok((s, ratio))
+        .and_then(|fwhm| Some(recorded_half_prominence_width_s(&clean)? / fwhm))
 }
 
 /// One true passage and how it is scored.
@@ -396,10 +461,14 @@ pub fn score_with(
         .filter(|(p, _)| p.required)
         .filter_map(|(_, h)| h.map(|(l, r)| r - l))
         .collect();
-    let true_width_s = if widths.is_empty() {
+    let fwhm_width_s = if widths.is_empty() {
         fwhm
     } else {
         widths.iter().sum::<f64>() / widths.len() as f64
+    };
+    let (true_width_s, width_truth) = match half_prominence_ratio(sim) {
+        Some(r) => (fwhm_width_s * r, WidthTruth::HalfProminence),
+        None => (fwhm_width_s, WidthTruth::OnePulseFwhm),
     };
     let true_inside = truths.iter().filter(|p| p.inside).count();
     let a = match detect(&sim.recording) {
@@ -419,9 +488,13 @@ pub fn score_with(
                 count_exact: required == 0,
                 too_short: required < 2,
                 width_s: None,
+                width_withheld: false,
                 true_width_s,
+                width_truth,
+                fwhm_width_s,
                 stated_width_s: fwhm,
                 width_error: None,
+                width_error_fwhm: None,
                 width_error_stated: None,
                 widths_used: None,
                 width_lower_bound: false,
@@ -490,9 +563,13 @@ pub fn score_with(
         count_exact: missed == 0 && spurious == 0,
         too_short: required < 2,
         width_s: width,
+        width_withheld: width.is_none(),
         true_width_s,
+        width_truth,
+        fwhm_width_s,
         stated_width_s: fwhm,
         width_error: width.map(|w| w / true_width_s - 1.0),
+        width_error_fwhm: width.map(|w| w / fwhm_width_s - 1.0),
         width_error_stated: width.map(|w| w / fwhm - 1.0),
         widths_used: Some(a.tau_p_s.n),
         width_lower_bound: a
