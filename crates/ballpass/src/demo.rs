@@ -39,7 +39,6 @@ use crate::model::{
 use crate::recording::Recording;
 use crate::report::analysis::AnalysisLinks;
 use crate::report::campaign::{diagnosis_parts, friction_examples, sweep_parts};
-use crate::report::kinds::fmt_pm;
 use crate::report::{
     self, Block, Level, Report, ReportFiles, ReportOptions, Section, Verdict as Badge,
 };
@@ -469,7 +468,7 @@ fn headlines(
     h.push(Finding::info(format!(
         "{} ball passages in the first record, τp/τc = {} (mean ± standard deviation over the passages; thesis 0.155)",
         p.count,
-        fmt_pm(p.tau_p_over_tau_c.mean, p.tau_p_over_tau_c.std, 4)
+        report::passage::width_pm(&p.tau_p_over_tau_c, 4)
     )));
     h.extend(s.findings.iter().cloned().map(Finding::info));
     let bad: Vec<&str> = d

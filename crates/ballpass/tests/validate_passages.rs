@@ -277,3 +277,38 @@ fn widths_under_a_drift_as_fast_as_the_pulses_are_withheld() {
         assert_eq!(s.widths_used, Some(0), "bench {seed}");
     }
 }
+
+/// A record whose widths are withheld says so in its report, in words:
+/// no "NaN" for τp, τp/τc or σ, and no mean line drawn at NaN (bench
+/// 14 000 367 above). The campaign's per-record τp of such a record is
+/// empty, not NaN (checked in the library's `campaign::run`).
+#[test]
+fn a_report_of_withheld_widths_says_withheld_not_nan() {
+    use ballpass::analysis::passage::{detect_passages, PassageSettings};
+    use ballpass::report::passage::passages_report;
+    use ballpass::report::render_html;
+    use ballpass::sim::simulate;
+    let seed = 14_000_367;
+    let bench = Domain::default().draw(seed);
+    let sim = simulate(&bench.settings(&bench.bearing(0, false), seed)).expect("simulated");
+    let settings = PassageSettings {
+        geometry: Some(bench.geometry),
+        ..PassageSettings::default()
+    };
+    let a = detect_passages(&sim.recording, &settings).expect("passages found");
+    assert!(a.tau_p_s.mean.is_nan(), "widths withheld: {:?}", a.tau_p_s);
+    let report = passages_report(
+        std::slice::from_ref(&sim.recording),
+        std::slice::from_ref(&a),
+        &[],
+        &settings,
+        "sr25w",
+    )
+    .expect("report built");
+    let html = render_html(&report, false).expect("rendered").html;
+    assert!(
+        html.contains("withheld (see the conditions)"),
+        "no 'withheld' in the report"
+    );
+    assert!(!html.contains("NaN"), "NaN in the report");
+}

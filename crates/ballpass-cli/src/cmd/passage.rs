@@ -201,11 +201,19 @@ fn summarize(out: &mut impl Write, r: &PassageAnalysis) -> Result<()> {
         "  {} passages ({} inverted) in {:.2} s; {vel}; noise {:.3e} V, threshold {:.3e} V",
         r.count, r.count_inverted, r.duration_s, r.noise_v, r.prominence_threshold_v
     )?;
-    writeln!(
-        out,
-        "  tau_c = {:.5} ± {:.5} s, tau_p = {:.5} ± {:.5} s (width at half prominence), tau_p/tau_c = {:.4} ± {:.4} (thesis 0.155)",
-        r.tau_c_s.mean, r.tau_c_s.std, r.tau_p_s.mean, r.tau_p_s.std, r.tau_p_over_tau_c.mean, r.tau_p_over_tau_c.std
-    )?;
+    if r.tau_p_s.mean.is_finite() {
+        writeln!(
+            out,
+            "  tau_c = {:.5} ± {:.5} s, tau_p = {:.5} ± {:.5} s (width at half prominence), tau_p/tau_c = {:.4} ± {:.4} (thesis 0.155)",
+            r.tau_c_s.mean, r.tau_c_s.std, r.tau_p_s.mean, r.tau_p_s.std, r.tau_p_over_tau_c.mean, r.tau_p_over_tau_c.std
+        )?;
+    } else {
+        writeln!(
+            out,
+            "  tau_c = {:.5} ± {:.5} s, tau_p withheld (see the conditions)",
+            r.tau_c_s.mean, r.tau_c_s.std
+        )?;
+    }
     match (r.f_c_predicted_hz, r.f_c_relative_error) {
         (Some(p), Some(e)) => writeln!(
             out,

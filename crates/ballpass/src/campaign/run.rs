@@ -218,9 +218,19 @@ pub fn process_recording(
             .filter(|f| f.is_finite()),
         tau_c_s: passages.as_ref().map(|p| p.tau_c_s.mean),
         tau_c_std_s: passages.as_ref().map(|p| p.tau_c_s.std),
-        tau_p_s: passages.as_ref().map(|p| p.tau_p_s.mean),
-        tau_p_std_s: passages.as_ref().map(|p| p.tau_p_s.std),
-        tau_ratio: passages.as_ref().map(|p| p.tau_p_over_tau_c.mean),
+        // Widths the passage analysis withheld (NaN) are left empty.
+        tau_p_s: passages
+            .as_ref()
+            .map(|p| p.tau_p_s.mean)
+            .filter(|t| t.is_finite()),
+        tau_p_std_s: passages
+            .as_ref()
+            .map(|p| p.tau_p_s.std)
+            .filter(|t| t.is_finite()),
+        tau_ratio: passages
+            .as_ref()
+            .map(|p| p.tau_p_over_tau_c.mean)
+            .filter(|t| t.is_finite()),
         velocity_error_std_um_s: ve.map(|s| s.std_um_s),
         velocity_error_lowpassed_std_um_s: ve.map(|s| s.lowpassed_std_um_s),
         phase_friction_optical_deg: phase("friction__optical"),

@@ -220,18 +220,19 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
             )
             .with_style(SeriesStyle::LinePoints),
         )
-        .with_hlines([Marker::black_dashed(
-            a.tau_p_s.mean,
-            format!("mean {}", fmt_sig(a.tau_p_s.mean, 4)),
-        )]);
+        .with_hlines(a.tau_p_s.mean.is_finite().then(|| {
+            Marker::black_dashed(
+                a.tau_p_s.mean,
+                format!("mean {}", fmt_sig(a.tau_p_s.mean, 4)),
+            )
+        }));
     let mut fig = Figure::new(
         format!("widths_{k}"),
         format!("{name}: period τc and width τp per passage"),
     )
     .with_caption(format!(
-        "τc: time to the next passage; τp: width at half prominence. τp/τc = {} ± {} (thesis 0.155).",
-        fmt_sig(a.tau_p_over_tau_c.mean, 4),
-        fmt_sig(a.tau_p_over_tau_c.std, 2)
+        "τc: time to the next passage; τp: width at half prominence. τp/τc = {} (thesis 0.155).",
+        width_pm(&a.tau_p_over_tau_c, 4)
     ))
     .with_panel(tc)
     .with_panel(tp);
@@ -245,6 +246,27 @@ pub fn passage_figures(k: usize, rec: &Recording, a: &PassageAnalysis) -> Result
 
 fn pm(m: &crate::stats::MeanStd, sig: usize) -> String {
     fmt_pm(m.mean, m.std, sig)
+}
+
+/// A width statistic (τp, its ratio to τc, σ) as `mean ± std`, or the
+/// word "withheld" where the record gives no width (the passage analysis
+/// withholds widths it cannot measure right, and says why in its
+/// conditions).
+pub fn width_pm(m: &crate::stats::MeanStd, sig: usize) -> String {
+    if m.mean.is_finite() {
+        fmt_pm(m.mean, m.std, sig)
+    } else {
+        "withheld (see the conditions)".into()
+    }
+}
+
+/// [`width_pm`] of a width in seconds, with its unit where there is one.
+fn width_s(m: &crate::stats::MeanStd, sig: usize) -> String {
+    if m.mean.is_finite() {
+        format!("{} s", fmt_pm(m.mean, m.std, sig))
+    } else {
+        width_pm(m, sig)
+    }
 }
 
 /// One record's sections with its figures placed in them: the passages
@@ -330,13 +352,13 @@ pub fn passage_sections(a: &PassageAnalysis) -> Vec<Section> {
         ("τc".into(), format!("{} s", pm(&a.tau_c_s, 5))),
         (
             "τp (width at half prominence)".into(),
-            format!("{} s", pm(&a.tau_p_s, 4)),
+            width_s(&a.tau_p_s, 4),
         ),
         (
             "τp/τc".into(),
-            format!("{} (thesis 0.155)", pm(&a.tau_p_over_tau_c, 4)),
+            format!("{} (thesis 0.155)", width_pm(&a.tau_p_over_tau_c, 4)),
         ),
-        ("Gaussian sigma".into(), format!("{} s", pm(&a.sigma_s, 4))),
+        ("Gaussian sigma".into(), width_s(&a.sigma_s, 4)),
         ("amplitude".into(), format!("{} V", pm(&a.amplitude_v, 4))),
     ];
     if let Some(s) = &a.spacing {
