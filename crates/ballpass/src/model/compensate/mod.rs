@@ -346,7 +346,13 @@ pub fn compensate(
             ),
         );
         c.load_cell.determined = false;
-        c.warnings.insert(0, c.load_cell.note.clone());
+        // After the stall warning (which comes first, or after a refusal).
+        let at = c
+            .warnings
+            .iter()
+            .position(|w| w.contains("nearly stalls"))
+            .map_or(0, |i| i + 1);
+        c.warnings.insert(at, c.load_cell.note.clone());
         return Ok(c);
     }
     let scanned = tau::scan(&a, recs, &stage, true, &tau::candidates());
