@@ -37,6 +37,17 @@
 //! compiled to 66.8 us here (the compiler does not keep 12 lanes in
 //! registers), so it was not kept.
 //!
+//! `floor_fill_480kB` and `floor_scale_240kB` (session 15) are the floors
+//! of the two kernels that mostly write their output: a new `Vec` of the
+//! lags' size (59 999 i64) filled with a constant, and one of the
+//! gradient's size (30 000 f64) holding each sample of `x` times a
+//! constant. Best of 300-500, load 7-11: correlation_lags 4.1 us against
+//! 8.2 us for the plain fill (the range is already written as fast as this
+//! core stores to L2); gradient 6.5-6.8 us against 4.1 us for the
+//! read-scale-write pass (the stencil and its finiteness check cost the
+//! rest; computing the interior by that plain pass and checking it after
+//! measured 7.8-8.0 us, slower).
+//!
 //! Of correlate's 400 us, the three FFTs of 31 104 complex points (the real
 //! transforms of 62 208) take ~290 us (96 us each; RustFFT was no faster
 //! at 30 000, 30 720, 31 250, 32 000 or 32 768 points, measured), so 5x
@@ -220,6 +231,23 @@ fn main() {
             "gradient",
             Box::new(|| {
                 black_box(dsp::gradient(&x, dsp::Spacing::Uniform(1.0 / fs)).expect("ok"));
+            }),
+        ),
+        // Floors of the two kernels bound by writing their output: a new
+        // buffer of the same size filled by the plainest loop (the lags'
+        // 59 999 i64, 480 kB: a constant; the gradient's 30 000 f64,
+        // 240 kB: each sample of `x` read and scaled once).
+        (
+            "floor_fill_480kB",
+            Box::new(|| {
+                black_box(vec![black_box(7i64); 2 * n - 1]);
+            }),
+        ),
+        (
+            "floor_scale_240kB",
+            Box::new(|| {
+                let s = black_box(2.0);
+                black_box(x.iter().map(|v| v * s).collect::<Vec<f64>>());
             }),
         ),
     ];
