@@ -217,11 +217,11 @@ pub const BENCH_DC_SHARE: f64 = 0.2;
 /// verdicts issue's "0.3 s to none".
 pub const BENCH_TAU_RANGE_S: (f64, f64) = (0.3, 100.0);
 
-/// [`bench`] with the load cell drawn over the verdicts' domain (session
+/// [`bench()`] with the load cell drawn over the verdicts' domain (session
 /// 15; the validation's benches from then on): DC coupled
 /// ([`BENCH_DC_SHARE`]) or discharging with τ log-uniform over
 /// [`BENCH_TAU_RANGE_S`]. The load cell is drawn from its own stream, so
-/// the rest of the bench (velocity, condition, seed) is [`bench`]'s draw.
+/// the rest of the bench (velocity, condition, seed) is [`bench()`]'s draw.
 pub fn bench_load_cell(seed: u64, i: u64) -> SimSettings {
     let mut s = bench(seed, i);
     let mut r = crate::sim::rng::Rng::stream(crate::sim::rng::derive_seed(seed, i), 78);

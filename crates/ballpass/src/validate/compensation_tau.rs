@@ -23,7 +23,7 @@ pub struct TauScan {
     pub std_over_v: f64,
     /// The τ the rule chose (`None`: the friction as recorded).
     pub chosen_tau_s: Option<f64>,
-    /// The friction as recorded, then each of [`TAU_GRID_S`].
+    /// The friction as recorded, then each of `TAU_GRID_S`.
     pub candidates: Vec<TauCandidate>,
 }
 

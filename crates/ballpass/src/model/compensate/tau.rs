@@ -13,8 +13,8 @@
 //!
 //! When τ is not given, each candidate `τ` of [`TAU_GRID_S`] (and the
 //! friction as recorded, a DC-coupled sensor) is tried: the records'
-//! friction restored with it ([`super::travel::friction_of`]), its level
-//! fitted as the replay fits it ([`super::replay::fit_levels`]), and
+//! friction restored with it (`super::travel::friction_of`), its level
+//! fitted as the replay fits it (`super::replay::fit_levels`), and
 //! replayed through the stage without a table. The replay then stands for
 //! the stage moving under that friction; its synchronous velocity error
 //! is compared with the records' (the encoder's, which the load cell does
