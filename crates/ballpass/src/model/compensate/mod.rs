@@ -160,6 +160,10 @@ const STALL_WORDS: &str =
      harmful); the f_c component after is given with an interval that held 36 of 48. Try it \
      with care (scaled down first)";
 
+/// The words of the stall warning that the near-stall τ warning is placed
+/// after ([`compensate`]).
+const STALL_PHRASE: &str = "the stage nearly stalls at the friction peaks";
+
 /// What it says above [`SEVERE_STALL_FRACTION`].
 const SEVERE_STALL_WORDS: &str =
     "above 57 % the stage sticks in most periods: on fresh simulated benches the table met both \
@@ -350,7 +354,7 @@ pub fn compensate(
         let at = c
             .warnings
             .iter()
-            .position(|w| w.contains("nearly stalls"))
+            .position(|w| w.contains(STALL_PHRASE))
             .map_or(0, |i| i + 1);
         c.warnings.insert(at, c.load_cell.note.clone());
         return Ok(c);
@@ -375,11 +379,7 @@ pub fn compensate(
     };
     let a2 = analyze(recs, pred, &again)?;
     let mut c = from_analysis(&a2, recs, gains)?;
-    let analysis_tau_s = a
-        .load_cell
-        .first()
-        .and_then(|d| d.fit.as_ref().filter(|f| f.identified).map(|f| f.tau_s));
-    c.load_cell = tau::LoadCellUsed::chosen(tau_s, true, analysis_tau_s, sc.candidates);
+    c.load_cell = tau::LoadCellUsed::chosen(tau_s, true, tau::analysis_tau_s(&a), sc.candidates);
     Ok(c)
 }
 
@@ -605,7 +605,7 @@ pub(crate) fn designed(
         };
         warnings.push(format!(
             "the velocity error's std is {:.0} % of the velocity ({std_before:.0} µm/s at {vel} mm/s): \
-             the stage nearly stalls at the friction peaks; {words}",
+             {STALL_PHRASE}; {words}",
             100.0 * stall,
         ));
     }

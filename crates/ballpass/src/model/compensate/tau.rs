@@ -32,6 +32,7 @@
 //! analysis decided, and a warning says that τ is not decided by the
 //! records and should be given.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{replay, travel};
@@ -89,48 +90,17 @@ pub(crate) fn scan(
         })
         .ok_or("no synchronous velocity error")?;
     let m1 = crate::analysis::sync::coefficient(&measured, 1);
+    // The candidates are independent: tried side by side, then taken in
+    // order (the first candidate's error is the one returned).
+    let tried: Vec<Tried> = taus
+        .par_iter()
+        .map(|&tau| try_one(tau, &keys0, recs, a, stage, &at, refined, &measured, m1))
+        .collect();
     let mut out = Vec::with_capacity(taus.len());
     let mut replayed_v1 = Vec::with_capacity(taus.len());
-    for &tau in taus {
-        let mut keys = keys0.clone();
-        for (k, r) in keys.iter_mut().zip(recs) {
-            k.friction_n = travel::friction_of(r, a, correction(tau), refined)?;
-        }
-        if refined {
-            replay::fit_levels(
-                &mut keys,
-                stage,
-                at.pitch_mm,
-                at.velocity_mm_s,
-                &at.settings,
-            )?;
-        }
-        let bare = replay::replay(
-            &keys,
-            stage,
-            None,
-            at.pitch_mm,
-            at.velocity_mm_s,
-            &at.settings,
-        )?;
-        let r1 = crate::analysis::sync::coefficient(&bare.waveform_um_s, 1);
-        let waveform_miss_um_s = if bare.waveform_um_s.len() == measured.len() {
-            (bare
-                .waveform_um_s
-                .iter()
-                .zip(&measured)
-                .map(|(r, m)| (r - m).powi(2))
-                .sum::<f64>()
-                / measured.len() as f64)
-                .sqrt()
-        } else {
-            f64::NAN
-        };
-        out.push(TauCandidate {
-            tau_s: tau,
-            f_c_miss_um_s: 2.0 * (m1.0 - r1.0).hypot(m1.1 - r1.1),
-            waveform_miss_um_s,
-        });
+    for t in tried {
+        let (c, r1) = t?;
+        out.push(c);
         replayed_v1.push(r1);
     }
     Ok(Scan {
@@ -138,6 +108,68 @@ pub(crate) fn scan(
         replayed_v1,
         measured_v1: m1,
     })
+}
+
+/// One candidate's agreement and its replayed fundamental, or why it
+/// could not be replayed.
+type Tried = Result<(TauCandidate, (f64, f64)), String>;
+
+/// One candidate `tau` of [`scan`]: its agreement and its replayed
+/// fundamental.
+#[allow(clippy::too_many_arguments)]
+fn try_one(
+    tau: Option<f64>,
+    keys0: &[travel::RecordKeys],
+    recs: &[Recording],
+    a: &Analysis,
+    stage: &PdLoop,
+    at: &replay::DesignAt,
+    refined: bool,
+    measured: &[f64],
+    m1: (f64, f64),
+) -> Tried {
+    let mut keys = keys0.to_vec();
+    for (k, r) in keys.iter_mut().zip(recs) {
+        k.friction_n = travel::friction_of(r, a, correction(tau), refined)?;
+    }
+    if refined {
+        replay::fit_levels(
+            &mut keys,
+            stage,
+            at.pitch_mm,
+            at.velocity_mm_s,
+            &at.settings,
+        )?;
+    }
+    let bare = replay::replay(
+        &keys,
+        stage,
+        None,
+        at.pitch_mm,
+        at.velocity_mm_s,
+        &at.settings,
+    )?;
+    let r1 = crate::analysis::sync::coefficient(&bare.waveform_um_s, 1);
+    let waveform_miss_um_s = if bare.waveform_um_s.len() == measured.len() {
+        (bare
+            .waveform_um_s
+            .iter()
+            .zip(measured)
+            .map(|(r, m)| (r - m).powi(2))
+            .sum::<f64>()
+            / measured.len() as f64)
+            .sqrt()
+    } else {
+        f64::NAN
+    };
+    Ok((
+        TauCandidate {
+            tau_s: tau,
+            f_c_miss_um_s: 2.0 * (m1.0 - r1.0).hypot(m1.1 - r1.1),
+            waveform_miss_um_s,
+        },
+        r1,
+    ))
 }
 
 /// The candidates' agreement, and the fundamentals behind it.
@@ -194,8 +226,7 @@ impl LoadCellUsed {
         Self {
             tau_s,
             source,
-            analysis_tau_s: first
-                .and_then(|d| d.fit.as_ref().filter(|f| f.identified).map(|f| f.tau_s)),
+            analysis_tau_s: analysis_tau_s(a),
             candidates: Vec::new(),
             determined: true,
             note: format!(
@@ -204,6 +235,14 @@ impl LoadCellUsed {
             ),
         }
     }
+}
+
+/// The τ the analysis `a` fitted from the records' decay (first record),
+/// s; `None` when it identified none.
+pub(crate) fn analysis_tau_s(a: &Analysis) -> Option<f64> {
+    a.load_cell
+        .first()
+        .and_then(|d| d.fit.as_ref().filter(|f| f.identified).map(|f| f.tau_s))
 }
 
 /// Candidates in the order tried: the friction as recorded, then
