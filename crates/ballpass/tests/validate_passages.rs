@@ -280,8 +280,7 @@ fn widths_under_a_drift_as_fast_as_the_pulses_are_withheld() {
 
 /// A record whose widths are withheld says so in its report, in words:
 /// no "NaN" for τp, τp/τc or σ, and no mean line drawn at NaN (bench
-/// 14 000 367 above). The campaign's per-record τp of such a record is
-/// empty, not NaN (checked in the library's `campaign::run`).
+/// 14 000 367 above).
 #[test]
 fn a_report_of_withheld_widths_says_withheld_not_nan() {
     use ballpass::analysis::passage::{detect_passages, PassageSettings};
