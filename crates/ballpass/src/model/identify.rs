@@ -84,7 +84,10 @@
 //!
 //! `(m, K K_D, K K_P, τ_d, s)` follow by a fixed-point solve. The fit is
 //! repeated over the two decades around the resonance found, with 95 %
-//! intervals by the delta method (numerical gradients). The stage is **identified**
+//! intervals by the delta method (numerical gradients). The intervals of
+//! f_n and ζ are then checked against the data by a jackknife over groups
+//! of Welch segments, and widened to it where the data spread more than
+//! the covariance says (module `jackknife`). The stage is **identified**
 //! when the 99.9 % intervals (the same standard errors × 3.29) are within
 //! ±5 % (f_n) and ±20 % (ζ), and the
 //! spectral resolution is fine enough for the resonance (at most a quarter
@@ -92,10 +95,13 @@
 //! identifiable" with the reason (too little coherent band around the
 //! resonance, most often because the friction does not excite it).
 
+mod jackknife;
 mod joint;
 mod model;
 
 use ballpass_dsp::{Complex64, Welch, WelchSettings};
+pub(crate) use jackknife::GroupAccumulator;
+pub use jackknife::{SegmentGroup, GROUPS};
 use joint::{joint_fit, JointFit};
 use model::{restoration, z_chain, Stage, NOISE, N_PARAMS, N_STAGE};
 use serde::Serialize;
@@ -127,6 +133,11 @@ pub struct StageSpectra {
     /// Pooled records with different ones keep the mean of `1/τ` (the
     /// restoration's deviation from 1 is linear in it).
     pub restored_tau_s: Option<f64>,
+    /// The same spectra in [`GROUPS`] parts (segment `j` of each record
+    /// into part `j mod GROUPS`; bins up to a quarter of the rate), for the
+    /// jackknife that checks the fit's intervals (module `jackknife`);
+    /// empty: no check.
+    pub groups: Vec<SegmentGroup>,
 }
 
 /// Segment length of the identification spectra for a record of `n`
@@ -165,7 +176,11 @@ impl StageSpectra {
         let set = welch
             .spectra(&[&f, &v], &[(0, 1)], fs_hz)
             .map_err(|e| Error::dsp("stage identification spectra", e))?;
-        Ok(StageSpectra::of_set(set, fs_hz, nperseg))
+        let mut groups = GroupAccumulator::new(f.len(), fs_hz, nperseg)?;
+        groups.push(&f, &v)?;
+        let mut out = StageSpectra::of_set(set, fs_hz, nperseg);
+        out.groups = groups.finish();
+        Ok(out)
     }
 
     /// The Welch estimate of [`StageSpectra::of`]: Hann segments of
@@ -195,6 +210,7 @@ impl StageSpectra {
             records: 1,
             n_d: nu / 2.0,
             restored_tau_s: None,
+            groups: Vec::new(),
         }
     }
 
@@ -274,6 +290,7 @@ impl StageSpectra {
         for (a, b) in self.p_fv.iter_mut().zip(&other.p_fv) {
             *a += b;
         }
+        jackknife::add_groups(&mut self.groups, &other.groups);
         let rate = |s: &StageSpectra| s.restored_tau_s.map_or(0.0, |t| 1.0 / t);
         let (a, b) = (self.records as f64, other.records as f64);
         let mean_rate = (rate(self) * a + rate(other) * b) / (a + b);
@@ -326,12 +343,52 @@ pub struct StageIdentification {
     pub reduced_chi2: Option<f64>,
     /// Whether the intervals are tight enough (module docs).
     pub identified: bool,
+    /// Groups of segments the intervals were checked with by the
+    /// jackknife (module docs; 0: not checked, the fit's covariance alone).
+    pub jackknife_groups: usize,
     /// In words, with the reason when not identified.
     pub text: String,
 }
 
 /// Fits the PD stage to pooled spectra (module docs).
 pub fn identify(s: &StageSpectra) -> StageIdentification {
+    let mut out = identify_once(s);
+    let values = |o: &StageIdentification| -> Option<[f64; 2]> {
+        Some([o.natural_frequency_hz?.value, o.damping_ratio?.value])
+    };
+    let Some(full) = values(&out) else {
+        return out;
+    };
+    // Each group left out goes through the whole identification (band,
+    // bins, fit), as the data would with that much less of them.
+    let Some(se) = jackknife::standard_errors(s, full, |sp| values(&identify_once(sp))) else {
+        return out;
+    };
+    out.jackknife_groups = s.groups.iter().filter(|g| g.segments > 0).count();
+    // The jackknife's variance replaces the stated one where it is larger
+    // at the 1 % level (χ² with one degree of freedom fewer than groups):
+    // on a well-specified fit the two agree and the stated one, less
+    // noisy, is kept.
+    let dof = (out.jackknife_groups - 1) as f64;
+    let larger = crate::stats::chi2_ppf(1.0 - JACKKNIFE_ALPHA, dof) / dof;
+    for (e, se) in [&mut out.natural_frequency_hz, &mut out.damping_ratio]
+        .into_iter()
+        .zip(se)
+    {
+        if let Some(e) = e {
+            let stated = e.ci95 / Z95;
+            if se * se > larger * stated * stated {
+                e.ci95 = Z95 * se;
+            }
+        }
+    }
+    decide(&mut out);
+    adequacy(&mut out);
+    out
+}
+
+/// [`identify`] without the jackknife check of the intervals.
+fn identify_once(s: &StageSpectra) -> StageIdentification {
     // Pass 1 over every coherent bin below a quarter of the rate; then the
     // fit is repeated over two decades centred (geometrically) on the
     // resonance found, where the PD model is meant to hold (far above it the
@@ -349,9 +406,14 @@ pub fn identify(s: &StageSpectra) -> StageIdentification {
         band = next;
         out = fit_band(s, band);
     }
-    // Model adequacy: the PD model must explain the coherent response to
-    // within its noise (reduced χ² at most 3, i.e. residuals at most ~1.7×
-    // their standard error); otherwise its parameters are not the stage's.
+    adequacy(&mut out);
+    out
+}
+
+/// Model adequacy: the PD model must explain the coherent response to
+/// within its noise (reduced χ² at most 3, i.e. residuals at most ~1.7×
+/// their standard error); otherwise its parameters are not the stage's.
+fn adequacy(out: &mut StageIdentification) {
     if out.identified && out.reduced_chi2.is_some_and(|r| r > MAX_REDUCED_CHI2) {
         out.identified = false;
         out.text = format!(
@@ -362,12 +424,15 @@ pub fn identify(s: &StageSpectra) -> StageIdentification {
             out.damping_ratio.map_or(f64::NAN, |e| e.value),
         );
     }
-    out
 }
 
 /// Largest reduced χ² with which the PD model is taken to describe the
 /// stage (module docs).
 pub const MAX_REDUCED_CHI2: f64 = 3.0;
+
+/// Level of the test that replaces a stated interval by the jackknife's
+/// (module `jackknife`): 1 %.
+const JACKKNIFE_ALPHA: f64 = 0.01;
 
 /// The normal quantile of the stated (95 %) intervals (the conventional
 /// 1.96).
@@ -496,6 +561,7 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         peak_gain_mm_s_per_n: None,
         reduced_chi2: None,
         identified: false,
+        jackknife_groups: 0,
         text: String::new(),
     };
     let nb = bins.len();
@@ -644,6 +710,22 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
     out.natural_frequency_hz = Some(fn_e);
     out.damping_ratio = Some(z_e);
     out.peak_gain_mm_s_per_n = Some(est(peak, var_of(&|x| 1e3 / x.c)));
+    decide(&mut out);
+    out
+}
+
+/// Whether the fitted stage is claimed identified, and the words: from the
+/// estimates and intervals in `out` (module docs).
+fn decide(out: &mut StageIdentification) {
+    let (Some(fn_e), Some(z_e), Some(peak)) = (
+        out.natural_frequency_hz,
+        out.damping_ratio,
+        out.peak_gain_mm_s_per_n,
+    ) else {
+        return;
+    };
+    let (fnat, zeta, peak) = (fn_e.value, z_e.value, peak.value);
+    let (nb, band, df) = (out.bins_used, out.band_hz, out.resolution_hz);
     // Claimed only where the 99.9 % intervals fit the bars: with the 95 %
     // ones, about one identified stage in 200 still fell outside them.
     let claim = Z_CLAIM / Z95;
@@ -662,6 +744,18 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
         format!(
             "stage not identifiable: the resonance (f_n ≈ {fnat:.3} Hz, ζ ≈ {zeta:.3}) is narrower than the {df:.3} Hz resolution allows; longer records would resolve it"
         )
+    } else if !(fn_e.ci95.is_finite() && z_e.ci95.is_finite()) {
+        let why = if out.jackknife_groups > 0 {
+            format!(
+                "the fit fails when one of the {} groups of the data's segments is left out",
+                out.jackknife_groups
+            )
+        } else {
+            "the fit's covariance is singular".to_string()
+        };
+        format!(
+            "stage not identifiable: {why}, so its intervals cannot be established (f_n ≈ {fnat:.3} Hz, ζ ≈ {zeta:.3})"
+        )
     } else {
         format!(
             "stage not identifiable: f_n = {fnat:.3} ± {:.3} Hz, ζ = {zeta:.3} ± {:.3} (99.9 %) are not within ±5 % and ±20 %; the coherent band {:.2}–{:.2} Hz does not pin the resonance down",
@@ -671,7 +765,6 @@ fn fit_band(s: &StageSpectra, band_limits: [f64; 2]) -> StageIdentification {
             band.map_or(0.0, |b| b[1])
         )
     };
-    out
 }
 
 #[cfg(test)]

@@ -129,3 +129,38 @@ fn intervals_match_a_monte_carlo_spread() {
         );
     }
 }
+
+/// The jackknife over groups of one segment each is the classical one:
+/// for the mean of the groups' values its variance is the sample
+/// variance over the group count.
+#[test]
+fn the_jackknife_of_a_mean_is_the_classical_standard_error() {
+    let xs = [3.0, 5.0, 4.0, 9.0, 1.0, 6.0, 2.0, 7.0];
+    let g = xs.len();
+    let nb = 4;
+    let groups: Vec<SegmentGroup> = xs
+        .iter()
+        .map(|&x| SegmentGroup {
+            p_ff: vec![x / g as f64; nb],
+            p_vv: vec![1.0; nb],
+            p_fv: vec![Complex64::new(0.0, 0.0); nb],
+            segments: 1,
+        })
+        .collect();
+    let mean = xs.iter().sum::<f64>() / g as f64;
+    let s = StageSpectra {
+        fs_hz: 100.0,
+        freq_hz: (0..nb).map(|i| i as f64).collect(),
+        p_ff: vec![mean; nb],
+        p_vv: vec![g as f64; nb],
+        p_fv: vec![Complex64::new(0.0, 0.0); nb],
+        records: 1,
+        n_d: g as f64,
+        restored_tau_s: None,
+        groups,
+    };
+    let se = super::jackknife::standard_errors(&s, [mean], |sp| Some([sp.p_ff[2]])).unwrap();
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (g - 1) as f64;
+    let want = (var / g as f64).sqrt();
+    assert!((se[0] - want).abs() <= 1e-12 * want, "{} vs {want}", se[0]);
+}

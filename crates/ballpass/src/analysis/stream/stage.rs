@@ -17,7 +17,9 @@ use super::chain::{Output, Trend, TrendSums};
 use crate::analysis::load_cell::DcRestoration;
 use crate::analysis::{Detrend, Signal};
 use crate::error::{Error, Result};
-use crate::model::identify::{identify, nperseg_for, StageIdentification, StageSpectra};
+use crate::model::identify::{
+    identify, nperseg_for, GroupAccumulator, StageIdentification, StageSpectra,
+};
 
 /// Samples detrended and fed to the Welch estimate at a time.
 const CHUNK: usize = 1 << 14;
@@ -37,6 +39,8 @@ pub(super) struct StageStream {
     lines: [TrendSums; 2],
     trends: Option<[Trend; 2]>,
     welch: WelchStream,
+    /// The same segments in the jackknife's groups.
+    groups: GroupAccumulator,
     /// Scratch: a chunk of each signal, scaled or detrended.
     buf: Pair,
 }
@@ -65,6 +69,7 @@ impl StageStream {
             lines: [TrendSums::new(len); 2],
             trends: None,
             welch,
+            groups: GroupAccumulator::new(len, fs, nperseg)?,
             buf: [Vec::new(), Vec::new()],
         }))
     }
@@ -121,12 +126,14 @@ impl StageStream {
             .get_or_insert_with(|| self.lines.map(|t| t.trend(Detrend::Linear)));
         let src = self.source(out);
         let welch = &mut self.welch;
+        let groups = &mut self.groups;
         for_chunks(src, &mut self.buf, &mut |at, xs| {
             for (x, t) in xs.iter_mut().zip(&trends) {
                 for (i, y) in x.iter_mut().enumerate() {
                     *y -= t.at(at + i);
                 }
             }
+            groups.push(&xs[0], &xs[1])?;
             welch
                 .push(&[&xs[0], &xs[1]])
                 .map_err(|e| Error::dsp("stage identification spectra", e))
@@ -147,7 +154,9 @@ impl StageStream {
             .welch
             .finish(fs)
             .map_err(|e| Error::dsp("stage identification spectra", e))?;
-        let sp = StageSpectra::of_set(set, fs, self.nperseg).restored_with(dc);
+        let mut sp = StageSpectra::of_set(set, fs, self.nperseg);
+        sp.groups = self.groups.finish();
+        let sp = sp.restored_with(dc);
         Ok((identify(&sp), sp))
     }
 }
