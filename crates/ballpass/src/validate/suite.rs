@@ -91,6 +91,9 @@ pub struct LagScore {
     /// Of the measured, those whose stated 95 % interval is within
     /// ±0.02 τc (the record resolves the lag to the acceptance).
     pub resolved: Rate,
+    /// Of the measured, lag within its own stated 95 % interval alone
+    /// (the interval's coverage; nominal 95 %).
+    pub inside_own_interval: Rate,
     /// Of the resolved, lag within 0.02 τc of the truth.
     pub resolved_within_0_02_tau_c: Rate,
     /// Median, 90th percentile and largest error, τc.
@@ -256,6 +259,11 @@ impl ValidationReport {
                 "  stated 95 % interval within ±0.02 τc {}; of those within 0.02 τc {}",
                 l.resolved, l.resolved_within_0_02_tau_c
             );
+            let _ = writeln!(
+                o,
+                "  within its own 95 % interval {} (nominal 95 %)",
+                l.inside_own_interval
+            );
         }
         if let Some(st) = &self.stage {
             let _ = writeln!(
@@ -337,6 +345,10 @@ fn lags_and_stage(
         within_0_02_tau_c: Rate::of(errs.iter().filter(|&&e| e <= 0.02).count(), errs.len()),
         within_interval: Rate::of(inside, errs.len()),
         resolved: Rate::of(resolved.len(), errs.len()),
+        inside_own_interval: Rate::of(
+            lag_rows.iter().filter(|(e, ci)| e.abs() <= *ci).count(),
+            errs.len(),
+        ),
         resolved_within_0_02_tau_c: Rate::of(
             resolved.iter().filter(|&&e| e <= 0.02).count(),
             resolved.len(),
