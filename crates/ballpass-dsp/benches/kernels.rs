@@ -158,6 +158,19 @@ fn main() {
     // 5 frequencies a golden-section step (one new point per line).
     let segs3: Vec<&[f64]> = segs[..3].to_vec();
     let f5: Vec<f64> = f10[..5].to_vec();
+    let mut lags_buf = vec![0i64; 2 * n - 1];
+    // Zeros: an FFT's time does not depend on the values (no subnormals),
+    // and repeated transforms of zeros never overflow.
+    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let (fft_long, fft_short) = (
+        planner.plan_fft_forward(31_104),
+        planner.plan_fft_forward(15_552),
+    );
+    let zero = rustfft::num_complex::Complex::new(0.0, 0.0);
+    let mut fft_buf = vec![zero; 31_104];
+    let mut fft_scratch = vec![zero; fft_long.get_inplace_scratch_len()];
+    let mut fft_buf_short = vec![zero; 15_552];
+    let mut fft_scratch_short = vec![zero; fft_short.get_inplace_scratch_len()];
     type Kernel<'a> = (&'static str, Box<dyn FnMut() + 'a>);
     let kernels: Vec<Kernel> = vec![
         (
@@ -228,6 +241,12 @@ fn main() {
             }),
         ),
         (
+            "freqz_scipy_grid",
+            Box::new(|| {
+                black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+            }),
+        ),
+        (
             "gradient",
             Box::new(|| {
                 black_box(dsp::gradient(&x, dsp::Spacing::Uniform(1.0 / fs)).expect("ok"));
@@ -248,6 +267,34 @@ fn main() {
             Box::new(|| {
                 let s = black_box(2.0);
                 black_box(x.iter().map(|v| v * s).collect::<Vec<f64>>());
+            }),
+        ),
+        // The C library's memset of an existing 480 kB buffer (the lags'
+        // size), no allocation: the store bandwidth correlation_lags is
+        // held to.
+        (
+            "floor_memset_480kB",
+            Box::new(|| {
+                lags_buf.fill(black_box(0));
+                black_box(&mut lags_buf);
+            }),
+        ),
+        // Correlate's transforms: one complex RustFFT of 31 104 points (the
+        // half-length transform of the real 62 208-point FFTs; correlate
+        // makes three), and of 15 552 (two of which would make one of
+        // 31 104 when its input's second half is zero).
+        (
+            "fft_31104",
+            Box::new(|| {
+                fft_long.process_with_scratch(&mut fft_buf, &mut fft_scratch);
+                black_box(&mut fft_buf);
+            }),
+        ),
+        (
+            "fft_15552",
+            Box::new(|| {
+                fft_short.process_with_scratch(&mut fft_buf_short, &mut fft_scratch_short);
+                black_box(&mut fft_buf_short);
             }),
         ),
     ];
