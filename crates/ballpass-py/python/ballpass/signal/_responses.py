@@ -146,7 +146,7 @@ def gradient(f, *varargs, axis=None, edge_order=1):
     axis (or ``axis``). ``varargs``: one scalar step for all axes, or one
     per axis (a scalar step or the sample coordinates). Units: those of
     ``f`` per unit of the spacing (mm and s give mm/s)."""
-    if (type(f) is np.ndarray and f.ndim == 1 and f.dtype == np.float64
+    if (type(f) is np.ndarray and f.ndim == 1 and f.dtype is _F64
             and axis in (None, 0, -1) and edge_order in (1, 2)
             and (not varargs or (len(varargs) == 1
                                  and (type(varargs[0]) in (float, int) or np.ndim(varargs[0]) == 0)))):
