@@ -203,8 +203,14 @@ pub fn gradient_with_edge_order(
     Ok(out)
 }
 
-/// Outputs per vector group of [`interior_uniform`].
-const GROUP: usize = 8;
+/// Outputs per vector group of [`interior_uniform`]: 32, four AVX-512
+/// registers, so that each lane's finiteness sum is added once per 32
+/// outputs, in four independent chains (with 8, one chain of dependent
+/// additions per 8 outputs and the group compiled in 4-, 2- and 1-wide
+/// pieces: kernels bench 7.3-7.6 us against 5.2-5.4 us with 32, 6.6-6.8
+/// with 16 and 10.8-11.3 with 64, where the group no longer fits the
+/// registers; load 9-10).
+const GROUP: usize = 32;
 
 /// Appends the interior `out[i] = (f[i+1] - f[i-1]) * inv_h2`,
 /// `0 < i < n-1`, to `out` (which holds `out[0]`), and says whether every
@@ -292,6 +298,28 @@ mod tests {
         assert_eq!(g[0], f64::NEG_INFINITY);
         assert_eq!(g[1], 0.0);
         assert_eq!(g[2], f64::MAX * 0.5);
+    }
+
+    /// The interior in groups of 32, the scalar head and the tail: every
+    /// split of a short signal (3 to 140 samples) gives each interior
+    /// value as `(f[i+1] - f[i-1]) * (1 / (2h))`, bit for bit.
+    #[test]
+    fn every_group_split_gives_the_stencil() {
+        let all: Vec<f64> = crate::test_noise::noise(140, 7);
+        let h = 0.001;
+        for n in 3..=all.len() {
+            let f = &all[..n];
+            let g = gradient(f, Spacing::Uniform(h)).unwrap();
+            assert_eq!(g.len(), n);
+            for i in 1..n - 1 {
+                assert_eq!(
+                    g[i].to_bits(),
+                    ((f[i + 1] - f[i - 1]) * (1.0 / (2.0 * h))).to_bits()
+                );
+            }
+            assert_eq!(g[0], (f[1] - f[0]) / h);
+            assert_eq!(g[n - 1], (f[n - 1] - f[n - 2]) / h);
+        }
     }
 
     #[test]

@@ -44,8 +44,8 @@ pub use iir::{
 pub use lfilter_fast::lfilter_fast;
 pub use lsq::{least_squares, Fit, FnProblem, LeastSquares, Problem, Termination};
 pub use lti::{
-    bode, freqs, freqs_values, freqz, freqz_values, sosfreqz, sosfreqz_values, unwrap,
-    AnalogResponse, Bode, DigitalResponse,
+    bode, freqs, freqs_values, freqz, freqz_values, freqz_values_scipy_grid, sosfreqz,
+    sosfreqz_values, unwrap, AnalogResponse, Bode, DigitalResponse,
 };
 pub use peaks::{
     find_peaks, peak_prominences, peak_widths, peak_widths_with_prominences, Bound,

@@ -59,8 +59,8 @@ fn scipy_grid(f: &[f64], fs: f64) -> Vec<f64> {
 }
 
 /// `scipy.signal.freqz(b, a, worN=f, fs=fs)` for an array `f` in the units
-/// of `fs`: `(w, H)`, `w` as SciPy returns it ([`scipy_grid`]) and `H`
-/// at `f`.
+/// of `fs`: `(w, H)`, `w` as SciPy returns it (as [`scipy_grid`], made
+/// with the response by [`dsp::freqz_values_scipy_grid`]) and `H` at `f`.
 #[pyfunction]
 pub(super) fn freqz_grid<'py>(
     py: Python<'py>,
@@ -71,7 +71,7 @@ pub(super) fn freqz_grid<'py>(
 ) -> PyResult<(Arr1<'py>, CArr1<'py>)> {
     let (b, a, f) = (slice1(&b)?, slice1(&a)?, slice1(&f)?);
     let (w, h) = py
-        .detach(|| dsp::freqz_values(b, a, f, fs).map(|h| (scipy_grid(f, fs), h)))
+        .detach(|| dsp::freqz_values_scipy_grid(b, a, f, fs))
         .map_err(errors::dsp)?;
     Ok((w.into_pyarray(py), complex(py, h)))
 }

@@ -13,6 +13,21 @@ from ._filters import _sos
 
 
 
+_F64 = np.dtype(np.float64)
+
+
+def _plain(*arrays):
+    """Whether every argument is a 1-D C-contiguous float64 ndarray (not a
+    subclass): what the slow path's conversions would return unchanged, so
+    that the common call goes straight to the kernel (about 2.5 us less per
+    call)."""
+    for x in arrays:
+        if not (type(x) is np.ndarray and x.dtype is _F64 and x.ndim == 1
+                and x.flags.c_contiguous):
+            return False
+    return True
+
+
 def _coefficients(c, name):
     c = np.atleast_1d(np.asarray(c))
     if np.iscomplexobj(c):
@@ -32,6 +47,9 @@ def freqs(b, a, worN=200, plot=None):
     (``scipy.signal.freqs``) at the angular frequencies ``worN`` (rad/s):
     ``(w, h)``. A number of points (SciPy picks the frequencies from the
     poles and zeros) raises NotImplementedError: give the frequencies."""
+    if plot is None and _plain(b, a, worN):
+        # The common call: the conversions below would return these arrays.
+        return worN, _native.freqs(b, a, worN)
     if plot is not None:
         raise NotImplementedError("plot=: ballpass.signal does not plot")
     if worN is None or isinstance(worN, (int, np.integer)):
@@ -84,6 +102,10 @@ def freqz(b, a=1, worN=512, whole=False, plot=None, fs=2 * np.pi, include_nyquis
     """Frequency response of the digital filter ``b(z) / a(z)``
     (``scipy.signal.freqz``): ``(w, h)``, ``w`` in the units of ``fs``
     (rad/sample by default, Hz with ``fs`` in Hz)."""
+    if plot is None and type(fs) is float and _plain(b, a, worN) and b.size > 0:
+        # The common call (frequencies given as an array, fs a float): the
+        # conversions below would return these arguments unchanged.
+        return _native.freqz_grid(b, a, worN, fs)
     if plot is not None:
         raise NotImplementedError("plot=: ballpass.signal does not plot")
     b, a = _coefficients(b, "b"), _coefficients(a, "a")
@@ -124,7 +146,7 @@ def gradient(f, *varargs, axis=None, edge_order=1):
     axis (or ``axis``). ``varargs``: one scalar step for all axes, or one
     per axis (a scalar step or the sample coordinates). Units: those of
     ``f`` per unit of the spacing (mm and s give mm/s)."""
-    if (type(f) is np.ndarray and f.ndim == 1 and f.dtype == np.float64
+    if (type(f) is np.ndarray and f.ndim == 1 and f.dtype is _F64
             and axis in (None, 0, -1) and edge_order in (1, 2)
             and (not varargs or (len(varargs) == 1
                                  and (type(varargs[0]) in (float, int) or np.ndim(varargs[0]) == 0)))):
