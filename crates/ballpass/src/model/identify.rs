@@ -84,10 +84,11 @@
 //!
 //! `(m, K K_D, K K_P, τ_d, s)` follow by a fixed-point solve. The fit is
 //! repeated over the two decades around the resonance found, with 95 %
-//! intervals by the delta method (numerical gradients). The intervals of
-//! f_n and ζ are then checked against the data by a jackknife over groups
-//! of Welch segments, and widened to it where the data spread more than
-//! the covariance says (module `jackknife`). The stage is **identified**
+//! intervals by the delta method (numerical gradients). Where that would
+//! claim the stage identified, the intervals of f_n and ζ are then checked
+//! against the data by a jackknife over groups of Welch segments, and
+//! widened to it where the data spread more than the covariance says
+//! (module `jackknife`). The stage is **identified**
 //! when the 99.9 % intervals (the same standard errors × 3.29) are within
 //! ±5 % (f_n) and ±20 % (ζ), and the
 //! spectral resolution is fine enough for the resonance (at most a quarter
@@ -344,7 +345,9 @@ pub struct StageIdentification {
     /// Whether the intervals are tight enough (module docs).
     pub identified: bool,
     /// Groups of segments the intervals were checked with by the
-    /// jackknife (module docs; 0: not checked, the fit's covariance alone).
+    /// jackknife (module docs; 0: not checked: the fit would not claim the
+    /// stage, so the check could not change the verdict, and the intervals
+    /// are the fit's covariance alone).
     pub jackknife_groups: usize,
     /// In words, with the reason when not identified.
     pub text: String,
@@ -353,6 +356,11 @@ pub struct StageIdentification {
 /// Fits the PD stage to pooled spectra (module docs).
 pub fn identify(s: &StageSpectra) -> StageIdentification {
     let mut out = identify_once(s);
+    // The check can only widen the intervals, so it cannot make a stage
+    // identified: it runs on the stages the fit would claim.
+    if !out.identified {
+        return out;
+    }
     let values = |o: &StageIdentification| -> Option<[f64; 2]> {
         Some([o.natural_frequency_hz?.value, o.damping_ratio?.value])
     };

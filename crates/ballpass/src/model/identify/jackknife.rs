@@ -25,7 +25,12 @@
 //! fewer than groups; on a well-specified fit the two agree and the stated
 //! one, less noisy, is kept (the jackknife's own variance is biased up a
 //! little, Efron–Stein). A fit that fails when one group is left out has
-//! no jackknife interval: the stage is then not claimed identified.
+//! no jackknife interval: the stage is then not claimed identified. The
+//! check runs only where the fit would claim the stage: it can only widen
+//! the intervals, so elsewhere it could not change the verdict. The groups
+//! are summed on every record (a sweep pools them), which costs one more
+//! transform per segment: `analyze` on a 30 s record took 9.4 ms instead
+//! of 8.2 ms in Python.
 
 use ballpass_dsp::{Complex64, Welch};
 
