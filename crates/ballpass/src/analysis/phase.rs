@@ -426,17 +426,7 @@ pub(crate) fn line_segments(w: &[f64], step: usize, k: usize) -> f64 {
     if k == 0 {
         return 0.0;
     }
-    let e: f64 = w.iter().map(|v| v * v).sum();
-    let mut s = 0.0;
-    for m in 1..k {
-        let shift = m * step;
-        if shift >= w.len() {
-            break;
-        }
-        let c: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / e;
-        s += (1.0 - m as f64 / k as f64) * c;
-    }
-    k as f64 / (1.0 + 2.0 * s)
+    k as f64 / (1.0 + 2.0 * crate::stats::overlap_sum(w, step, k, false))
 }
 
 /// 95 % half-width of the cross-spectral phase, degrees, from the

@@ -281,6 +281,15 @@ pub fn welch_dof(w: &[f64], step: usize, k: usize) -> f64 {
     if k == 0 {
         return 0.0;
     }
+    2.0 * k as f64 / (1.0 + 2.0 * overlap_sum(w, step, k, true))
+}
+
+/// `Σ_{m=1}^{k−1} (1 − m/k) c(m)` (or `c(m)²` when `squared`), with
+/// `c(m) = Σ_t w[t] w[t + m·step] / Σ_t w[t]²` the overlap correlation of
+/// `k` segments of window `w` at hop `step`: the sum behind
+/// [`welch_dof`] (the power of noise, `c²`) and the equivalent segment
+/// count of a line's phase (`c`).
+pub(crate) fn overlap_sum(w: &[f64], step: usize, k: usize, squared: bool) -> f64 {
     let e: f64 = w.iter().map(|v| v * v).sum();
     let mut s = 0.0;
     for m in 1..k {
@@ -289,9 +298,11 @@ pub fn welch_dof(w: &[f64], step: usize, k: usize) -> f64 {
             break;
         }
         let c: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / e;
-        s += (1.0 - m as f64 / k as f64) * c * c;
+        // Evaluated as ((1 − m/k) c) c, the order the two sums had apart.
+        let t = (1.0 - m as f64 / k as f64) * c;
+        s += if squared { t * c } else { t };
     }
-    2.0 * k as f64 / (1.0 + 2.0 * s)
+    s
 }
 
 /// Vertex of the parabola through `(-1, a)`, `(0, b)`, `(1, c)`: offset in
