@@ -94,16 +94,24 @@ pub(super) fn add_groups(mine: &mut Vec<SegmentGroup>, other: &[SegmentGroup]) {
 
 /// Sums the segments of a detrended friction and velocity error into
 /// [`GROUPS`] slots, fed in order in pieces of any length (the samples
-/// the record's Welch estimate takes, in the same segments).
+/// the record's Welch estimate takes, in the same segments). Only what the
+/// next segment needs of the samples seen is kept (less than a segment);
+/// a segment inside one piece is read from it in place.
 pub(crate) struct GroupAccumulator {
     welch: Welch,
     fs_hz: f64,
     nperseg: usize,
     step: usize,
     segments: usize,
+    /// The next segment (it starts at `next · step`).
     next: usize,
+    /// Samples fed so far.
+    seen: usize,
     keep: usize,
+    /// The samples from the next segment's start up to `seen`.
     buf: [Vec<f64>; 2],
+    /// Scratch: a segment spanning `buf` and a new piece.
+    seg: [Vec<f64>; 2],
     groups: Vec<SegmentGroup>,
 }
 
@@ -129,8 +137,10 @@ impl GroupAccumulator {
             step,
             segments,
             next: 0,
+            seen: 0,
             keep: (nperseg / 4 + 1 + EXTRA_BINS).min(nperseg / 2 + 1),
             buf: [Vec::new(), Vec::new()],
+            seg: [Vec::new(), Vec::new()],
             groups: vec![SegmentGroup::default(); GROUPS],
         })
     }
@@ -140,30 +150,57 @@ impl GroupAccumulator {
     /// # Errors
     /// [`Error::Dsp`] if a segment's spectra fail.
     pub(crate) fn push(&mut self, friction: &[f64], velocity: &[f64]) -> Result<()> {
-        self.buf[0].extend_from_slice(friction);
-        self.buf[1].extend_from_slice(velocity);
-        while self.next < self.segments && self.buf[0].len() >= self.nperseg {
-            let n = self.nperseg;
-            let set = self
-                .welch
-                .spectra(
-                    &[&self.buf[0][..n], &self.buf[1][..n]],
-                    &[(0, 1)],
-                    self.fs_hz,
-                )
-                .map_err(|e| Error::dsp("stage identification jackknife", e))?;
+        let new_start = self.seen;
+        self.seen += friction.len();
+        let buf_start = new_start - self.buf[0].len();
+        while self.next < self.segments {
+            let start = self.next * self.step;
+            let end = start + self.nperseg;
+            if end > self.seen {
+                break;
+            }
+            let group = &mut self.groups[self.next % GROUPS];
             let scale = 1.0 / self.segments as f64;
-            let k = self.keep;
-            let one = SegmentGroup {
-                p_ff: set.auto[0][..k].iter().map(|x| x * scale).collect(),
-                p_vv: set.auto[1][..k].iter().map(|x| x * scale).collect(),
-                p_fv: set.cross[0][..k].iter().map(|x| x * scale).collect(),
-                segments: 1,
-            };
-            self.groups[self.next % GROUPS].add(&one);
+            let (welch, fs, keep) = (&mut self.welch, self.fs_hz, self.keep);
+            if start >= new_start {
+                let r = start - new_start..end - new_start;
+                add_segment(
+                    welch,
+                    fs,
+                    keep,
+                    scale,
+                    group,
+                    &friction[r.clone()],
+                    &velocity[r],
+                )?;
+            } else {
+                for (seg, (old, new)) in self
+                    .seg
+                    .iter_mut()
+                    .zip([(&self.buf[0], friction), (&self.buf[1], velocity)])
+                {
+                    seg.clear();
+                    seg.extend_from_slice(&old[start - buf_start..]);
+                    seg.extend_from_slice(&new[..end - new_start]);
+                }
+                add_segment(welch, fs, keep, scale, group, &self.seg[0], &self.seg[1])?;
+            }
             self.next += 1;
-            for b in &mut self.buf {
-                b.drain(..self.step.min(b.len()));
+        }
+        // Keep what the next segment needs (it starts at or before `seen`:
+        // the segment before it ended there or earlier, and segments
+        // overlap).
+        let from = self.next * self.step;
+        let done = self.next >= self.segments;
+        for (b, new) in self.buf.iter_mut().zip([friction, velocity]) {
+            if done {
+                b.clear();
+            } else if from >= new_start {
+                b.clear();
+                b.extend_from_slice(&new[from - new_start..]);
+            } else {
+                b.drain(..from - buf_start);
+                b.extend_from_slice(new);
             }
         }
         Ok(())
@@ -173,6 +210,38 @@ impl GroupAccumulator {
     pub(crate) fn finish(self) -> Vec<SegmentGroup> {
         self.groups
     }
+}
+
+/// Adds one segment's spectra (bins up to `keep`, times `scale`) to
+/// `group`.
+fn add_segment(
+    welch: &mut Welch,
+    fs_hz: f64,
+    keep: usize,
+    scale: f64,
+    group: &mut SegmentGroup,
+    friction: &[f64],
+    velocity: &[f64],
+) -> Result<()> {
+    let set = welch
+        .spectra(&[friction, velocity], &[(0, 1)], fs_hz)
+        .map_err(|e| Error::dsp("stage identification jackknife", e))?;
+    if group.p_ff.is_empty() {
+        group.p_ff = vec![0.0; keep];
+        group.p_vv = vec![0.0; keep];
+        group.p_fv = vec![Complex64::new(0.0, 0.0); keep];
+    }
+    for (g, x) in group.p_ff.iter_mut().zip(&set.auto[0]) {
+        *g += x * scale;
+    }
+    for (g, x) in group.p_vv.iter_mut().zip(&set.auto[1]) {
+        *g += x * scale;
+    }
+    for (g, x) in group.p_fv.iter_mut().zip(&set.cross[0]) {
+        *g += x * scale;
+    }
+    group.segments += 1;
+    Ok(())
 }
 
 /// The spectra with group `g` left out, as a Welch average of the rest;
