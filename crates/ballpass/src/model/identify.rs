@@ -100,8 +100,8 @@ mod jackknife;
 mod joint;
 mod model;
 
-use ballpass_dsp::{Complex64, Welch, WelchSettings};
-pub(crate) use jackknife::GroupAccumulator;
+use ballpass_dsp::{Complex64, WelchSettings};
+pub(crate) use jackknife::grouped_welch;
 pub use jackknife::{SegmentGroup, GROUPS};
 use joint::{joint_fit, JointFit};
 use model::{restoration, z_chain, Stage, NOISE, N_PARAMS, N_STAGE};
@@ -172,15 +172,32 @@ impl StageSpectra {
             ballpass_dsp::detrend_in_place(s, ballpass_dsp::DetrendType::Linear)
                 .map_err(|e| Error::dsp("stage identification detrend", e))?;
         }
-        let mut welch = Welch::new(StageSpectra::welch_settings(nperseg))
-            .map_err(|e| Error::dsp("stage identification Welch", e))?;
-        let set = welch
-            .spectra(&[&f, &v], &[(0, 1)], fs_hz)
+        // A segment no longer than the record, as the Welch estimate takes it.
+        let nperseg = nperseg.min(f.len());
+        let mut welch = jackknife::grouped_welch(nperseg)?;
+        welch
+            .push(&[&f, &v])
             .map_err(|e| Error::dsp("stage identification spectra", e))?;
-        let mut groups = GroupAccumulator::new(f.len(), fs_hz, nperseg)?;
-        groups.push(&f, &v)?;
+        let out = StageSpectra::of_grouped(welch, fs_hz, nperseg)?;
+        Ok(out)
+    }
+
+    /// The spectra and the jackknife's groups from a stream made by
+    /// `jackknife::grouped_welch` and fed the detrended friction and
+    /// velocity error (m/s).
+    ///
+    /// # Errors
+    /// [`Error::Dsp`] if the stream has no complete segment.
+    pub(crate) fn of_grouped(
+        welch: ballpass_dsp::WelchStream,
+        fs_hz: f64,
+        nperseg: usize,
+    ) -> Result<StageSpectra> {
+        let (set, groups) = welch
+            .finish_with_groups(fs_hz)
+            .map_err(|e| Error::dsp("stage identification spectra", e))?;
         let mut out = StageSpectra::of_set(set, fs_hz, nperseg);
-        out.groups = groups.finish();
+        out.groups = groups.into_iter().map(SegmentGroup::from_part).collect();
         Ok(out)
     }
 

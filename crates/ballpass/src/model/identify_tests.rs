@@ -184,7 +184,7 @@ fn segment_groups_are_the_same_in_pieces_and_add_up_to_the_welch_estimate() {
     for s in &mut detrended {
         ballpass_dsp::detrend_in_place(s, ballpass_dsp::DetrendType::Linear).unwrap();
     }
-    let mut acc = GroupAccumulator::new(n, fs, nperseg).unwrap();
+    let mut welch = super::grouped_welch(nperseg).unwrap();
     let mut at = 0;
     for (k, len) in [1usize, 90, 1000, 7, 400, 1500, 2]
         .iter()
@@ -195,11 +195,14 @@ fn segment_groups_are_the_same_in_pieces_and_add_up_to_the_welch_estimate() {
             break;
         }
         let end = (at + len).min(n);
-        acc.push(&detrended[0][at..end], &detrended[1][at..end])
+        welch
+            .push(&[&detrended[0][at..end], &detrended[1][at..end]])
             .unwrap();
         at = end;
     }
-    assert_eq!(acc.finish(), whole.groups);
+    let pieces = StageSpectra::of_grouped(welch, fs, nperseg).unwrap();
+    assert_eq!(pieces.groups, whole.groups);
+    assert_eq!(pieces.p_fv, whole.p_fv);
     for i in 0..whole.groups[0].p_ff.len() {
         let sum: f64 = whole.groups.iter().filter_map(|g| g.p_ff.get(i)).sum();
         assert!(

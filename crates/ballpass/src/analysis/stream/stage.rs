@@ -18,7 +18,7 @@ use crate::analysis::load_cell::DcRestoration;
 use crate::analysis::{Detrend, Signal};
 use crate::error::{Error, Result};
 use crate::model::identify::{
-    identify, nperseg_for, GroupAccumulator, StageIdentification, StageSpectra,
+    grouped_welch, identify, nperseg_for, StageIdentification, StageSpectra,
 };
 
 /// Samples detrended and fed to the Welch estimate at a time.
@@ -38,9 +38,8 @@ pub(super) struct StageStream {
     nperseg: usize,
     lines: [TrendSums; 2],
     trends: Option<[Trend; 2]>,
+    /// The estimate, with the jackknife's groups of its segments.
     welch: WelchStream,
-    /// The same segments in the jackknife's groups.
-    groups: GroupAccumulator,
     /// Scratch: a chunk of each signal, scaled or detrended.
     buf: Pair,
 }
@@ -60,8 +59,7 @@ impl StageStream {
             return Ok(None);
         };
         let nperseg = nperseg_for(len, fs);
-        let welch = WelchStream::new(StageSpectra::welch_settings(nperseg), 2, &[(0, 1)])
-            .map_err(|e| Error::dsp("stage identification Welch", e))?;
+        let welch = grouped_welch(nperseg)?;
         Ok(Some(StageStream {
             of: [f, v],
             trimmed: trim > 0,
@@ -69,7 +67,6 @@ impl StageStream {
             lines: [TrendSums::new(len); 2],
             trends: None,
             welch,
-            groups: GroupAccumulator::new(len, fs, nperseg)?,
             buf: [Vec::new(), Vec::new()],
         }))
     }
@@ -126,14 +123,12 @@ impl StageStream {
             .get_or_insert_with(|| self.lines.map(|t| t.trend(Detrend::Linear)));
         let src = self.source(out);
         let welch = &mut self.welch;
-        let groups = &mut self.groups;
         for_chunks(src, &mut self.buf, &mut |at, xs| {
             for (x, t) in xs.iter_mut().zip(&trends) {
                 for (i, y) in x.iter_mut().enumerate() {
                     *y -= t.at(at + i);
                 }
             }
-            groups.push(&xs[0], &xs[1])?;
             welch
                 .push(&[&xs[0], &xs[1]])
                 .map_err(|e| Error::dsp("stage identification spectra", e))
@@ -150,13 +145,7 @@ impl StageStream {
         fs: f64,
         dc: &DcRestoration,
     ) -> Result<(StageIdentification, StageSpectra)> {
-        let set = self
-            .welch
-            .finish(fs)
-            .map_err(|e| Error::dsp("stage identification spectra", e))?;
-        let mut sp = StageSpectra::of_set(set, fs, self.nperseg);
-        sp.groups = self.groups.finish();
-        let sp = sp.restored_with(dc);
+        let sp = StageSpectra::of_grouped(self.welch, fs, self.nperseg)?.restored_with(dc);
         Ok((identify(&sp), sp))
     }
 }

@@ -28,11 +28,11 @@
 //! no jackknife interval: the stage is then not claimed identified. The
 //! check runs only where the fit would claim the stage: it can only widen
 //! the intervals, so elsewhere it could not change the verdict. The groups
-//! are summed on every record (a sweep pools them), which costs one more
-//! transform per segment: `analyze` on a 30 s record took 9.4 ms instead
-//! of 8.2 ms in Python.
+//! are summed on every record (a sweep pools them) from the estimate's own
+//! segment transforms ([`ballpass_dsp::WelchStream::with_groups`]): a few
+//! additions per segment.
 
-use ballpass_dsp::{Complex64, Welch};
+use ballpass_dsp::{Complex64, SpectralSet, WelchStream};
 
 use super::StageSpectra;
 use crate::error::{Error, Result};
@@ -64,6 +64,22 @@ pub struct SegmentGroup {
 }
 
 impl SegmentGroup {
+    /// A group from its part of the friction, velocity-error estimate
+    /// (auto spectra in that order, their cross spectrum); an empty group
+    /// without segments.
+    pub(super) fn from_part(part: SpectralSet) -> SegmentGroup {
+        if part.n_segments == 0 {
+            return SegmentGroup::default();
+        }
+        let mut auto = part.auto.into_iter();
+        SegmentGroup {
+            p_ff: auto.next().unwrap_or_default(),
+            p_vv: auto.next().unwrap_or_default(),
+            p_fv: part.cross.into_iter().next().unwrap_or_default(),
+            segments: part.n_segments,
+        }
+    }
+
     fn add(&mut self, other: &SegmentGroup) {
         if self.p_ff.is_empty() {
             *self = other.clone();
@@ -92,156 +108,17 @@ pub(super) fn add_groups(mine: &mut Vec<SegmentGroup>, other: &[SegmentGroup]) {
     }
 }
 
-/// Sums the segments of a detrended friction and velocity error into
-/// [`GROUPS`] slots, fed in order in pieces of any length (the samples
-/// the record's Welch estimate takes, in the same segments). Only what the
-/// next segment needs of the samples seen is kept (less than a segment);
-/// a segment inside one piece is read from it in place.
-pub(crate) struct GroupAccumulator {
-    welch: Welch,
-    fs_hz: f64,
-    nperseg: usize,
-    step: usize,
-    segments: usize,
-    /// The next segment (it starts at `next · step`).
-    next: usize,
-    /// Samples fed so far.
-    seen: usize,
-    keep: usize,
-    /// The samples from the next segment's start up to `seen`.
-    buf: [Vec<f64>; 2],
-    /// Scratch: a segment spanning `buf` and a new piece.
-    seg: [Vec<f64>; 2],
-    groups: Vec<SegmentGroup>,
-}
-
-impl GroupAccumulator {
-    /// For a record of `len` samples at `fs_hz`, segments of `nperseg`
-    /// ([`StageSpectra::welch_settings`]).
-    ///
-    /// # Errors
-    /// [`Error::Dsp`] if the Welch settings are rejected.
-    pub(crate) fn new(len: usize, fs_hz: f64, nperseg: usize) -> Result<GroupAccumulator> {
-        let welch = Welch::new(StageSpectra::welch_settings(nperseg))
-            .map_err(|e| Error::dsp("stage identification jackknife", e))?;
-        let step = (nperseg - nperseg / 2).max(1);
-        let segments = if len >= nperseg {
-            (len - nperseg) / step + 1
-        } else {
-            0
-        };
-        Ok(GroupAccumulator {
-            welch,
-            fs_hz,
-            nperseg,
-            step,
-            segments,
-            next: 0,
-            seen: 0,
-            keep: (nperseg / 4 + 1 + EXTRA_BINS).min(nperseg / 2 + 1),
-            buf: [Vec::new(), Vec::new()],
-            seg: [Vec::new(), Vec::new()],
-            groups: vec![SegmentGroup::default(); GROUPS],
-        })
-    }
-
-    /// Feeds the next samples of the friction and the velocity error.
-    ///
-    /// # Errors
-    /// [`Error::Dsp`] if a segment's spectra fail.
-    pub(crate) fn push(&mut self, friction: &[f64], velocity: &[f64]) -> Result<()> {
-        let new_start = self.seen;
-        self.seen += friction.len();
-        let buf_start = new_start - self.buf[0].len();
-        while self.next < self.segments {
-            let start = self.next * self.step;
-            let end = start + self.nperseg;
-            if end > self.seen {
-                break;
-            }
-            let group = &mut self.groups[self.next % GROUPS];
-            let scale = 1.0 / self.segments as f64;
-            let (welch, fs, keep) = (&mut self.welch, self.fs_hz, self.keep);
-            if start >= new_start {
-                let r = start - new_start..end - new_start;
-                add_segment(
-                    welch,
-                    fs,
-                    keep,
-                    scale,
-                    group,
-                    &friction[r.clone()],
-                    &velocity[r],
-                )?;
-            } else {
-                for (seg, (old, new)) in self
-                    .seg
-                    .iter_mut()
-                    .zip([(&self.buf[0], friction), (&self.buf[1], velocity)])
-                {
-                    seg.clear();
-                    seg.extend_from_slice(&old[start - buf_start..]);
-                    seg.extend_from_slice(&new[..end - new_start]);
-                }
-                add_segment(welch, fs, keep, scale, group, &self.seg[0], &self.seg[1])?;
-            }
-            self.next += 1;
-        }
-        // Keep what the next segment needs (it starts at or before `seen`:
-        // the segment before it ended there or earlier, and segments
-        // overlap).
-        let from = self.next * self.step;
-        let done = self.next >= self.segments;
-        for (b, new) in self.buf.iter_mut().zip([friction, velocity]) {
-            if done {
-                b.clear();
-            } else if from >= new_start {
-                b.clear();
-                b.extend_from_slice(&new[from - new_start..]);
-            } else {
-                b.drain(..from - buf_start);
-                b.extend_from_slice(new);
-            }
-        }
-        Ok(())
-    }
-
-    /// The groups (empty slots where the record has fewer segments).
-    pub(crate) fn finish(self) -> Vec<SegmentGroup> {
-        self.groups
-    }
-}
-
-/// Adds one segment's spectra (bins up to `keep`, times `scale`) to
-/// `group`.
-fn add_segment(
-    welch: &mut Welch,
-    fs_hz: f64,
-    keep: usize,
-    scale: f64,
-    group: &mut SegmentGroup,
-    friction: &[f64],
-    velocity: &[f64],
-) -> Result<()> {
-    let set = welch
-        .spectra(&[friction, velocity], &[(0, 1)], fs_hz)
-        .map_err(|e| Error::dsp("stage identification jackknife", e))?;
-    if group.p_ff.is_empty() {
-        group.p_ff = vec![0.0; keep];
-        group.p_vv = vec![0.0; keep];
-        group.p_fv = vec![Complex64::new(0.0, 0.0); keep];
-    }
-    for (g, x) in group.p_ff.iter_mut().zip(&set.auto[0]) {
-        *g += x * scale;
-    }
-    for (g, x) in group.p_vv.iter_mut().zip(&set.auto[1]) {
-        *g += x * scale;
-    }
-    for (g, x) in group.p_fv.iter_mut().zip(&set.cross[0]) {
-        *g += x * scale;
-    }
-    group.segments += 1;
-    Ok(())
+/// The Welch stream of the identification spectra ([`StageSpectra::welch_settings`])
+/// that also sums its segments into [`GROUPS`] groups over the bins the
+/// fit can use (up to a quarter of the rate, plus [`EXTRA_BINS`]).
+///
+/// # Errors
+/// [`Error::Dsp`] if the Welch settings are rejected.
+pub(crate) fn grouped_welch(nperseg: usize) -> Result<WelchStream> {
+    let keep = nperseg / 4 + 1 + EXTRA_BINS;
+    WelchStream::new(StageSpectra::welch_settings(nperseg), 2, &[(0, 1)])
+        .and_then(|w| w.with_groups(GROUPS, keep))
+        .map_err(|e| Error::dsp("stage identification Welch", e))
 }
 
 /// The spectra with group `g` left out, as a Welch average of the rest;
