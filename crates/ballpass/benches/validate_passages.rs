@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7|fresh8|fresh9] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7|fresh8|fresh9|fresh10] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -19,7 +19,8 @@
 //! that; `fresh7`, 15_200_001+, never looked at before session 14's rule
 //! was frozen; `fresh8`, 15_300_001+, never looked at before session 15's
 //! rule was frozen; `fresh9`, 15_400_001+, never looked at before session
-//! 16, which scored session 15's rule on it again, unchanged). Prints the
+//! 16, which scored session 15's rule on it again, unchanged; `fresh10`,
+//! 15_500_001+, never looked at before session 17's rule was frozen). Prints the
 //! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %; `--json` prints every record's score instead of the
@@ -60,9 +61,10 @@ fn main() {
         "fresh7" => 15_200_001,
         "fresh8" => 15_300_001,
         "fresh9" => 15_400_001,
+        "fresh10" => 15_500_001,
         other => {
             eprintln!(
-                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6, fresh7, fresh8 or fresh9"
+                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6, fresh7, fresh8, fresh9 or fresh10"
             );
             std::process::exit(2);
         }

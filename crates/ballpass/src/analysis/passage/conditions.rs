@@ -28,6 +28,9 @@ pub(super) struct Inputs<'a> {
     /// The widths were withheld: the median bend of the baseline under a
     /// pulse, in pulse heights (`withhold.rs`).
     pub withheld_bend: Option<f64>,
+    /// The widths were withheld: the standard error of the mean width
+    /// from their scatter beyond noise, relative (`withhold.rs`).
+    pub withheld_scatter_se: Option<f64>,
 }
 
 /// Smallest dip per pulse, in pulse heights, for the AC coupling to be
@@ -76,6 +79,18 @@ pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
             message: format!(
                 "the level under the pulses bends by {:.0}% of a pulse across a pulse (median over the pulses): the baseline moves as fast as the pulses, and a width cannot be told from it; the widths tau_p are withheld (counts and times hold)",
                 100.0 * bend
+            ),
+            advice: "a level that moves within a pulse with a laser source is the strain-dependent interference of thesis §5.2 (Figs. 32, 36): use an incoherent source (LED, thesis §5.3), keep the fibre still, and record again to measure widths".into(),
+        });
+    }
+
+    if let Some(se) = c.withheld_scatter_se {
+        out.push(Condition {
+            kind: ConditionKind::WidthsWithheld,
+            measure: se,
+            message: format!(
+                "the widths disagree from pulse to pulse by more than their noise explains, which leaves their mean uncertain by {:.1}% (one standard error): a level that moves at the pulses' own scale reads as wider or narrower pulses; the widths tau_p are withheld (counts and times hold)",
+                100.0 * se
             ),
             advice: "a level that moves within a pulse with a laser source is the strain-dependent interference of thesis §5.2 (Figs. 32, 36): use an incoherent source (LED, thesis §5.3), keep the fibre still, and record again to measure widths".into(),
         });
@@ -193,6 +208,7 @@ mod tests {
             // Predicted 1.4 Hz: the measured period is 40 % long.
             f_c_predicted: Some(1.4),
             withheld_bend: None,
+            withheld_scatter_se: None,
         });
         let m = out
             .iter()

@@ -96,9 +96,12 @@
 //! - [`ConditionKind::PeriodMismatch`]: measured `τ_c` far from the prediction.
 //! - [`ConditionKind::WidthsWithheld`]: the baseline bends under the pulses
 //!   by more than 15 % of a pulse (median over the pulses): a drift as fast
-//!   as the pulses, which a width cannot be told from. No width is reported
-//!   (`tau_p_s` is NaN, no passage has `width_used`); counts and times are
-//!   kept (`withhold.rs`).
+//!   as the pulses, which a width cannot be told from; or the widths
+//!   disagree from pulse to pulse beyond their noise so much that their
+//!   mean's standard error is over 2 % (a drift at the pulses' scale that
+//!   the baseline does not follow, so does not bend with). No width is
+//!   reported (`tau_p_s` is NaN, no passage has `width_used`); counts and
+//!   times are kept (`withhold.rs`).
 //!
 //! How often each is right on benches it was never tuned on is measured by
 //! [`crate::validate::passages`].
@@ -131,6 +134,7 @@ pub use overlap::PulseOverlap;
 pub use settings::PassageSettings;
 use signal::{gaussian_smooth, median, noise_sigma, rms_difference_sigma, running_percentile};
 pub(crate) use train_stats::TrainStats;
+use withhold::Withheld;
 
 /// `2√(2 ln 2)`: width at half maximum of a Gaussian over its sigma.
 const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949_3;
@@ -205,8 +209,8 @@ pub enum ConditionKind {
     MissedPassages,
     /// The measured period is far from the predicted one.
     PeriodMismatch,
-    /// The baseline bends under the pulses too much for their widths to be
-    /// measured: the widths are withheld.
+    /// The baseline bends under the pulses, or the widths scatter beyond
+    /// noise, too much for the widths to be measured: they are withheld.
     WidthsWithheld,
 }
 
@@ -386,6 +390,12 @@ pub struct PassageAnalysis {
     /// ([`ConditionKind::WidthsWithheld`]).
     #[serde(default)]
     pub baseline_bend: Option<f64>,
+    /// Standard error of the mean width, relative, from the widths'
+    /// scatter over the passages beyond what each fit's noise explains
+    /// (`None` with fewer than three widths measured); above 0.02 the
+    /// widths are withheld ([`ConditionKind::WidthsWithheld`]).
+    #[serde(default)]
+    pub width_scatter_se: Option<f64>,
     /// How much the pulses overlap and how far low that can leave the
     /// widths (`None` when the mean pulse gives no answer).
     #[serde(default)]
@@ -615,7 +625,15 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         .iter()
         .map(|f| withhold::baseline_bend(&m.baseline, &f.pulse, &m.shape))
         .collect();
-    let (baseline_bend, widths_withheld) = withhold::withhold(&mut passages, &bends);
+    let used: Vec<(f64, f64)> = kept
+        .iter()
+        .zip(&passages)
+        .filter(|(_, p)| p.width_used)
+        .map(|(f, _)| (f.pulse.s, f.s_se))
+        .collect();
+    let width_scatter_se = withhold::scatter_se(&used);
+    let (baseline_bend, widths_withheld) =
+        withhold::withhold(&mut passages, &bends, width_scatter_se);
 
     let TrainStats {
         tau_c_all,
@@ -648,7 +666,9 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         ac,
         f_c,
         f_c_predicted,
-        withheld_bend: baseline_bend.filter(|_| widths_withheld),
+        withheld_bend: baseline_bend.filter(|_| widths_withheld == Some(Withheld::Bend)),
+        withheld_scatter_se: width_scatter_se
+            .filter(|_| widths_withheld == Some(Withheld::Scatter)),
     });
     // Overlap of pulses one median period apart (the template's units are
     // blocks, its stretch the pulses' mean).
@@ -731,6 +751,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         ac_time_constant_s: ac.map(|a| a.0),
         template_fwhm_s: fwhm_s,
         baseline_bend,
+        width_scatter_se,
         overlap,
         count: passages.len(),
         count_inverted: inverted,

@@ -151,6 +151,9 @@ pub struct ConditionsReported {
     /// heights ([`PassageAnalysis::baseline_bend`]).
     #[serde(default)]
     pub baseline_bend: Option<f64>,
+    /// [`PassageAnalysis::width_scatter_se`].
+    #[serde(default)]
+    pub width_scatter_se: Option<f64>,
     /// The baseline drift's measure (its range over the median pulse) when reported.
     pub baseline_drift_measure: Option<f64>,
     /// The AC coupling's time constant found (and undone), s.
@@ -168,6 +171,7 @@ impl ConditionsReported {
             period_mismatch: has(ConditionKind::PeriodMismatch),
             widths_withheld: has(ConditionKind::WidthsWithheld),
             baseline_bend: a.baseline_bend,
+            width_scatter_se: a.width_scatter_se,
             baseline_drift_measure: a
                 .conditions
                 .iter()
