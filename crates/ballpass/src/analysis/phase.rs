@@ -423,10 +423,22 @@ impl LineStream {
 /// ([`crate::stats::welch_dof`]): Hann at 50 % has `c(1) = 1/6`, hence
 /// `k / (1 + (k − 1)/(3k))` (→ `0.75 k`) where `ν/2` gives `0.947 k`.
 pub(crate) fn line_segments(w: &[f64], step: usize, k: usize) -> f64 {
+    line_segments_turned(w, step, k, 0.0)
+}
+
+/// [`line_segments`] for the coherence of a line and noise in a bin whose
+/// frequency differs from the line's by `theta / (2π · step)` cycles per
+/// sample (`theta` = 2π · offset in bins · step / segment length):
+/// `k / (1 + 2 Σ (1 − m/k) c(m) cos(m θ))`. The noise's correlation
+/// between segments turns against the line's phasor, so the count grows
+/// with the offset: Hann at 50 % gives `0.75 k` on the line's bin, `k`
+/// half a bin away, `1.5 k` one bin away. `theta = 0` is
+/// [`line_segments`].
+pub(crate) fn line_segments_turned(w: &[f64], step: usize, k: usize, theta: f64) -> f64 {
     if k == 0 {
         return 0.0;
     }
-    k as f64 / (1.0 + 2.0 * crate::stats::overlap_sum(w, step, k, false))
+    k as f64 / (1.0 + 2.0 * crate::stats::overlap_sum_turned(w, step, k, theta))
 }
 
 /// 95 % half-width of the cross-spectral phase, degrees, from the

@@ -434,7 +434,7 @@ pub(crate) fn run_staged_above(
     let mut full = average_spectra(&fulls);
     let mut hr = average_spectra(&hires);
     for s in [&mut unfiltered, &mut full, &mut hr] {
-        super::confidence::finish(s, settings.band_confidence, settings.confidence);
+        super::confidence::finish(s, settings);
     }
     if hr.info.n_segments < 2 && recs.len() < 2 {
         warnings.push(format!(

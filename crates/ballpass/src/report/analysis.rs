@@ -550,11 +550,15 @@ fn band_words(s: &crate::analysis::Spectra) -> String {
 fn coherence_words(s: &crate::analysis::Spectra, confidence: f64) -> String {
     s.info.coherence_threshold.map_or(String::new(), |t| {
         format!(
-            " The dashed horizontal line at {} is the {} significance level: two unrelated \
-             signals exceed 1 − a^(1/(ν/2 − 1)) with probability a, here a = 1 − c^(1/3) for \
-             the three pairs tested at confidence c, ν = {} equivalent degrees of freedom.",
+            " The dashed horizontal line at {} is the {} significance level of a coherence \
+             row whose k·f_c falls on a bin: noise (in both signals, or beside a line in one \
+             of them) exceeds it in any of the three bins nearest k·f_c with probability at \
+             most a = 1 − c^(1/3) = {} for the three pairs tested at confidence c; rows \
+             between bins have a lower level, stated in their rows (`coherence` in \
+             analysis.json; ν = {} equivalent degrees of freedom).",
             fmt_sig(t, 3),
             fmt_percent(confidence),
+            fmt_percent(crate::analysis::confidence::coherence_row_rate(confidence)),
             fmt_sig(s.info.dof, 3)
         )
     })

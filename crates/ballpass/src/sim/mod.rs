@@ -434,6 +434,10 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let mut position_out = Vec::with_capacity(n_out);
     let mut optical_out = Vec::with_capacity(n_out);
     let mut ve_true = Vec::with_capacity(n_out);
+    // The ball-pass pulse trains alone, as they fall in time (truth.rs,
+    // `optical_lag_s`).
+    let mut ripple_out = Vec::with_capacity(n_out);
+    let mut pulses_out = Vec::with_capacity(n_out);
     let mut speed_sum = 0.0;
     let q_mm = s.encoder.resolution_um * 1e-3;
     let v_band_min = fr.zero_velocity_band_mm_s * 1e-3;
@@ -472,11 +476,10 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
 
         // Friction at this step (held over it).
         let sb = travel(x);
-        let magnitude = (fr.coulomb_n
-            + roughness.value((x - x_init) * 1e3)
-            + friction_pulses.value(sb)
-            + stick_pulses.value(sb))
-        .max(0.0);
+        let ripple = friction_pulses.value(sb);
+        let magnitude =
+            (fr.coulomb_n + roughness.value((x - x_init) * 1e3) + ripple + stick_pulses.value(sb))
+                .max(0.0);
         let v_eps = v_band_min.max(2.0 * magnitude * dt / m);
         let friction = magnitude * (xdot / v_eps).clamp(-1.0, 1.0);
 
@@ -511,6 +514,8 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
             position_out.push(quantize(x * 1e3, q_mm));
             ve_true.push((xdot - if profile.is_some() { rdot } else { v_m_s }) * 1e3);
             speed_sum += xdot.abs() * 1e3;
+            ripple_out.push(ripple);
+            pulses_out.push(pulses);
         }
         lcl.step(lc_hp_out);
         ol.step(opt_hp_out);
@@ -613,7 +618,15 @@ pub fn simulate(settings: &SimSettings) -> Result<Simulation> {
     let gvf = s.stage.g_vf(w);
     let h_ve = (-gvf.0, -gvf.1);
     let optical_delay_s = opt.sensor_offset_mm / (mean_v / 2.0);
-    let opt_phase_force = -w * optical_delay_s + shape_phase + arg(opt_resp) - arg(lc_aa);
+    // The phase the pulse trains' fundamentals show as they fall in time
+    // (truth.rs, `optical_lag_s`); the pulses' geometric delay where the
+    // record cannot tell it.
+    let trains_phase = match profile {
+        None => truth::fundamental_phase_difference(&ripple_out, &pulses_out, w / s.fs_hz),
+        Some(_) => None,
+    };
+    let opt_phase_force =
+        trains_phase.unwrap_or(-w * optical_delay_s + shape_phase) + arg(opt_resp) - arg(lc_aa);
     let opt_phase = opt_phase_force + arg(lc_aa) - arg(lc_resp);
     let optical_lag_s = wrap_lag(-opt_phase / w, tau_c);
     let optical_lag_force_s = wrap_lag(-opt_phase_force / w, tau_c);

@@ -93,7 +93,17 @@ pub struct Truth {
     pub friction_pulse_fwhm_s: f64,
     /// Delay of the optical pulses after the friction pulses, `offset / (v/2)`, s (not wrapped).
     pub optical_delay_s: f64,
-    /// Lag of the optical channel behind the friction channel, s.
+    /// Lag of the optical channel behind the friction channel, s. Since
+    /// session 17 it rests on the fundamentals of the two pulse trains as
+    /// the simulator generated them in time (Hann-windowed DFT at `f_c`,
+    /// records of ten periods or more; [`fundamental_phase_difference`]),
+    /// not on `optical_delay_s` and the pulse shapes alone: both trains are
+    /// fixed in the travel, so a velocity ripple locked to the ball
+    /// passages (the stage answering the friction ripple, strongest when
+    /// `f_c` or `2 f_c` is near its resonance) moves them in time by the
+    /// stage's position ripple at their instants, and the recorded channels
+    /// show that. At one speed only; with a speed profile, or fewer than ten
+    /// periods, the geometric delay at the mean speed.
     pub optical_lag_s: f64,
     /// Same, in units of tau_c.
     pub optical_lag_tau_c: f64,
@@ -159,7 +169,76 @@ impl Truth {
     }
 }
 
+/// `arg O(ω) − arg F(ω)` (radians, unwrapped to `(−π, π]`), with `F`
+/// and `O` the Hann-windowed DFTs at `w_per_sample` (radians per sample) of
+/// the mean-removed friction ripple and optical pulse train as the
+/// simulator generated them in time; `None` with fewer than ten periods in
+/// the record (the window's leakage from DC and the harmonics is then no
+/// longer negligible) or a train without a fundamental.
+pub(crate) fn fundamental_phase_difference(
+    friction: &[f64],
+    optical: &[f64],
+    w_per_sample: f64,
+) -> Option<f64> {
+    let n = friction.len().min(optical.len());
+    if n < 2 || (n as f64) * w_per_sample < 10.0 * std::f64::consts::TAU {
+        return None;
+    }
+    let dft = |x: &[f64]| {
+        let m = x[..n].iter().sum::<f64>() / n as f64;
+        let (mut re, mut im, mut e) = (0.0, 0.0, 0.0);
+        for (i, v) in x[..n].iter().enumerate() {
+            let h = 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos();
+            let a = w_per_sample * i as f64;
+            let d = h * (v - m);
+            re += d * a.cos();
+            im -= d * a.sin();
+            e += d * d;
+        }
+        (re, im, e)
+    };
+    let (fr, fi, fe) = dft(friction);
+    let (or, oi, oe) = dft(optical);
+    // A fundamental of at least 1e-6 of the train's windowed energy.
+    let has = |re: f64, im: f64, e: f64| e > 0.0 && re * re + im * im > 1e-12 * e * n as f64;
+    if !has(fr, fi, fe) || !has(or, oi, oe) {
+        return None;
+    }
+    let d = oi.atan2(or) - fi.atan2(fr);
+    let tau = std::f64::consts::TAU;
+    Some(d - tau * ((d + std::f64::consts::PI) / tau).floor())
+}
+
 /// The truth file that belongs beside a recording: `rec.csv` → `rec.truth.json`.
 pub fn truth_path(recording_path: &Path) -> PathBuf {
     recording_path.with_extension("truth.json")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fundamental_phase_difference;
+
+    /// Two sinusoids 12.3 periods long, the second 0.7 rad behind, over
+    /// offsets and harmonics of their own: the phase difference within
+    /// 1e-3 rad (the Hann window's leakage from DC and 2 f at 12 periods is
+    /// below 1e-4); too short a record gives `None`.
+    #[test]
+    fn the_fundamental_phase_difference_of_two_trains() {
+        let (n, w) = (4000usize, std::f64::consts::TAU * 12.3 / 4000.0);
+        let f: Vec<f64> = (0..n)
+            .map(|i| 3.0 + (w * i as f64 + 0.2).cos() + 0.5 * (2.0 * w * i as f64).cos())
+            .collect();
+        let o: Vec<f64> = (0..n)
+            .map(|i| {
+                1.0 + 2.0 * (w * i as f64 + 0.2 - 0.7).cos() + 0.3 * (3.0 * w * i as f64).sin()
+            })
+            .collect();
+        let d = fundamental_phase_difference(&f, &o, w).unwrap();
+        assert!((d + 0.7).abs() < 1e-3, "{d}");
+        assert_eq!(
+            fundamental_phase_difference(&f[..3000], &o[..3000], w),
+            None
+        );
+        assert_eq!(fundamental_phase_difference(&vec![1.0; n], &o, w), None);
+    }
 }

@@ -290,6 +290,27 @@ pub fn welch_dof(w: &[f64], step: usize, k: usize) -> f64 {
 /// [`welch_dof`] (the power of noise, `c²`) and the equivalent segment
 /// count of a line's phase (`c`).
 pub(crate) fn overlap_sum(w: &[f64], step: usize, k: usize, squared: bool) -> f64 {
+    overlap_terms(w, step, k, |_, c| if squared { c } else { 1.0 })
+}
+
+/// `Σ_{m=1}^{k−1} (1 − m/k) c(m) cos(m θ)`: [`overlap_sum`]'s linear sum
+/// for the cross spectrum of a line and noise in a bin whose frequency
+/// differs from the line's by `θ / (2π · step)` cycles per sample (the
+/// line's segment phasor and the noise's correlation between segments `m`
+/// hops apart turn by `m θ` against each other); `θ = 0` is
+/// `overlap_sum(w, step, k, false)` bit for bit.
+pub(crate) fn overlap_sum_turned(w: &[f64], step: usize, k: usize, theta: f64) -> f64 {
+    overlap_terms(w, step, k, |m, _| {
+        if theta == 0.0 {
+            1.0
+        } else {
+            (m as f64 * theta).cos()
+        }
+    })
+}
+
+/// `Σ_{m=1}^{k−1} ((1 − m/k) c(m)) · weight(m, c(m))`.
+fn overlap_terms(w: &[f64], step: usize, k: usize, weight: impl Fn(usize, f64) -> f64) -> f64 {
     let e: f64 = w.iter().map(|v| v * v).sum();
     let mut s = 0.0;
     for m in 1..k {
@@ -298,9 +319,10 @@ pub(crate) fn overlap_sum(w: &[f64], step: usize, k: usize, squared: bool) -> f6
             break;
         }
         let c: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / e;
-        // Evaluated as ((1 − m/k) c) c, the order the two sums had apart.
+        // Evaluated as ((1 − m/k) c) c, the order the two sums had apart
+        // (a weight of 1 leaves the product exact).
         let t = (1.0 - m as f64 / k as f64) * c;
-        s += if squared { t * c } else { t };
+        s += t * weight(m, c);
     }
     s
 }

@@ -577,7 +577,7 @@ pub(crate) fn analyze_stream_blocks(
         nseg_h,
     )?;
     for s in [&mut unfiltered, &mut full, &mut hr] {
-        super::confidence::finish(s, settings.band_confidence, settings.confidence);
+        super::confidence::finish(s, settings);
     }
     let (stage, stage_spectra) = match (stage, &dc) {
         (Some(st), Some(dc)) => {
