@@ -81,6 +81,17 @@ fn uniforms(n: usize, mut state: u64) -> Vec<f64> {
         .collect()
 }
 
+/// `f()` with the stack pointer moved down by `PAD` bytes: the same call
+/// from a stack that starts elsewhere modulo 64, as in different processes
+/// (the kernel places the stack top at a random 16-byte multiple).
+#[inline(never)]
+fn with_stack_pad<const PAD: usize>(f: &mut dyn FnMut()) {
+    let pad = [0u8; PAD];
+    black_box(&pad);
+    f();
+    black_box(&pad);
+}
+
 fn best(repeat: usize, mut f: impl FnMut()) -> Duration {
     (0..repeat)
         .map(|_| {
@@ -253,6 +264,41 @@ fn main() {
             "freqz_scipy_grid",
             Box::new(|| {
                 black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+            }),
+        ),
+        // The Python path of freqz at four stack offsets modulo 64 (session
+        // 17): a kernel whose blocks sit on the stack unaligned runs at
+        // two speeds depending on where the stack starts.
+        (
+            "freqz_grid_sp0",
+            Box::new(|| {
+                with_stack_pad::<64>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
+            }),
+        ),
+        (
+            "freqz_grid_sp16",
+            Box::new(|| {
+                with_stack_pad::<80>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
+            }),
+        ),
+        (
+            "freqz_grid_sp32",
+            Box::new(|| {
+                with_stack_pad::<96>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
+            }),
+        ),
+        (
+            "freqz_grid_sp48",
+            Box::new(|| {
+                with_stack_pad::<112>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
             }),
         ),
         (
