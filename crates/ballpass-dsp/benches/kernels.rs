@@ -57,6 +57,14 @@
 //! into two half-length ones would save ~7 us of the ~290), and the
 //! memset of an existing 480 kB buffer is the lags' store floor.
 //!
+//! Session 17 (`freqz_grid_sp0` .. `freqz_grid_sp48`: `freqz_scipy_grid`
+//! called from four stack offsets modulo 64). The freqz blocks were 8-byte
+//! aligned arrays on the stack, so the speed depended on where the
+//! process's stack started. Main's binary measured freqz 169 or 205 us and
+//! freqz_scipy_grid 182 or 226 us, depending on the process. With the blocks
+//! 64-byte aligned: freqz 163-165 us, and freqz_scipy_grid 172-173 us at all
+//! four offsets (best of 300, load 7-8).
+//!
 //! Of correlate's 400 us, the three FFTs of 31 104 complex points (the real
 //! transforms of 62 208) take ~290 us (96 us each; RustFFT was no faster
 //! at 30 000, 30 720, 31 250, 32 000 or 32 768 points, measured), so 5x
