@@ -57,6 +57,14 @@
 //! into two half-length ones would save ~7 us of the ~290), and the
 //! memset of an existing 480 kB buffer is the lags' store floor.
 //!
+//! Session 17 (`freqz_grid_sp0` .. `freqz_grid_sp48`: `freqz_scipy_grid`
+//! called from four stack offsets modulo 64). The freqz blocks were 8-byte
+//! aligned arrays on the stack, so the speed depended on where the
+//! process's stack started. Main's binary measured freqz 169 or 205 us and
+//! freqz_scipy_grid 182 or 226 us, depending on the process. With the blocks
+//! 64-byte aligned: freqz 163-165 us, and freqz_scipy_grid 172-173 us at all
+//! four offsets (best of 300, load 7-8).
+//!
 //! Of correlate's 400 us, the three FFTs of 31 104 complex points (the real
 //! transforms of 62 208) take ~290 us (96 us each; RustFFT was no faster
 //! at 30 000, 30 720, 31 250, 32 000 or 32 768 points, measured), so 5x
@@ -79,6 +87,17 @@ fn uniforms(n: usize, mut state: u64) -> Vec<f64> {
             (z >> 11) as f64 / (1u64 << 53) as f64
         })
         .collect()
+}
+
+/// `f()` with the stack pointer moved down by `PAD` bytes: the same call
+/// from a stack that starts elsewhere modulo 64, as in different processes
+/// (the kernel places the stack top at a random 16-byte multiple).
+#[inline(never)]
+fn with_stack_pad<const PAD: usize>(f: &mut dyn FnMut()) {
+    let pad = [0u8; PAD];
+    black_box(&pad);
+    f();
+    black_box(&pad);
 }
 
 fn best(repeat: usize, mut f: impl FnMut()) -> Duration {
@@ -253,6 +272,41 @@ fn main() {
             "freqz_scipy_grid",
             Box::new(|| {
                 black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+            }),
+        ),
+        // The Python path of freqz at four stack offsets modulo 64 (session
+        // 17): a kernel whose blocks sit on the stack unaligned runs at
+        // two speeds depending on where the stack starts.
+        (
+            "freqz_grid_sp0",
+            Box::new(|| {
+                with_stack_pad::<64>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
+            }),
+        ),
+        (
+            "freqz_grid_sp16",
+            Box::new(|| {
+                with_stack_pad::<80>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
+            }),
+        ),
+        (
+            "freqz_grid_sp32",
+            Box::new(|| {
+                with_stack_pad::<96>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
+            }),
+        ),
+        (
+            "freqz_grid_sp48",
+            Box::new(|| {
+                with_stack_pad::<112>(&mut || {
+                    black_box(dsp::freqz_values_scipy_grid(&b, &a, &f, fs).expect("ok"));
+                })
             }),
         ),
         (

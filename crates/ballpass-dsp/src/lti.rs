@@ -82,10 +82,10 @@ pub fn freqs_values(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Vec<Complex
     Ok(crate::simd::widest(
         #[inline(always)]
         || {
-            by_full_blocks(w_rad_s, |w: &[f64; LANES], h: &mut [Complex64; LANES]| {
+            by_full_blocks(w_rad_s, |w: &Lanes<LANES>, h: &mut [Complex64; LANES]| {
                 if short {
                     let (nb, na) = (polyval_jw_short(b, w), polyval_jw_short(a, w));
-                    if all_finite_lanes(&[&nb.0, &nb.1, &na.0, &na.1]) {
+                    if all_finite_lanes(&[&nb.0 .0, &nb.1 .0, &na.0 .0, &na.1 .0]) {
                         return div_lanes(nb, na, &mut h[..]);
                     }
                 }
@@ -109,8 +109,8 @@ pub fn freqs_values(b: &[f64], a: &[f64], w_rad_s: &[f64]) -> Result<Vec<Complex
 /// caller checks the results and evaluates NumPy's way when one is not
 /// finite.
 #[inline(always)]
-fn polyval_jw_short(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
-    let (mut yr, mut yi) = ([0.0; LANES], [0.0; LANES]);
+fn polyval_jw_short(p: &[f64], w: &[f64; LANES]) -> (Lanes<LANES>, Lanes<LANES>) {
+    let (mut yr, mut yi) = (Lanes::zero(), Lanes::zero());
     for &c in p {
         for k in 0..LANES {
             let (r, i) = (yr[k], yi[k]);
@@ -150,18 +150,52 @@ const LANES: usize = 16;
 /// slower with 32 than with 16: 102-109 against 81 us).
 const FREQZ_LANES: usize = 64;
 
+/// One block's values of a lane kernel, 64-byte aligned. The blocks live
+/// on the stack (a block of 64 lanes is eight AVX-512 registers, more than
+/// the kernels can keep in registers), and plain `[f64; L]` arrays are
+/// only 8-byte aligned: where they then sat depended on where the process's
+/// stack happened to start (randomised per process), and in half of the
+/// processes every 64-byte access split over two cache lines (Python
+/// `freqz`, 30 000 points: 221-231 us in those processes, 184-186 in the
+/// others, one wheel). Aligned, every process gets the fast layout.
+#[derive(Clone, Copy)]
+#[repr(C, align(64))]
+struct Lanes<const L: usize>([f64; L]);
+
+impl<const L: usize> Lanes<L> {
+    #[inline(always)]
+    fn zero() -> Self {
+        Lanes([0.0; L])
+    }
+}
+
+impl<const L: usize> std::ops::Deref for Lanes<L> {
+    type Target = [f64; L];
+    #[inline(always)]
+    fn deref(&self) -> &[f64; L] {
+        &self.0
+    }
+}
+
+impl<const L: usize> std::ops::DerefMut for Lanes<L> {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut [f64; L] {
+        &mut self.0
+    }
+}
+
 /// `eval` on the points `x` in blocks of [`LANES`] (the last block padded
 /// with zeros, its extra results dropped): one result per point.
 #[inline(always)]
 fn by_blocks<const L: usize>(
     x: &[f64],
-    mut eval: impl FnMut(&[f64; L], &mut [Complex64]),
+    mut eval: impl FnMut(&Lanes<L>, &mut [Complex64]),
 ) -> Vec<Complex64> {
     // Grown block by block (zeroed while the block is in L1, not the whole
     // output up front).
     let mut h = Vec::with_capacity(x.len());
     for xs in x.chunks(L) {
-        let mut block = [0.0; L];
+        let mut block = Lanes::zero();
         block[..xs.len()].copy_from_slice(xs);
         let start = h.len();
         h.resize(start + xs.len(), Complex64::new(0.0, 0.0));
@@ -182,14 +216,14 @@ fn by_blocks<const L: usize>(
 #[inline(always)]
 fn by_full_blocks(
     x: &[f64],
-    mut eval: impl FnMut(&[f64; LANES], &mut [Complex64; LANES]),
+    mut eval: impl FnMut(&Lanes<LANES>, &mut [Complex64; LANES]),
 ) -> Vec<Complex64> {
     // One call of `eval` in the loop (a second one for the last block
     // took it out of line: 2.6x slower).
     let mut h = Vec::with_capacity(x.len());
     let mut out = [Complex64::new(0.0, 0.0); LANES];
     for xs in x.chunks(LANES) {
-        let mut block = [0.0; LANES];
+        let mut block = Lanes::zero();
         block[..xs.len()].copy_from_slice(xs);
         eval(&block, &mut out);
         if xs.len() == LANES {
@@ -205,8 +239,8 @@ fn by_full_blocks(
 /// imaginary parts, with `polyval`'s operations (`y s` as the complex
 /// product with `s.re = 0`, then `+ (c, 0)`).
 #[inline(always)]
-fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
-    let (mut yr, mut yi) = ([0.0; LANES], [0.0; LANES]);
+fn polyval_jw(p: &[f64], w: &[f64; LANES]) -> (Lanes<LANES>, Lanes<LANES>) {
+    let (mut yr, mut yi) = (Lanes::zero(), Lanes::zero());
     for &c in p {
         for k in 0..LANES {
             let (r, i) = (yr[k], yi[k]);
@@ -303,15 +337,17 @@ fn check_freqs(freq_hz: &[f64], fs_hz: f64) -> Result<()> {
 /// block in SIMD lanes ([`crate::sincos`], within 2 ulp of the C
 /// library's that NumPy's `exp` calls).
 #[inline(always)]
-fn unit_delays<const L: usize>(f: &[f64; L], fs_hz: f64) -> ([f64; L], [f64; L]) {
-    crate::sincos::sincos(&minus_omega(f, fs_hz))
+fn unit_delays<const L: usize>(f: &[f64; L], fs_hz: f64) -> (Lanes<L>, Lanes<L>) {
+    let (mut zr, mut zi) = (Lanes::zero(), Lanes::zero());
+    crate::sincos::sincos_into(&minus_omega(f, fs_hz), &mut zr, &mut zi);
+    (zr, zi)
 }
 
 /// `-w = -(2 pi f / fs)` for a block of frequencies, rounded as NumPy's
 /// `2 * pi * f / fs` (then negated, exactly).
 #[inline(always)]
-fn minus_omega<const L: usize>(f: &[f64; L], fs_hz: f64) -> [f64; L] {
-    let mut minus_w = [0.0; L];
+fn minus_omega<const L: usize>(f: &[f64; L], fs_hz: f64) -> Lanes<L> {
+    let mut minus_w = Lanes::zero();
     for k in 0..L {
         minus_w[k] = -(2.0 * std::f64::consts::PI * f[k] / fs_hz);
     }
@@ -326,11 +362,11 @@ fn minus_omega<const L: usize>(f: &[f64; L], fs_hz: f64) -> [f64; L] {
 /// bench).
 #[inline(always)]
 fn div_lanes<const L: usize>(
-    (ar, ai): ([f64; L], [f64; L]),
-    (br, bi): ([f64; L], [f64; L]),
+    (ar, ai): (Lanes<L>, Lanes<L>),
+    (br, bi): (Lanes<L>, Lanes<L>),
     h: &mut [Complex64],
 ) {
-    let (mut re, mut im) = ([0.0; L], [0.0; L]);
+    let (mut re, mut im) = (Lanes::<L>::zero(), Lanes::<L>::zero());
     let mut any_zero = false;
     for k in 0..L {
         any_zero |= (br[k] == 0.0) & (bi[k] == 0.0);
@@ -358,37 +394,96 @@ fn div_lanes<const L: usize>(
             }
         }
     }
-    for (k, h) in h.iter_mut().enumerate() {
-        *h = Complex64::new(re[k], im[k]);
+    // A full block as a fixed-size array: its interleaved (re, im) stores
+    // are then vector stores. Through a slice of run-time length (what
+    // `by_blocks` hands over) they compiled to two scalar loads and two
+    // scalar stores per result.
+    if let Ok(h) = <&mut [Complex64; L]>::try_from(&mut *h) {
+        for k in 0..L {
+            h[k] = Complex64::new(re[k], im[k]);
+        }
+    } else {
+        for (k, h) in h.iter_mut().enumerate() {
+            *h = Complex64::new(re[k], im[k]);
+        }
     }
 }
 
 /// `c(z^-1)` at a block of `z^-1` (NumPy `polyval` from the lowest power,
 /// as SciPy's `freqz`): `acc = (c_k, 0) + acc z^-1` from the last
 /// coefficient down, real and imaginary parts.
+///
+/// The first step, from `acc = (r, +0)`, is `(c_k + r zr, 0 + r zi)`
+/// without the products by the zero: the same bits for finite `r`, `zr`,
+/// `zi` (as here: checked coefficients, cosines and sines). NumPy's real
+/// part is `c_k + (r zr - (+0) zi)`: with `r zr` nonzero the zero product
+/// does not change it; with `r zr` a zero, `r zr - (+-0)` is a zero whose
+/// sign is lost in `c_k + ` unless `c_k` is `-0.0` (only then do the two
+/// differ, so a `-0.0` coefficient takes NumPy's step). The imaginary part
+/// `0 + (r zi + (+0) zr)` is `r zi` when that is nonzero and `+0`
+/// otherwise, as `0 + r zi`. Four of the step's eight operations, a tenth
+/// of a butter(5) response's Horner work. `SHORT` says whether to take it
+/// ([`short_first_step`] of the polynomial): a constant, so that the
+/// block loop has one path (a branch on the coefficient inside the block
+/// made the loop larger and slower: Python freqz 181-186 against 178-180 us).
 #[inline(always)]
-fn polyval_z<const L: usize>(c: &[f64], zr: &[f64; L], zi: &[f64; L]) -> ([f64; L], [f64; L]) {
-    let (mut ar, mut ai) = ([c[c.len() - 1]; L], [0.0; L]);
-    for &ci in c.iter().rev().skip(1) {
-        for k in 0..L {
-            let (r, i) = (ar[k], ai[k]);
-            let (mr, mi) = (r * zr[k] - i * zi[k], r * zi[k] + i * zr[k]);
-            (ar[k], ai[k]) = (ci + mr, 0.0 + mi);
+fn polyval_z<const L: usize, const SHORT: bool>(
+    c: &[f64],
+    zr: &[f64; L],
+    zi: &[f64; L],
+) -> (Lanes<L>, Lanes<L>) {
+    let r = c[c.len() - 1];
+    let (mut ar, mut ai) = (Lanes([r; L]), Lanes::zero());
+    let mut rest = c.iter().rev().skip(1);
+    if SHORT {
+        if let Some(&ci) = rest.next() {
+            for k in 0..L {
+                (ar[k], ai[k]) = (ci + r * zr[k], 0.0 + r * zi[k]);
+            }
         }
+    }
+    for &ci in rest {
+        horner_z_step(ci, &mut ar, &mut ai, zr, zi);
     }
     (ar, ai)
 }
 
+/// Whether [`polyval_z`]'s short first step gives NumPy's bits for `c`:
+/// its second-to-last coefficient (the first step's) is not `-0.0`.
+fn short_first_step(c: &[f64]) -> bool {
+    c.len() < 2 || !(c[c.len() - 2] == 0.0 && c[c.len() - 2].is_sign_negative())
+}
+
+/// One step of [`polyval_z`], NumPy's operations: `acc = (ci, 0) + acc z^-1`.
+#[inline(always)]
+fn horner_z_step<const L: usize>(
+    ci: f64,
+    ar: &mut [f64; L],
+    ai: &mut [f64; L],
+    zr: &[f64; L],
+    zi: &[f64; L],
+) {
+    for k in 0..L {
+        let (r, i) = (ar[k], ai[k]);
+        let (mr, mi) = (r * zr[k] - i * zi[k], r * zi[k] + i * zr[k]);
+        (ar[k], ai[k]) = (ci + mr, 0.0 + mi);
+    }
+}
+
 /// `b(z^-1) / a(z^-1)` at a block of `z^-1`, into `h`.
 #[inline(always)]
-fn ratio_z<const L: usize>(
+fn ratio_z<const L: usize, const SHORT: bool>(
     b: &[f64],
     a: &[f64],
     zr: &[f64; L],
     zi: &[f64; L],
     h: &mut [Complex64],
 ) {
-    div_lanes(polyval_z(b, zr, zi), polyval_z(a, zr, zi), h);
+    div_lanes(
+        polyval_z::<L, SHORT>(b, zr, zi),
+        polyval_z::<L, SHORT>(a, zr, zi),
+        h,
+    );
 }
 
 /// Frequency response of the digital filter `b(z) / a(z)` (coefficients of
@@ -416,15 +511,32 @@ pub fn freqz_values(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result
     check_poly("b", b)?;
     check_poly("a", a)?;
     check_freqs(freq_hz, fs_hz)?;
+    let short = short_first_step(b) && short_first_step(a);
     Ok(crate::simd::widest(
         #[inline(always)]
         || {
-            by_blocks(freq_hz, |f: &[f64; FREQZ_LANES], h| {
-                let (zr, zi) = unit_delays(f, fs_hz);
-                ratio_z(b, a, &zr, &zi, h);
-            })
+            if short {
+                freqz_blocks::<true>(b, a, freq_hz, fs_hz)
+            } else {
+                freqz_blocks::<false>(b, a, freq_hz, fs_hz)
+            }
         },
     ))
+}
+
+/// [`freqz_values`]' block loop, with or without the short first Horner
+/// step.
+#[inline(always)]
+fn freqz_blocks<const SHORT: bool>(
+    b: &[f64],
+    a: &[f64],
+    freq_hz: &[f64],
+    fs_hz: f64,
+) -> Vec<Complex64> {
+    by_blocks(freq_hz, |f: &Lanes<FREQZ_LANES>, h| {
+        let (zr, zi) = unit_delays(f, fs_hz);
+        ratio_z::<_, SHORT>(b, a, &zr, &zi, h);
+    })
 }
 
 /// [`freqz_values`] together with the frequencies
@@ -448,24 +560,42 @@ pub fn freqz_values_scipy_grid(
     check_poly("b", b)?;
     check_poly("a", a)?;
     check_freqs(freq_hz, fs_hz)?;
-    let back = fs_hz / (2.0 * std::f64::consts::PI);
+    let short = short_first_step(b) && short_first_step(a);
     Ok(crate::simd::widest(
         #[inline(always)]
         || {
-            let mut grid = Vec::with_capacity(freq_hz.len());
-            let h = by_blocks(freq_hz, |f: &[f64; FREQZ_LANES], h| {
-                let minus_w = minus_omega(f, fs_hz);
-                let mut w = [0.0; FREQZ_LANES];
-                for k in 0..FREQZ_LANES {
-                    w[k] = -minus_w[k] * back;
-                }
-                grid.extend_from_slice(&w[..h.len()]);
-                let (zr, zi) = crate::sincos::sincos(&minus_w);
-                ratio_z(b, a, &zr, &zi, h);
-            });
-            (grid, h)
+            if short {
+                freqz_grid_blocks::<true>(b, a, freq_hz, fs_hz)
+            } else {
+                freqz_grid_blocks::<false>(b, a, freq_hz, fs_hz)
+            }
         },
     ))
+}
+
+/// [`freqz_values_scipy_grid`]'s block loop, with or without the short
+/// first Horner step.
+#[inline(always)]
+fn freqz_grid_blocks<const SHORT: bool>(
+    b: &[f64],
+    a: &[f64],
+    freq_hz: &[f64],
+    fs_hz: f64,
+) -> (Vec<f64>, Vec<Complex64>) {
+    let back = fs_hz / (2.0 * std::f64::consts::PI);
+    let mut grid = Vec::with_capacity(freq_hz.len());
+    let h = by_blocks(freq_hz, |f: &Lanes<FREQZ_LANES>, h| {
+        let minus_w = minus_omega(f, fs_hz);
+        let mut w = Lanes::<FREQZ_LANES>::zero();
+        for k in 0..FREQZ_LANES {
+            w[k] = -minus_w[k] * back;
+        }
+        grid.extend_from_slice(&w[..h.len()]);
+        let (mut zr, mut zi) = (Lanes::zero(), Lanes::zero());
+        crate::sincos::sincos_into(&minus_w, &mut zr, &mut zi);
+        ratio_z::<_, SHORT>(b, a, &zr, &zi, h);
+    });
+    (grid, h)
 }
 
 /// Frequency response of second-order sections, the product of the
@@ -499,12 +629,12 @@ pub fn sosfreqz_values(sos: &Sos, freq_hz: &[f64], fs_hz: f64) -> Result<Vec<Com
     Ok(crate::simd::widest(
         #[inline(always)]
         || {
-            by_blocks(freq_hz, |f: &[f64; LANES], h| {
+            by_blocks(freq_hz, |f: &Lanes<LANES>, h| {
                 let (zr, zi) = unit_delays(f, fs_hz);
                 let mut hs = [Complex64::new(0.0, 0.0); LANES];
                 let mut acc = [Complex64::new(1.0, 0.0); LANES];
                 for s in sos.sections() {
-                    ratio_z(&s[..3], &s[3..], &zr, &zi, &mut hs);
+                    ratio_z::<_, false>(&s[..3], &s[3..], &zr, &zi, &mut hs);
                     for (acc, hs) in acc.iter_mut().zip(&hs) {
                         *acc *= *hs;
                     }
@@ -568,6 +698,49 @@ mod tests {
                     acc * freqz_at(&s[..3], &s[3..], f[i], 1000.0)
                 });
             assert_eq!(hsos[i], want, "sosfreqz {i}");
+        }
+    }
+
+    /// `freqz`'s Horner sums with the short first step are NumPy's bit for
+    /// bit where signed zeros can appear: zero and `-0.0` coefficients
+    /// (last, second to last, elsewhere), at 0 Hz, a quarter and half the
+    /// sampling rate and their negatives (where the cosine or sine is an
+    /// exact or near zero), in full and partial blocks.
+    #[test]
+    fn short_first_horner_step_keeps_signed_zeros() {
+        let bits = |h: Complex64| (h.re.to_bits(), h.im.to_bits());
+        let polys: [&[f64]; 9] = [
+            &[1.0, 0.0],
+            &[1.0, -0.0],
+            &[0.0, 1.0],
+            &[-0.0, 1.0],
+            &[0.5, -0.0, 0.0],
+            &[2.0, 0.0, -0.0],
+            &[1.0, -0.0, 0.25, 0.0],
+            &[-0.0, -0.0, 1.0],
+            &[0.2, -0.1, 0.05, 0.3],
+        ];
+        let f: Vec<f64> = [
+            0.0, -0.0, 250.0, -250.0, 500.0, -500.0, 1e-300, 125.0, 1000.0,
+        ]
+        .into_iter()
+        .cycle()
+        .take(80)
+        .collect();
+        for b in polys {
+            for a in polys {
+                let h = freqz(b, a, &f, 1000.0).unwrap().h;
+                for (i, &fi) in f.iter().enumerate() {
+                    let want = freqz_at(b, a, fi, 1000.0);
+                    let same = bits(h[i]) == bits(want)
+                        || (h[i].re.is_nan() || h[i].im.is_nan())
+                            && (h[i].re.to_bits() == want.re.to_bits()
+                                || h[i].re.is_nan() && want.re.is_nan())
+                            && (h[i].im.to_bits() == want.im.to_bits()
+                                || h[i].im.is_nan() && want.im.is_nan());
+                    assert!(same, "b {b:?} a {a:?} f {fi}: {} vs {want}", h[i]);
+                }
+            }
         }
     }
 
@@ -643,7 +816,7 @@ mod tests {
         bi: [f64; LANES],
     ) {
         let mut h = [Complex64::new(0.0, 0.0); LANES];
-        div_lanes((ar, ai), (br, bi), &mut h);
+        div_lanes((Lanes(ar), Lanes(ai)), (Lanes(br), Lanes(bi)), &mut h);
         for k in 0..LANES {
             let want = nc::div(Complex64::new(ar[k], ai[k]), Complex64::new(br[k], bi[k]));
             for (g, w) in [(h[k].re, want.re), (h[k].im, want.im)] {

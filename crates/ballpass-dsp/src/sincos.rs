@@ -46,13 +46,23 @@ const C6: f64 = -1.135_964_755_778_819_482_65e-11;
 
 /// `(cos x, sin x)` of every lane of `x` (finite values).
 #[inline(always)]
+#[cfg(test)]
 pub(crate) fn sincos<const L: usize>(x: &[f64; L]) -> ([f64; L], [f64; L]) {
     let (mut c, mut s) = ([0.0; L], [0.0; L]);
+    sincos_into(x, &mut c, &mut s);
+    (c, s)
+}
+
+/// The cosines (`c`) and sines (`s`) of every lane of `x` (finite values)
+/// into the caller's arrays, so that a caller can keep its blocks aligned
+/// (see `lti::Lanes`).
+#[inline(always)]
+pub(crate) fn sincos_into<const L: usize>(x: &[f64; L], c: &mut [f64; L], s: &mut [f64; L]) {
     if x.iter().any(|v| v.abs() > REDUCED_MAX) {
         for k in 0..L {
             (c[k], s[k]) = (x[k].cos(), x[k].sin());
         }
-        return (c, s);
+        return;
     }
     for k in 0..L {
         let n = (x[k] * std::f64::consts::FRAC_2_PI).round_ties_even();
@@ -64,19 +74,81 @@ pub(crate) fn sincos<const L: usize>(x: &[f64; L]) -> ([f64; L], [f64; L]) {
         let hz = 0.5 * z;
         let w = 1.0 - hz;
         let cr = w + (((1.0 - w) - hz) + z * poly);
-        // Quadrant n mod 4 (exact on these integers).
-        let q = n - 4.0 * (0.25 * n).floor();
-        let odd = q == 1.0 || q == 3.0;
-        let (s0, c0) = if odd { (cr, sr) } else { (sr, cr) };
-        s[k] = if q >= 2.0 { -s0 } else { s0 };
-        c[k] = if q == 1.0 || q == 2.0 { -c0 } else { c0 };
+        // Quadrant n mod 4: the low bits of n + 1.5 2^52 (exact for
+        // |n| < 2^51, two's complement below zero). Bit 0 swaps sine and
+        // cosine, bit 1 negates the sine, bit 0 xor bit 1 the cosine: the
+        // same selections and sign flips as with n mod 4 taken in floating
+        // point (`quadrant_bits_select_as_the_float_quadrant`), in five
+        // fewer operations.
+        let t = (n + QUADRANT_BIAS).to_bits();
+        let (s0, c0) = if t & 1 == 1 { (cr, sr) } else { (sr, cr) };
+        s[k] = f64::from_bits(s0.to_bits() ^ ((t & 2) << 62));
+        c[k] = f64::from_bits(c0.to_bits() ^ (((t ^ (t >> 1)) & 1) << 63));
     }
-    (c, s)
 }
+
+/// 1.5 2^52: `n + QUADRANT_BIAS` holds the integer `n` in its low bits.
+const QUADRANT_BIAS: f64 = 6_755_399_441_055_744.0;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The kernel with the quadrant taken in floating point (session 16's
+    /// selection), the reference of the bit selection.
+    fn sincos_float_quadrant(x: f64) -> (f64, f64) {
+        let n = (x * std::f64::consts::FRAC_2_PI).round_ties_even();
+        let r = ((x - n * P1) - n * P2) - n * P3;
+        let z = r * r;
+        let v = z * r;
+        let sr = r + v * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
+        let poly = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
+        let hz = 0.5 * z;
+        let w = 1.0 - hz;
+        let cr = w + (((1.0 - w) - hz) + z * poly);
+        let q = n - 4.0 * (0.25 * n).floor();
+        let odd = q == 1.0 || q == 3.0;
+        let (s0, c0) = if odd { (cr, sr) } else { (sr, cr) };
+        let s = if q >= 2.0 { -s0 } else { s0 };
+        let c = if q == 1.0 || q == 2.0 { -c0 } else { c0 };
+        (c, s)
+    }
+
+    /// The quadrant from the bits of `n` gives the float quadrant's
+    /// cosines and sines bit for bit: signed zeros, every quadrant of
+    /// negative and positive arguments, their boundaries and neighbours,
+    /// up to the reduction's limit.
+    #[test]
+    fn quadrant_bits_select_as_the_float_quadrant() {
+        let mut xs: Vec<f64> = vec![0.0, -0.0, 1e-300, -1e-300, REDUCED_MAX, -REDUCED_MAX];
+        for k in -3000..=3000 {
+            let x = k as f64 * std::f64::consts::FRAC_PI_4;
+            let m = x.abs().to_bits();
+            let near = |b: u64| f64::from_bits(b).copysign(x);
+            xs.extend([
+                x,
+                near(m + 1),
+                near(m.saturating_sub(1)),
+                x * 0.37,
+                x * 1.0e3,
+            ]);
+        }
+        xs.retain(|x| x.abs() <= REDUCED_MAX);
+        for block in xs.chunks(8) {
+            let mut x = [0.0; 8];
+            x[..block.len()].copy_from_slice(block);
+            let (c, s) = sincos(&x);
+            for k in 0..block.len() {
+                let (wc, ws) = sincos_float_quadrant(x[k]);
+                assert_eq!(
+                    (c[k].to_bits(), s[k].to_bits()),
+                    (wc.to_bits(), ws.to_bits()),
+                    "x = {:e}",
+                    x[k]
+                );
+            }
+        }
+    }
 
     /// The spacing of doubles at `|v|`.
     fn ulp(v: f64) -> f64 {

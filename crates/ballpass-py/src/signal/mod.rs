@@ -137,5 +137,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(response::sosfreqz_grid, m)?)?;
     m.add_function(wrap_pyfunction!(response::gradient, m)?)?;
     m.add_function(wrap_pyfunction!(response::gradient1, m)?)?;
+    m.add_function(wrap_pyfunction!(response::gradient_plain, m)?)?;
     Ok(())
 }

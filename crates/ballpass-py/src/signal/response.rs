@@ -2,8 +2,9 @@
 
 use ballpass_dsp as dsp;
 use ballpass_dsp::Spacing;
-use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyFloat;
 
 use super::filters::sos_from;
 use super::{map_rows, rows, slice1, stack, Arr1, Arr2, CArr1, SMALL_WORK};
@@ -165,4 +166,36 @@ pub(super) fn gradient1<'py>(
     }
     .map_err(errors::dsp)?;
     Ok(g.into_pyarray(py))
+}
+
+/// `numpy.gradient(f, h)` with its checks made here instead of in Python
+/// (about 0.4 us less per call than `gradient1` behind the Python checks):
+/// `f` a C-contiguous 1-D float64 array of at least two samples and `h` a
+/// Python float, else `None` and the caller takes the general path (which
+/// converts the arguments or raises NumPy's errors).
+#[pyfunction]
+pub(super) fn gradient_plain<'py>(
+    py: Python<'py>,
+    f: &Bound<'py, PyAny>,
+    h: &Bound<'py, PyAny>,
+) -> PyResult<Option<Arr1<'py>>> {
+    let (Ok(f), Ok(h)) = (f.cast::<PyArray1<f64>>(), h.cast_exact::<PyFloat>()) else {
+        return Ok(None);
+    };
+    let Ok(f) = f.try_readonly() else {
+        return Ok(None);
+    };
+    let h = h.value();
+    let f = match f.as_slice() {
+        Ok(f) if f.len() >= 2 => f,
+        _ => return Ok(None),
+    };
+    let run = || dsp::gradient_with_edge_order(f, Spacing::Uniform(h), dsp::EdgeOrder::First);
+    let g = if f.len() <= SMALL_WORK {
+        run()
+    } else {
+        py.detach(run)
+    }
+    .map_err(errors::dsp)?;
+    Ok(Some(g.into_pyarray(py)))
 }
