@@ -43,7 +43,7 @@
 //!   enters the cross spectrum linearly, shared by `c(m)` itself, turned
 //!   against the line's phasor by the offset `δ` (bins) between the line and
 //!   the bin: `n = K / (1 + 2 Σ (1 − m/K) c(m) cos(2π m δ · step / nperseg))`
-//!   ([`super::phase::line_segments_turned`]); Hann at 50 % gives `0.75 K`
+//!   (`super::phase::line_segments_turned`); Hann at 50 % gives `0.75 K`
 //!   on the line's bin, `K` half a bin off, `1.5 K` a bin off.
 //!
 //! A bin is counted as the smaller of the two (`R` averaged records

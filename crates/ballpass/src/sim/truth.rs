@@ -96,7 +96,7 @@ pub struct Truth {
     /// Lag of the optical channel behind the friction channel, s. Since
     /// session 17 it rests on the fundamentals of the two pulse trains as
     /// the simulator generated them in time (Hann-windowed DFT at `f_c`,
-    /// records of ten periods or more; [`fundamental_phase_difference`]),
+    /// records of ten periods or more; `fundamental_phase_difference`),
     /// not on `optical_delay_s` and the pulse shapes alone: both trains are
     /// fixed in the travel, so a velocity ripple locked to the ball
     /// passages (the stage answering the friction ripple, strongest when
