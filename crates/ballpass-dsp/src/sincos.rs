@@ -65,15 +65,7 @@ pub(crate) fn sincos_into<const L: usize>(x: &[f64; L], c: &mut [f64; L], s: &mu
         return;
     }
     for k in 0..L {
-        let n = (x[k] * std::f64::consts::FRAC_2_PI).round_ties_even();
-        let r = ((x[k] - n * P1) - n * P2) - n * P3;
-        let z = r * r;
-        let v = z * r;
-        let sr = r + v * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
-        let poly = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
-        let hz = 0.5 * z;
-        let w = 1.0 - hz;
-        let cr = w + (((1.0 - w) - hz) + z * poly);
+        let (n, sr, cr) = reduced(x[k]);
         // Quadrant n mod 4: the low bits of n + 1.5 2^52 (exact for
         // |n| < 2^51, two's complement below zero). Bit 0 swaps sine and
         // cosine, bit 1 negates the sine, bit 0 xor bit 1 the cosine: the
@@ -87,6 +79,23 @@ pub(crate) fn sincos_into<const L: usize>(x: &[f64; L], c: &mut [f64; L], s: &mu
     }
 }
 
+/// The nearest multiple `n` of π/2 to `x` and the sine and cosine of the
+/// remainder `x − n π/2` (`|x| ≤ REDUCED_MAX`): the kernel's arithmetic
+/// before the quadrant is applied.
+#[inline(always)]
+fn reduced(x: f64) -> (f64, f64, f64) {
+    let n = (x * std::f64::consts::FRAC_2_PI).round_ties_even();
+    let r = ((x - n * P1) - n * P2) - n * P3;
+    let z = r * r;
+    let v = z * r;
+    let sr = r + v * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
+    let poly = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
+    let hz = 0.5 * z;
+    let w = 1.0 - hz;
+    let cr = w + (((1.0 - w) - hz) + z * poly);
+    (n, sr, cr)
+}
+
 /// 1.5 2^52: `n + QUADRANT_BIAS` holds the integer `n` in its low bits.
 const QUADRANT_BIAS: f64 = 6_755_399_441_055_744.0;
 
@@ -97,15 +106,7 @@ mod tests {
     /// The kernel with the quadrant taken in floating point (session 16's
     /// selection), the reference of the bit selection.
     fn sincos_float_quadrant(x: f64) -> (f64, f64) {
-        let n = (x * std::f64::consts::FRAC_2_PI).round_ties_even();
-        let r = ((x - n * P1) - n * P2) - n * P3;
-        let z = r * r;
-        let v = z * r;
-        let sr = r + v * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
-        let poly = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
-        let hz = 0.5 * z;
-        let w = 1.0 - hz;
-        let cr = w + (((1.0 - w) - hz) + z * poly);
+        let (n, sr, cr) = reduced(x);
         let q = n - 4.0 * (0.25 * n).floor();
         let odd = q == 1.0 || q == 3.0;
         let (s0, c0) = if odd { (cr, sr) } else { (sr, cr) };
