@@ -508,10 +508,7 @@ pub fn freqz(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<Digita
 /// # Errors
 /// As [`freqz`].
 pub fn freqz_values(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<Vec<Complex64>> {
-    check_poly("b", b)?;
-    check_poly("a", a)?;
-    check_freqs(freq_hz, fs_hz)?;
-    let short = short_first_step(b) && short_first_step(a);
+    let short = freqz_checked(b, a, freq_hz, fs_hz)?;
     Ok(crate::simd::widest(
         #[inline(always)]
         || {
@@ -522,6 +519,15 @@ pub fn freqz_values(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result
             }
         },
     ))
+}
+
+/// [`freqz`]'s checks of its inputs; whether both polynomials take the
+/// short first Horner step ([`short_first_step`]).
+fn freqz_checked(b: &[f64], a: &[f64], freq_hz: &[f64], fs_hz: f64) -> Result<bool> {
+    check_poly("b", b)?;
+    check_poly("a", a)?;
+    check_freqs(freq_hz, fs_hz)?;
+    Ok(short_first_step(b) && short_first_step(a))
 }
 
 /// [`freqz_values`]' block loop, with or without the short first Horner
@@ -557,10 +563,7 @@ pub fn freqz_values_scipy_grid(
     freq_hz: &[f64],
     fs_hz: f64,
 ) -> Result<(Vec<f64>, Vec<Complex64>)> {
-    check_poly("b", b)?;
-    check_poly("a", a)?;
-    check_freqs(freq_hz, fs_hz)?;
-    let short = short_first_step(b) && short_first_step(a);
+    let short = freqz_checked(b, a, freq_hz, fs_hz)?;
     Ok(crate::simd::widest(
         #[inline(always)]
         || {

@@ -281,32 +281,20 @@ pub fn welch_dof(w: &[f64], step: usize, k: usize) -> f64 {
     if k == 0 {
         return 0.0;
     }
-    2.0 * k as f64 / (1.0 + 2.0 * overlap_sum(w, step, k, true))
+    2.0 * k as f64 / (1.0 + 2.0 * overlap_terms(w, step, k, |_, c| c))
 }
 
-/// `Σ_{m=1}^{k−1} (1 − m/k) c(m)` (or `c(m)²` when `squared`), with
-/// `c(m) = Σ_t w[t] w[t + m·step] / Σ_t w[t]²` the overlap correlation of
-/// `k` segments of window `w` at hop `step`: the sum behind
-/// [`welch_dof`] (the power of noise, `c²`) and the equivalent segment
-/// count of a line's phase (`c`).
-pub(crate) fn overlap_sum(w: &[f64], step: usize, k: usize, squared: bool) -> f64 {
-    overlap_terms(w, step, k, |_, c| if squared { c } else { 1.0 })
-}
-
-/// `Σ_{m=1}^{k−1} (1 − m/k) c(m) cos(m θ)`: [`overlap_sum`]'s linear sum
-/// for the cross spectrum of a line and noise in a bin whose frequency
-/// differs from the line's by `θ / (2π · step)` cycles per sample (the
-/// line's segment phasor and the noise's correlation between segments `m`
-/// hops apart turn by `m θ` against each other); `θ = 0` is
-/// `overlap_sum(w, step, k, false)` bit for bit.
+/// `Σ_{m=1}^{k−1} (1 − m/k) c(m) cos(m θ)`, with `c(m) = Σ_t w[t]
+/// w[t + m·step] / Σ_t w[t]²` the overlap correlation of `k` segments of
+/// window `w` at hop `step`: the equivalent segment count of the cross
+/// spectrum of a line and noise in a bin whose frequency differs from the
+/// line's by `θ / (2π · step)` cycles per sample (the line's segment phasor
+/// and the noise's correlation between segments `m` hops apart turn by
+/// `m θ` against each other; `θ = 0`: a line's phase on its own bin).
+/// [`welch_dof`] sums `c(m)²` instead (the power of noise).
 pub(crate) fn overlap_sum_turned(w: &[f64], step: usize, k: usize, theta: f64) -> f64 {
-    overlap_terms(w, step, k, |m, _| {
-        if theta == 0.0 {
-            1.0
-        } else {
-            (m as f64 * theta).cos()
-        }
-    })
+    // cos(0) is exactly 1: θ = 0 weighs every term by one.
+    overlap_terms(w, step, k, |m, _| (m as f64 * theta).cos())
 }
 
 /// `Σ_{m=1}^{k−1} ((1 − m/k) c(m)) · weight(m, c(m))`.
@@ -319,8 +307,8 @@ fn overlap_terms(w: &[f64], step: usize, k: usize, weight: impl Fn(usize, f64) -
             break;
         }
         let c: f64 = w[shift..].iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / e;
-        // Evaluated as ((1 − m/k) c) c, the order the two sums had apart
-        // (a weight of 1 leaves the product exact).
+        // Evaluated as ((1 − m/k) c) · weight (a weight of 1 leaves the
+        // product exact).
         let t = (1.0 - m as f64 / k as f64) * c;
         s += t * weight(m, c);
     }
