@@ -20,7 +20,8 @@
 //!    and a high-resolution spectrum: `decimate` by
 //!    `q = floor(fs / (2.5 f_lp))` (Chebyshev anti-alias at `0.8 fs/(2q)`,
 //!    at or above the low-pass) then Welch with
-//!    `nperseg = min(next_pow2(4 (fs/q) / f_c), N/q)`; or, with
+//!    `nperseg = min(smooth(6 (fs/q) / f_c), N/q)` (six periods, rounded up to an even
+//!    `2^a 3^b 5^c`); or, with
 //!    [`HiresMethod::PolyphaseZoom`], the thesis' zoom processing (docs/methods.md §10).
 //! 5. Harmonics `k f_c` (predicted and measured): PSD, local noise floor,
 //!    ratio, chi-square significance; coherence with its threshold.

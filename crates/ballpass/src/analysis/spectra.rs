@@ -10,7 +10,13 @@
 //! 0.05 dB, cut at `0.8 fs/(2q)`, zero phase) with `q = floor(fs / (2.5
 //! f_lp))` (without low-pass: `f_lp` replaced by `2 (K+1) f_c`), so the cut
 //! sits at or above the low-pass; Welch at `fs/q` with
-//! `nperseg = min(next_pow2(4 (fs/q) / f_c), N_d)`. A resolution coarser
+//! `nperseg = min(smooth(6 (fs/q) / f_c), N_d)`, where `smooth(x)` is the
+//! smallest even `2^a 3^b 5^c >= x`: 6 to 6.75 bins per `f_c`.
+//! Six is what the floor beside each line needs: the floor is fitted on
+//! the bins of `[0.4, 2.5] f_c` (for `k = 1`) that are more than 1.5 bins
+//! from every harmonic, at least five of them, and at 4–5 bins per `f_c`
+//! (what a power of two of four periods gave on a third of the records)
+//! only three are left and no line could be tested. A resolution coarser
 //! than `f_c/4` is a warning, coarser than `f_c/2` an error. The thesis'
 //! zoom ([`HiresMethod::PolyphaseZoom`]) averages the branch spectra instead.
 //!
@@ -144,13 +150,33 @@ pub(crate) struct HiresPlan {
     pub zoom: bool,
 }
 
-/// Next power of two `>= x` (x > 0).
-fn next_pow2(x: f64) -> usize {
-    let mut n = 1usize;
-    while (n as f64) < x {
-        n *= 2;
+/// The high-resolution segment in ball-pass periods (module docs).
+const HIRES_PERIODS: f64 = 6.0;
+
+/// Smallest even `2^a 3^b 5^c >= x` (x > 0): a length the FFT handles at
+/// the speed of a power of two.
+fn next_smooth(x: f64) -> usize {
+    let mut best = usize::MAX;
+    let mut p2 = 2usize;
+    loop {
+        let mut p3 = p2;
+        loop {
+            let mut n = p3;
+            while (n as f64) < x {
+                n *= 5;
+            }
+            best = best.min(n);
+            if (p3 as f64) >= x {
+                break;
+            }
+            p3 *= 3;
+        }
+        if (p2 as f64) >= x {
+            break;
+        }
+        p2 *= 2;
     }
-    n
+    best
 }
 
 /// Resolves `q`, the segment length and the decimator; warns or errors when
@@ -176,7 +202,7 @@ pub(crate) fn plan_hires(
     };
     let nd = if zoom { n / q } else { n.div_ceil(q) };
     let fs_d = fs_hz / q as f64;
-    let auto_nperseg = next_pow2(4.0 * fs_d / f_c_hz);
+    let auto_nperseg = next_smooth(HIRES_PERIODS * fs_d / f_c_hz);
     let nperseg = settings.hires_nperseg.unwrap_or(auto_nperseg).min(nd);
     if nperseg < 2 {
         return Err(Error::setting(
@@ -483,14 +509,42 @@ mod tests {
     fn resolution_rules() {
         let s = AnalyzeSettings::default();
         let mut w = Vec::new();
-        // 1 kHz, 20 Hz low-pass, 9 mm/s: q = 20, 256 samples, 0.195 Hz.
+        // 1 kHz, 20 Hz low-pass, 9 mm/s: q = 20, 6 periods at 50 Hz are
+        // 270.4 samples: 288 = 2^5 3^2, 0.174 Hz, 6.4 bins per f_c.
         let p = plan_hires(&s, 1000.0, 30_000, 1.10959, &mut w).unwrap();
-        assert_eq!((p.q, p.nperseg, p.noverlap), (20, 256, 128));
+        assert_eq!((p.q, p.nperseg, p.noverlap), (20, 288, 144));
         assert!(w.is_empty());
         // 4 s of data at 1 mm/s cannot resolve 0.123 Hz.
         let e = plan_hires(&s, 1000.0, 4000, 0.123288, &mut w)
             .unwrap_err()
             .to_string();
         assert!(e.contains("cannot resolve f_c"), "{e}");
+    }
+
+    /// The smallest even 5-smooth length at or above x, against a brute
+    /// force search; every f_c gets 6 to 6.75 bins per f_c above 100
+    /// samples (even 5-smooth numbers lie within 12.5 % of each other
+    /// there: 128 to 144 is the widest gap).
+    #[test]
+    fn smooth_segment_lengths() {
+        let smooth = |n: usize| {
+            let mut m = n;
+            for p in [2, 3, 5] {
+                while m % p == 0 {
+                    m /= p;
+                }
+            }
+            m == 1 && n % 2 == 0
+        };
+        for x in 1..5000usize {
+            let want = (x..).find(|&n| smooth(n)).unwrap();
+            assert_eq!(next_smooth(x as f64), want, "{x}");
+            assert_eq!(next_smooth(x as f64 - 0.5), want, "{x} - 0.5");
+        }
+        for i in 0..2000 {
+            let x = 100.0 * (1.0f64 + 0.01 * i as f64);
+            let r = next_smooth(x) as f64 / x;
+            assert!((1.0..=1.125).contains(&r), "{x} -> {r}");
+        }
     }
 }
