@@ -184,12 +184,11 @@ pub fn process_recording(
     };
     let low_band = (!psd.is_empty()).then(|| low_band_power(&freq, &psd, settings.low_band_hz));
 
-    let tau_for_sticking = passages
-        .as_ref()
-        .map(|p| p.tau_c_s.mean)
-        .filter(|t| t.is_finite() && *t > 0.0)
-        .or(analysis.measured_period.period_s)
-        .unwrap_or(prediction.tau_c_s);
+    let tau_for_sticking = sticking_period(
+        passages.as_ref().map(|p| p.tau_c_s.mean),
+        analysis.measured_period.period_s,
+        prediction.tau_c_s,
+    );
     let sticking = match &restored {
         Some((f, _)) => Some(passage_heights(
             f,
@@ -258,6 +257,25 @@ pub fn process_recording(
 ///
 /// # Errors
 /// A bad low-pass setting (the analysis would have failed on it first).
+/// The ball-pass period the per-period heights are cut with: the optical
+/// passages' mean interval when it agrees with the period the
+/// correlations measured within 2 % (a missed passage makes one interval
+/// double and moves the mean by `1/n`; interference that hides half the
+/// passages doubles it), else the measured period, else the passages',
+/// else the prediction. Periods cut at a wrong length fold the ripple
+/// onto a sliding phase, and the heights then scatter like sticking.
+fn sticking_period(passages_s: Option<f64>, measured_s: Option<f64>, predicted_s: f64) -> f64 {
+    let usable = |t: &f64| t.is_finite() && *t > 0.0;
+    let passages_s = passages_s.filter(usable);
+    let measured_s = measured_s.filter(usable);
+    match (passages_s, measured_s) {
+        (Some(p), Some(m)) if (p / m - 1.0).abs() <= 0.02 => p,
+        (_, Some(m)) => m,
+        (Some(p), None) => p,
+        (None, None) => predicted_s,
+    }
+}
+
 fn position_ripple(
     rec: &Recording,
     restored: &Option<(Cow<'_, [f64]>, crate::analysis::load_cell::DcRestoration)>,
@@ -342,6 +360,22 @@ pub fn process_simulation(
 
 #[cfg(test)]
 mod tests {
+    /// The passages' period where it agrees with the correlations', the
+    /// correlations' where half the passages were missed (session 18: a
+    /// good bearing behind optical interference was called bad on periods
+    /// 1.7 and 2 times too long), and the fallbacks.
+    #[test]
+    fn the_sticking_period_trusts_passages_that_agree() {
+        use super::sticking_period;
+        assert_eq!(sticking_period(Some(2.65), Some(2.647), 2.6), 2.65);
+        assert_eq!(sticking_period(Some(5.13), Some(2.647), 2.6), 2.647);
+        assert_eq!(sticking_period(Some(4.46), Some(2.647), 2.6), 2.647);
+        assert_eq!(sticking_period(Some(2.65), None, 2.6), 2.65);
+        assert_eq!(sticking_period(None, Some(2.647), 2.6), 2.647);
+        assert_eq!(sticking_period(Some(f64::NAN), None, 2.6), 2.6);
+        assert_eq!(sticking_period(None, None, 2.6), 2.6);
+    }
+
     use super::*;
     use crate::sim::{simulate, Condition, SimSettings};
 

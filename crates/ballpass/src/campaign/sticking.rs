@@ -11,8 +11,9 @@
 //! ```text
 //! smoothed  = friction through three box filters of width w (≈ Gaussian of
 //!             σ = 0.01 τc: noise down, spikes of ≥ 0.02 τc kept)
-//! baseline  = block medians over τc/2, linearly interpolated (follows drift
-//!             and slow wander, not the passages)
+//! baseline  = block medians over τc, linearly interpolated (follows drift
+//!             and slow wander, not the passages; a pulse narrower than
+//!             τc/2 never fills half a block)
 //! height_j  = max over period j (t in [j τc, (j+1) τc)) of smoothed − baseline
 //! typical   = median of the heights,  spread = (median − 10th percentile) / 1.2816
 //! spike     = a period with height > typical + κ · spread      (κ = 8)
@@ -176,7 +177,12 @@ pub fn passage_heights(
     let sigma = settings.smoothing_periods * per;
     let w = ((4.0 * sigma * sigma + 1.0).sqrt().round() as usize).max(1);
     let smooth = triple_box(friction_n, w);
-    let block = ((per / 2.0).round() as usize).max(8);
+    // Blocks of one period: a ripple pulse narrower than half a period
+    // then fills less than half of every block, so the block median stays
+    // on the level between pulses (half-period blocks put it on the pulse
+    // top wherever a pulse wider than a quarter period filled more than
+    // half a block, and the heights then changed with the blocks' phase).
+    let block = (per.round() as usize).max(8);
     let residual = detrend_by_block_medians(&smooth, block);
     let n = residual.len();
     // Whole periods centred on the passages: the windows' edges half a
