@@ -47,23 +47,36 @@
 //!   on the line's bin, `K` half a bin off, `1.5 K` a bin off.
 //!
 //! A bin is counted as the smaller of the two (`R` averaged records
-//! multiply both by `R`). A coherence row at `k f_c` takes the largest of
-//! the three bins nearest `k f_c`; the two outer ones are at least half a
-//! bin from the line, the middle one nearest it counts fewest, so the row is
-//! tested against the middle bin's level at `a/3` (Bonferroni over the three
-//! bins): each bin exceeds its own level with probability at most `a/3`,
-//! the row at most `a`. The analysis tests three pairs at each harmonic, so
-//! each row at `a = 1 − confidence^(1/3)` (Šidák): at most `1 − confidence`
-//! for the three pairs at one harmonic together, `a` (0.33 % at 99 %) per
-//! row. The bound is conservative: seeded simulations of the null with the
-//! estimator's own segmenting (Hann, 50 %, 3–150 segments, a line in one
-//! channel at 0, 0.15, 0.3 or 0.5 bin from the bin grid, or noise in both)
-//! gave 0.03–0.28 % per row at a = 0.33 %, where a one-bin level at `ν/2`
-//! gave 0.6–1.1 % (two to three times its nominal rate).
+//! multiply both by `R`; [`coherence_segments`]). Carter's law at such a
+//! count is only an approximation for the line case, heavier than the truth
+//! on the line's bin at few segments (seven times at three segments), so a
+//! coherence row is tested on exact tails instead: a row at `k f_c` takes
+//! the largest of the three bins nearest `k f_c` and is significant above
+//! the `c` at which the three bins' tails add up to `a`
+//! ([`coherence_row_level`]), each bin's tail the larger of
 //!
-//! The coherence figure draws the level of a line on a bin (the highest a
-//! row can have): above it a row is significant wherever its `k f_c` falls;
-//! rows between bins have lower levels, each stated in its row
+//! - noise in both: Carter's `(1 − c)^(ν/2 − 1)`;
+//! - a line in one channel: the exact tail of `|uᴴY|²/(YᴴY)` for the noise
+//!   channel's correlated segment DFTs `Y` and the line's phasors `u`, at
+//!   the bin's offset from the line (`line_tail`: one positive eigenvalue
+//!   of a quadratic form, found with a banded Cholesky factor); above 512
+//!   segments per record Carter's at the line's count, which it approaches.
+//!
+//! Noise exceeds the row's level with probability at most `a` whichever
+//! null holds (the larger tail per bin, the sum over bins). The analysis
+//! tests three pairs at each harmonic, so each row at `a = 1 −
+//! confidence^(1/3)` (Šidák): at most `1 − confidence` for the three pairs
+//! at one harmonic together, `a` (0.33 % at 99 %) per row. Seeded
+//! simulations of the null with the estimator's own segmenting (Hann, 50 %,
+//! 3–150 segments, a line in one channel 0–0.5 bin from the grid, strong or
+//! about as strong as the noise in its bin, or noise in both) gave
+//! 0.13–0.31 % per row at a = 0.33 %; session 17's rule (the middle bin's
+//! Carter level at `a/3`) gave 0.02–0.31 %, and one bin's level at `ν/2`
+//! 0.6–1.1 % (two to three times its nominal rate).
+//!
+//! The coherence figure draws the level of a row whose line falls on a bin
+//! (the highest in our checks); rows between bins have lower levels, each
+//! stated in its row
 //! (`coherence` in `analysis.json`).
 
 use serde::Serialize;
@@ -72,6 +85,9 @@ use super::export::{product_token, psd_column};
 use super::spectra::SpectrumInfo;
 use super::{AnalyzeSettings, Signal, Spectra};
 use crate::stats::chi2_ppf;
+use std::f64::consts::TAU;
+
+mod line_tail;
 
 /// A PSD's confidence band as multipliers of the estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -149,13 +165,94 @@ pub fn coherence_segments(info: &SpectrumInfo, w: &[f64], offset_bins: f64) -> f
     n_power.min(n_line)
 }
 
-/// The level a coherence row tests against (module docs): `1 − (a/3)^(1/(n
-/// − 1))` with `a = 1 − confidence^(1/3)` and `n` the
-/// [`coherence_segments`] of the bin nearest the line; `None` with `n ≤ 1`.
-/// Noise exceeds it in any of the three bins of a row with probability at
-/// most `a`.
-pub fn coherence_row_threshold(n: f64, confidence: f64) -> Option<f64> {
-    carter_level(n, (1.0 - confidence.powf(1.0 / 3.0)) / 3.0)
+/// The level a coherence row at `offset_bins` (the line's offset from the
+/// bin nearest it, `|δ| ≤ ½`) tests against (module docs): the `c` at which
+/// the three bins' null tails sum to `a = 1 − confidence^(1/3)`, each bin's
+/// tail the larger of the noise-in-both one (Carter at Welch's `ν/2`) and
+/// the exact one of a line in one channel (`line_tail`; Carter
+/// at the line's equivalent count beyond
+/// 512 segments per record). `None` with `ν/2 ≤ 1` or
+/// without a window of `info.nperseg` samples.
+pub fn coherence_row_level(
+    info: &SpectrumInfo,
+    w: &[f64],
+    offset_bins: f64,
+    confidence: f64,
+) -> Option<f64> {
+    let a = coherence_row_rate(confidence);
+    let n_power = 0.5 * info.dof;
+    if !(n_power > 1.0 && a > 0.0 && a < 1.0 && w.len() == info.nperseg) {
+        return None;
+    }
+    let step = info.nperseg.checked_sub(info.noverlap).filter(|&s| s > 0);
+    let k = info.n_segments.max(1);
+    let r = info.n_records.max(1);
+    let corr = step.map(|st| line_tail::overlap_correlations(w, st, k));
+    let turn = |d: f64| step.map_or(0.0, |st| TAU * d * st as f64 / info.nperseg as f64);
+    let exact = k <= line_tail::EXACT_MAX_SEGMENTS;
+    // Per bin: ln of its tail at x = ln(1 − c).
+    let bins: Vec<(f64, f64)> = [offset_bins + 1.0, offset_bins, offset_bins - 1.0]
+        .iter()
+        .map(|&d| {
+            let n_line = match step {
+                Some(st) => r as f64 * super::phase::line_segments_turned(w, st, k, turn(d)),
+                None => n_power,
+            };
+            (d, n_line)
+        })
+        .collect();
+    let tail = |x: f64| -> f64 {
+        let c = -x.exp_m1();
+        bins.iter()
+            .map(|&(d, n_line)| {
+                let noise = ((n_power - 1.0) * x).exp();
+                let line = match (&corr, exact) {
+                    (Some(corr), true) => line_tail::line_tail(corr, k, r, turn(d), c)
+                        .unwrap_or_else(|| ((n_line - 1.0) * x).exp()),
+                    _ => ((n_line.max(1.0) - 1.0) * x).exp(),
+                };
+                noise.max(line)
+            })
+            .sum()
+    };
+    // Solve ln tail(x) = ln a for x = ln(1 − c) < 0 (tail falls from 3 at
+    // x = 0; Carter's tails are straight lines in x, the exact ones nearly
+    // so): bracket, then Illinois false position on ln tail.
+    let phi = |x: f64| tail(x).ln() - a.ln();
+    let (mut hi, mut f_hi) = (0.0, phi(0.0));
+    let mut lo = a.ln() / (n_power - 1.0);
+    let mut f_lo = phi(lo);
+    while f_lo > 0.0 {
+        (hi, f_hi) = (lo, f_lo);
+        lo *= 2.0;
+        f_lo = phi(lo);
+        if lo < -1e4 {
+            return None;
+        }
+    }
+    let mut side = 0i8;
+    for _ in 0..100 {
+        let x = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let f = phi(x);
+        if f.abs() < 1e-12 || (hi - lo).abs() < 1e-14 * lo.abs() {
+            lo = x;
+            break;
+        }
+        if f > 0.0 {
+            (hi, f_hi) = (x, f);
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        } else {
+            (lo, f_lo) = (x, f);
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    Some(-lo.exp_m1())
 }
 
 /// The nominal false-alarm rate of one coherence row, `1 − confidence^(1/3)`
@@ -165,8 +262,8 @@ pub fn coherence_row_rate(confidence: f64) -> f64 {
 }
 
 /// Fills in a spectrum's band and coherence level once its `dof` is final
-/// (after the repeats are averaged); the level drawn is a row's on the
-/// line's bin, the highest a row can have (module docs).
+/// (after the repeats are averaged); the level drawn is a row's with the
+/// line on a bin (module docs).
 pub(crate) fn finish(s: &mut Spectra, settings: &AnalyzeSettings) {
     s.info.band = psd_band(s.info.dof, settings.band_confidence);
     s.info.coherence_threshold = settings
@@ -174,9 +271,7 @@ pub(crate) fn finish(s: &mut Spectra, settings: &AnalyzeSettings) {
         .to_dsp()
         .values(s.info.nperseg)
         .ok()
-        .and_then(|w| {
-            coherence_row_threshold(coherence_segments(&s.info, &w, 0.0), settings.confidence)
-        });
+        .and_then(|w| coherence_row_level(&s.info, &w, 0.0, settings.confidence));
 }
 
 /// Band multipliers of bin `i` of `n` (DC and an even-`nperseg` Nyquist
@@ -343,6 +438,35 @@ mod tests {
                 "{name}: coverage {hits}/{total} = {:.4}, 99.9 % interval [{a:.4}, {b:.4}]",
                 hits as f64 / total as f64
             );
+        }
+    }
+
+    /// The row level against an independent root: SciPy's `brentq` on the
+    /// same sum of three tails, each the larger of Carter's at `ν/2` and
+    /// the eigenvalue product of a line in one channel (NumPy
+    /// `linalg.solve`/`slogdet` on the dense matrices), periodic Hann 64 at
+    /// 50 %. Both roots are solved to ~1e-12; 1e-9 absolute is loose.
+    #[test]
+    fn coherence_row_level_matches_a_scipy_root() {
+        let w = hann(64);
+        for (k, d, want) in [
+            (3usize, 0.0, 0.9736355937284047),
+            (12, 0.0, 0.505862958583905),
+            (12, 0.3, 0.4911374464089439),
+            (12, -0.5, 0.479306473503266),
+            (40, 0.2, 0.1801207129456115),
+            (150, 0.0, 0.05246646762367738),
+        ] {
+            let info = SpectrumInfo {
+                nperseg: 64,
+                noverlap: 32,
+                n_segments: k,
+                n_records: 1,
+                dof: welch_dof(&w, 32, k),
+                ..Default::default()
+            };
+            let got = coherence_row_level(&info, &w, d, 0.99).unwrap();
+            assert!((got - want).abs() < 1e-9, "K={k} δ={d}: {got} vs {want}");
         }
     }
 }
