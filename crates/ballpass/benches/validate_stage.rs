@@ -8,7 +8,7 @@
 //! with exact binomial intervals).
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_stage -- [train|fresh|fresh2|SEED] [N] [--list] [--dump DIR]
+//! cargo bench -p ballpass --bench validate_stage -- [train|fresh|fresh2|SEED] [N] [--list] [--dump DIR] [--domain FILE]
 //! ```
 //!
 //! `train` draws bench seeds 3_000_001..=3_000_000+N (the seeds the interval
@@ -20,7 +20,9 @@
 //! a quarter of the rate (`seed.bin`: little-endian f64 rows of frequency,
 //! P_ff, P_vv, Re P_fv, Im P_fv) and `index.jsonl` (the truth, the load
 //! cell's time constant and the one the analysis undid, and the estimate)
-//! for offline study.
+//! for offline study. `--domain FILE` draws the benches from a domain file
+//! (the JSON of `ballpass validate --domain`, e.g. one lab's bench) instead
+//! of the default domain.
 
 use std::io::Write;
 
@@ -143,7 +145,26 @@ fn main() {
             std::process::exit(1);
         }
     }
-    let domain = Domain::default();
+    let domain = match args
+        .iter()
+        .position(|a| a == "--domain")
+        .and_then(|i| args.get(i + 1))
+    {
+        Some(p) => {
+            let d = std::fs::read_to_string(p)
+                .map_err(|e| e.to_string())
+                .and_then(|t| serde_json::from_str::<Domain>(&t).map_err(|e| e.to_string()))
+                .and_then(|d| d.validate().map(|()| d).map_err(|e| e.to_string()));
+            match d {
+                Ok(d) => d,
+                Err(e) => {
+                    eprintln!("{p}: not a domain: {e}");
+                    std::process::exit(2);
+                }
+            }
+        }
+        None => Domain::default(),
+    };
     let t0 = std::time::Instant::now();
     let done = std::sync::atomic::AtomicUsize::new(0);
     let rows: Vec<Row> = (first..first + n)

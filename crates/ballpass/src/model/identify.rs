@@ -96,11 +96,14 @@
 //! identifiable" with the reason (too little coherent band around the
 //! resonance, most often because the friction does not excite it).
 
+mod encoder;
 mod jackknife;
 mod joint;
 mod model;
 
 use ballpass_dsp::{Complex64, WelchSettings};
+pub use encoder::EncoderPhases;
+pub(crate) use encoder::Lattice;
 pub(crate) use jackknife::grouped_welch;
 pub use jackknife::{SegmentGroup, GROUPS};
 use joint::{joint_fit, JointFit};
@@ -139,6 +142,10 @@ pub struct StageSpectra {
     /// jackknife that checks the fit's intervals (module `jackknife`);
     /// empty: no check.
     pub groups: Vec<SegmentGroup>,
+    /// The check of the encoder's quantisation (module `encoder`): of the
+    /// record whose quantisation is least spread by its motion; `None`
+    /// when no counting encoder was found in the velocity error.
+    pub encoder: Option<EncoderPhases>,
 }
 
 /// Segment length of the identification spectra for a record of `n`
@@ -229,6 +236,7 @@ impl StageSpectra {
             n_d: nu / 2.0,
             restored_tau_s: None,
             groups: Vec::new(),
+            encoder: None,
         }
     }
 
@@ -286,7 +294,12 @@ impl StageSpectra {
                 .into_iter()
                 .map(|x| x - velocity_mm_s)
                 .collect();
-        StageSpectra::of(friction_n, &v, fs_hz, nperseg)
+        let mut lattice = Lattice::new(v.len());
+        let v_m_s: Vec<f64> = v.iter().map(|x| x * 1e-3).collect();
+        lattice.push(&v_m_s);
+        let mut out = StageSpectra::of(friction_n, &v, fs_hz, nperseg)?;
+        out.encoder = lattice.phases(velocity_mm_s * 1e-3);
+        Ok(out)
     }
 
     /// Adds another record's spectra on the same grid; `false` (nothing
@@ -309,6 +322,7 @@ impl StageSpectra {
             *a += b;
         }
         jackknife::add_groups(&mut self.groups, &other.groups);
+        self.encoder = encoder::worse(self.encoder, other.encoder);
         let rate = |s: &StageSpectra| s.restored_tau_s.map_or(0.0, |t| 1.0 / t);
         let (a, b) = (self.records as f64, other.records as f64);
         let mean_rate = (rate(self) * a + rate(other) * b) / (a + b);
@@ -373,6 +387,19 @@ pub struct StageIdentification {
 /// Fits the PD stage to pooled spectra (module docs).
 pub fn identify(s: &StageSpectra) -> StageIdentification {
     let mut out = identify_once(s);
+    if out.identified {
+        if let Some(e) = s.encoder.filter(EncoderPhases::undithered) {
+            out.identified = false;
+            out.text = format!(
+                "stage not identifiable: the encoder's quantisation is not spread by the motion (the stage advances {:.4} counts per sample, which visits only about {:.0} phases of a count, and the stage's position error stays within about a count), so the measured velocity error is a staircase of the true one that follows the friction; the fit would give f_n = {:.3} Hz, ζ = {:.3}. A speed or sampling rate at which the counts per sample are not a simple fraction avoids it",
+                e.counts_per_sample,
+                1.0 / e.gap_counts,
+                out.natural_frequency_hz.map_or(f64::NAN, |e| e.value),
+                out.damping_ratio.map_or(f64::NAN, |e| e.value),
+            );
+            return out;
+        }
+    }
     // The check can only widen the intervals, so it cannot make a stage
     // identified: it runs on the stages the fit would claim.
     if !out.identified {

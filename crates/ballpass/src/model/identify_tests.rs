@@ -158,6 +158,7 @@ fn the_jackknife_of_a_mean_is_the_classical_standard_error() {
         n_d: g as f64,
         restored_tau_s: None,
         groups,
+        encoder: None,
     };
     let se = super::jackknife::standard_errors(&s, [mean], |sp| Some([sp.p_ff[2]])).unwrap();
     let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (g - 1) as f64;

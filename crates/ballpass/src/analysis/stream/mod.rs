@@ -581,7 +581,7 @@ pub(crate) fn analyze_stream_blocks(
     }
     let (stage, stage_spectra) = match (stage, &dc) {
         (Some(st), Some(dc)) => {
-            let (id, sp) = st.finish(fs, dc)?;
+            let (id, sp) = st.finish(fs, pred.velocity_mm_s, dc)?;
             (Some(id), Some(sp))
         }
         _ => (None, None),

@@ -18,7 +18,7 @@ use crate::analysis::load_cell::DcRestoration;
 use crate::analysis::{Detrend, Signal};
 use crate::error::{Error, Result};
 use crate::model::identify::{
-    grouped_welch, identify, nperseg_for, StageIdentification, StageSpectra,
+    grouped_welch, identify, nperseg_for, Lattice, StageIdentification, StageSpectra,
 };
 
 /// Samples detrended and fed to the Welch estimate at a time.
@@ -42,6 +42,9 @@ pub(super) struct StageStream {
     welch: WelchStream,
     /// Scratch: a chunk of each signal, scaled or detrended.
     buf: Pair,
+    /// The velocity error as it comes, for the check of the encoder's
+    /// quantisation.
+    lattice: Lattice,
 }
 
 impl StageStream {
@@ -68,6 +71,7 @@ impl StageStream {
             trends: None,
             welch,
             buf: [Vec::new(), Vec::new()],
+            lattice: Lattice::new(len),
         }))
     }
 
@@ -123,7 +127,9 @@ impl StageStream {
             .get_or_insert_with(|| self.lines.map(|t| t.trend(Detrend::Linear)));
         let src = self.source(out);
         let welch = &mut self.welch;
+        let lattice = &mut self.lattice;
         for_chunks(src, &mut self.buf, &mut |at, xs| {
+            lattice.push(&xs[1]);
             for (x, t) in xs.iter_mut().zip(&trends) {
                 for (i, y) in x.iter_mut().enumerate() {
                     *y -= t.at(at + i);
@@ -135,17 +141,19 @@ impl StageStream {
         })
     }
 
-    /// The spectra and the stage fitted to them; `dc` the load cell's
-    /// restoration of the friction.
+    /// The spectra and the stage fitted to them; `velocity_mm_s` the
+    /// commanded speed, `dc` the load cell's restoration of the friction.
     ///
     /// # Errors
     /// The Welch estimate's.
     pub(super) fn finish(
         self,
         fs: f64,
+        velocity_mm_s: f64,
         dc: &DcRestoration,
     ) -> Result<(StageIdentification, StageSpectra)> {
-        let sp = StageSpectra::of_grouped(self.welch, fs, self.nperseg)?.restored_with(dc);
+        let mut sp = StageSpectra::of_grouped(self.welch, fs, self.nperseg)?.restored_with(dc);
+        sp.encoder = self.lattice.phases(velocity_mm_s * 1e-3);
         Ok((identify(&sp), sp))
     }
 }

@@ -152,6 +152,7 @@ fn leave_out(s: &StageSpectra, g: usize) -> Option<StageSpectra> {
         n_d: s.n_d * (total - grp.segments) as f64 / total as f64,
         restored_tau_s: s.restored_tau_s,
         groups: Vec::new(),
+        encoder: s.encoder,
     })
 }
 
