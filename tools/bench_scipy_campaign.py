@@ -176,7 +176,7 @@ def one(path, velocity):
     f_c = velocity / (2 * a.d_avg)
     sig, corr, _, hires, _ = ra.analyze(fs, fr, pos, opt, a)
     nd = -(-len(sig["friction"]) // a.q)
-    nperseg_hr = min(ra.next_pow2(4.0 * (fs / a.q) / f_c), nd)
+    nperseg_hr = min(ra.next_smooth(6.0 * (fs / a.q) / f_c), nd)
     ve_raw = np.gradient(pos, 1.0 / fs) - velocity
     scalars(fs, sig, corr, hires, f_c, nperseg_hr, nd, ve_raw)
     tau = 1.0 / f_c

@@ -26,7 +26,8 @@ Steps (the defaults of ballpass' AnalyzeSettings; each is a flag here too):
   5. high-resolution spectra: decimate(step-2 signal, q) (IIR, zero phase),
      then welch/csd/coherence at fs/q with nperseg_hr, where by default
      q = floor(fs / (2.5 lowpass)) and
-     nperseg_hr = min(next_pow2(4 (fs/q) / f_c), len(decimated)),
+     nperseg_hr = min(next_smooth(6 (fs/q) / f_c), len(decimated)) (six
+     periods rounded up to the next even 2^a 3^b 5^c),
      f_c = V / (2 d_avg); or, with --zoom M, the thesis' polyphase average:
      mean over i < M of welch/csd(x[i::M][:N//M], fs/M), coherence
      |mean Pxy|^2 / (mean Pxx mean Pyy).
@@ -201,7 +202,7 @@ def analyze(fs, friction, position, optical, a):
     if a.zoom:
         m = a.zoom
         nd = n // m
-        nhr = min(a.nperseg_hr or next_pow2(4.0 * (fs / m) / f_c), nd)
+        nhr = min(a.nperseg_hr or next_smooth(6.0 * (fs / m) / f_c), nd)
         nov = a.noverlap_hr if a.noverlap_hr is not None else nhr // 2
         hires = zoom_spectra(sig, fs, m, nhr, nov)
     else:
@@ -210,17 +211,23 @@ def analyze(fs, friction, position, optical, a):
             k: signal.decimate(x, q, ftype="iir", zero_phase=True) for k, x in sig.items()
         }
         nd = len(dec["friction"])
-        nhr = min(a.nperseg_hr or next_pow2(4.0 * (fs / q) / f_c), nd)
+        nhr = min(a.nperseg_hr or next_smooth(6.0 * (fs / q) / f_c), nd)
         nov = a.noverlap_hr if a.noverlap_hr is not None else nhr // 2
         hires = spectra(dec, fs / q, nhr, nov)
     return sig, corr, full, hires, unfiltered
 
 
-def next_pow2(x):
-    n = 1
-    while n < x:
-        n *= 2
-    return n
+def next_smooth(x):
+    """Smallest even n >= x whose only prime factors are 2, 3 and 5."""
+    n = max(2, int(np.ceil(x)))
+    while True:
+        m = n
+        for p in (2, 3, 5):
+            while m % p == 0:
+                m //= p
+        if m == 1 and n % 2 == 0:
+            return n
+        n += 1
 
 
 def zoom_spectra(sig, fs, m, nperseg, noverlap):

@@ -38,12 +38,12 @@
 //! significant".
 //!
 //! Coherence at `k f_c`: the largest of the three bins nearest `k f_c`,
-//! significant above `1 − (a/3)^(1/(n − 1))`, `a = 1 − confidence^(1/3)`,
-//! with `n` the equivalent number of independent segments of the bin
-//! nearest `k f_c` counted for a line in one channel and noise in the other
-//! (fewer than Welch's `ν/2` near the line): noise passes a row with
-//! probability at most `a` whether neither, one or both channels carry a
-//! line ([`super::confidence`] module docs).
+//! significant above the level at which the three bins' null tails add up
+//! to `a = 1 − confidence^(1/3)`; each bin's tail is the larger of noise in
+//! both channels and the exact tail of a line in one channel beside noise,
+//! at the line's offset from the bin: noise passes a row with probability
+//! at most `a` whether neither, one or both channels carry a line
+//! ([`super::confidence`] module docs).
 
 use rayon::prelude::*;
 use serde::Serialize;
