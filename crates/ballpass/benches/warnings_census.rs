@@ -32,9 +32,11 @@ use rayon::prelude::*;
 fn kind(w: &str) -> String {
     let mut out = String::with_capacity(w.len());
     let mut in_number = false;
-    for c in w.chars() {
-        let numeric =
-            c.is_ascii_digit() || (in_number && (c == '.' || c == ',')) || (c == '-' && !in_number);
+    let chars: Vec<char> = w.chars().collect();
+    for (i, &c) in chars.iter().enumerate() {
+        // A minus sign belongs to the number after it, a hyphen to words.
+        let sign = c == '-' && !in_number && chars.get(i + 1).is_some_and(char::is_ascii_digit);
+        let numeric = c.is_ascii_digit() || (in_number && (c == '.' || c == ',')) || sign;
         if numeric {
             if !in_number {
                 out.push('#');
