@@ -329,7 +329,8 @@ mod tests {
     use super::*;
     use crate::stats::welch_dof;
 
-    fn hann(n: usize) -> Vec<f64> {
+    /// A periodic Hann window (the child modules' tests use it too).
+    pub(super) fn hann(n: usize) -> Vec<f64> {
         (0..n)
             .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos())
             .collect()

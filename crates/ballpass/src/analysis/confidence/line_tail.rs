@@ -160,13 +160,8 @@ pub(crate) fn line_tail(corr: &[f64], k: usize, records: usize, theta: f64, c: f
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::hann;
     use super::*;
-
-    fn hann(n: usize) -> Vec<f64> {
-        (0..n)
-            .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / n as f64).cos())
-            .collect()
-    }
 
     /// Independent segments: Carter's `(1 − c)^(RK − 1)` exactly (up to
     /// rounding of the Newton root, 1e-12 relative).
