@@ -294,9 +294,14 @@ impl StageSpectra {
                 .into_iter()
                 .map(|x| x - velocity_mm_s)
                 .collect();
+        // The check takes m/s: scaled a block at a time, not copied whole.
         let mut lattice = Lattice::new(v.len());
-        let v_m_s: Vec<f64> = v.iter().map(|x| x * 1e-3).collect();
-        lattice.push(&v_m_s);
+        let mut block = Vec::with_capacity(4096);
+        for part in v.chunks(4096) {
+            block.clear();
+            block.extend(part.iter().map(|x| x * 1e-3));
+            lattice.push(&block);
+        }
         let mut out = StageSpectra::of(friction_n, &v, fs_hz, nperseg)?;
         out.encoder = lattice.phases(velocity_mm_s * 1e-3);
         Ok(out)
@@ -394,8 +399,8 @@ pub fn identify(s: &StageSpectra) -> StageIdentification {
                 "stage not identifiable: the encoder's quantisation is not spread by the motion (the stage advances {:.4} counts per sample, which visits only about {:.0} phases of a count, and the stage's position error stays within about a count), so the measured velocity error is a staircase of the true one that follows the friction; the fit would give f_n = {:.3} Hz, ζ = {:.3}. A speed or sampling rate at which the counts per sample are not a simple fraction avoids it",
                 e.counts_per_sample,
                 1.0 / e.gap_counts,
-                out.natural_frequency_hz.map_or(f64::NAN, |e| e.value),
-                out.damping_ratio.map_or(f64::NAN, |e| e.value),
+                out.natural_frequency_hz.map_or(f64::NAN, |f_n| f_n.value),
+                out.damping_ratio.map_or(f64::NAN, |zeta| zeta.value),
             );
             return out;
         }

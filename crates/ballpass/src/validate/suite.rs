@@ -349,21 +349,36 @@ fn wrap(x: f64) -> f64 {
     }
 }
 
-/// One record's lag error (τc, `None` when not measurable), stage
-/// outcome (`None` when not identified; else within tolerance, f_n inside
-/// its interval, ζ inside its interval) and friction–optical coherence
-/// rows.
-type RecordScore = (
-    bool,
-    Option<(f64, f64)>,
-    Option<(bool, bool, bool)>,
-    CoherenceOutcome,
-);
+/// One record of the lag/stage part.
+struct RecordScore {
+    /// Ten periods or more: the lag is scored.
+    eligible: bool,
+    /// Lag error and the stated 95 % interval, τc (`None`: not measurable
+    /// or not eligible).
+    lag: Option<(f64, f64)>,
+    /// `None` when the stage was not identified.
+    stage: Option<StageOutcome>,
+    coherence: CoherenceOutcome,
+}
 
-/// Friction–optical coherence of one ripple record: the `k = 1` row
-/// significant (`None`: no row), any row significant, and the ripple as a
-/// fraction of the Coulomb level.
-type CoherenceOutcome = (Option<bool>, bool, f64);
+/// An identified stage against the simulated one.
+#[derive(Clone, Copy)]
+struct StageOutcome {
+    /// Within ±5 % f_n and ±20 % ζ.
+    within: bool,
+    f_n_inside_interval: bool,
+    zeta_inside_interval: bool,
+}
+
+/// Friction–optical coherence of one ripple record.
+struct CoherenceOutcome {
+    /// The `k = 1` row significant (`None`: no row).
+    k1: Option<bool>,
+    /// Any row significant.
+    any: bool,
+    /// The ripple as a fraction of the Coulomb level.
+    ripple_fraction: f64,
+}
 
 fn lags_and_stage(
     domain: &Domain,
@@ -381,10 +396,13 @@ fn lags_and_stage(
             r
         })
         .collect();
-    let failed: Vec<String> = rows.iter().filter_map(|r| r.clone().err()).collect();
+    let failed: Vec<String> = rows
+        .iter()
+        .filter_map(|r| r.as_ref().err().cloned())
+        .collect();
     let ok: Vec<RecordScore> = rows.into_iter().filter_map(Result::ok).collect();
-    let eligible = ok.iter().filter(|r| r.0).count();
-    let lag_rows: Vec<(f64, f64)> = ok.iter().filter_map(|r| r.1).collect();
+    let eligible = ok.iter().filter(|r| r.eligible).count();
+    let lag_rows: Vec<(f64, f64)> = ok.iter().filter_map(|r| r.lag).collect();
     let inside = lag_rows
         .iter()
         .filter(|(e, ci)| e.abs() <= ci.max(0.02))
@@ -415,21 +433,27 @@ fn lags_and_stage(
         error_p90_tau_c: q(0.9),
         error_max_tau_c: errs.last().copied(),
     };
-    let ids: Vec<(bool, bool, bool)> = ok.iter().filter_map(|r| r.2).collect();
-    let count = |p: &dyn Fn(&(bool, bool, bool)) -> bool| ids.iter().filter(|r| p(r)).count();
+    let ids: Vec<StageOutcome> = ok.iter().filter_map(|r| r.stage).collect();
+    let count = |p: &dyn Fn(&StageOutcome) -> bool| ids.iter().filter(|r| p(r)).count();
     let stage = StageScore {
         identified: Rate::of(ids.len(), ok.len()),
-        within_tolerance: Rate::of(count(&|r| r.0), ids.len()),
-        inside_intervals: Rate::of(count(&|r| r.1 && r.2), ids.len()),
-        f_n_inside_interval: Rate::of(count(&|r| r.1), ids.len()),
-        zeta_inside_interval: Rate::of(count(&|r| r.2), ids.len()),
+        within_tolerance: Rate::of(count(&|r| r.within), ids.len()),
+        inside_intervals: Rate::of(
+            count(&|r| r.f_n_inside_interval && r.zeta_inside_interval),
+            ids.len(),
+        ),
+        f_n_inside_interval: Rate::of(count(&|r| r.f_n_inside_interval), ids.len()),
+        zeta_inside_interval: Rate::of(count(&|r| r.zeta_inside_interval), ids.len()),
     };
-    let k1: Vec<(bool, f64)> = ok.iter().filter_map(|r| Some((r.3 .0?, r.3 .2))).collect();
+    let k1: Vec<(bool, f64)> = ok
+        .iter()
+        .filter_map(|r| Some((r.coherence.k1?, r.coherence.ripple_fraction)))
+        .collect();
     let strong: Vec<bool> = k1.iter().filter(|r| r.1 >= 0.03).map(|r| r.0).collect();
     let coherence = CoherenceDetection {
         k1: Rate::of(k1.iter().filter(|r| r.0).count(), k1.len()),
         k1_ripple_3_percent: Rate::of(strong.iter().filter(|&&c| c).count(), strong.len()),
-        any_k: Rate::of(ok.iter().filter(|r| r.3 .1).count(), ok.len()),
+        any_k: Rate::of(ok.iter().filter(|r| r.coherence.any).count(), ok.len()),
     };
     (lags, stage, coherence, failed)
 }
@@ -483,23 +507,28 @@ fn one_record(domain: &Domain, seed: u64) -> Result<RecordScore, String> {
         let fn_t = (st.kkp_n_per_m / st.mass_kg).sqrt() / std::f64::consts::TAU;
         let z_t = st.kkd_n_s_per_m / (2.0 * (st.mass_kg * st.kkp_n_per_m).sqrt());
         let within = (fe.value / fn_t - 1.0).abs() <= 0.05 && (ze.value / z_t - 1.0).abs() <= 0.2;
-        Some((
+        Some(StageOutcome {
             within,
-            (fe.value - fn_t).abs() <= fe.ci95,
-            (ze.value - z_t).abs() <= ze.ci95,
-        ))
+            f_n_inside_interval: (fe.value - fn_t).abs() <= fe.ci95,
+            zeta_inside_interval: (ze.value - z_t).abs() <= ze.ci95,
+        })
     });
     let fo: Vec<_> = a
         .coherence
         .iter()
         .filter(|r| r.pair == "friction__optical")
         .collect();
-    let coherence = (
-        fo.iter().find(|r| r.k == 1).and_then(|r| r.significant),
-        fo.iter().any(|r| r.significant == Some(true)),
-        s.friction.pulse_amplitude_n / s.friction.coulomb_n,
-    );
-    Ok((eligible, lag, stage, coherence))
+    let coherence = CoherenceOutcome {
+        k1: fo.iter().find(|r| r.k == 1).and_then(|r| r.significant),
+        any: fo.iter().any(|r| r.significant == Some(true)),
+        ripple_fraction: s.friction.pulse_amplitude_n / s.friction.coulomb_n,
+    };
+    Ok(RecordScore {
+        eligible,
+        lag,
+        stage,
+        coherence,
+    })
 }
 
 /// One ripple-free record: friction periodicity claimed, and the
@@ -571,7 +600,10 @@ fn periodicity(
             r
         })
         .collect();
-    let failed: Vec<String> = rows.iter().filter_map(|r| r.clone().err()).collect();
+    let failed: Vec<String> = rows
+        .iter()
+        .filter_map(|r| r.as_ref().err().cloned())
+        .collect();
     let done: Vec<Option<NullRecord>> = rows.into_iter().filter_map(Result::ok).collect();
     let too_short = done.iter().filter(|c| c.is_none()).count();
     let records: Vec<NullRecord> = done.into_iter().flatten().collect();
@@ -637,7 +669,7 @@ mod tests {
     #[test]
     fn the_lag_truth_follows_the_stage_ripple() {
         let r = one_record(&Domain::default(), 26_100_055).unwrap();
-        let (err, ci) = r.1.expect("measurable");
+        let (err, ci) = r.lag.expect("measurable");
         eprintln!("lag error {err:.5} τc, interval ±{ci:.5} τc");
         assert!(err.abs() <= ci, "lag error {err} τc, interval ±{ci} τc");
     }

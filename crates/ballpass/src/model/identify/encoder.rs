@@ -171,10 +171,19 @@ impl Lattice {
         }
         let frac = a.rem_euclid(1.0);
         let mut seen = vec![false; BINS];
+        let mut filled = 0usize;
         let mut ph = 0.0f64;
+        // Once every bin is visited the gap is one bin: a long record
+        // with an irrational speed stops after a few thousand samples.
         for _ in 0..self.at {
             let b = ((ph * BINS as f64) as usize).min(BINS - 1);
-            seen[b] = true;
+            if !seen[b] {
+                seen[b] = true;
+                filled += 1;
+                if filled == BINS {
+                    break;
+                }
+            }
             ph += frac;
             if ph >= 1.0 {
                 ph -= 1.0;
