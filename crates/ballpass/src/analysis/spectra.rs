@@ -521,6 +521,22 @@ mod tests {
         assert!(e.contains("cannot resolve f_c"), "{e}");
     }
 
+    /// Every f_c of the domain (0.1–5 Hz at 1 kHz, long records) gets 6 to
+    /// 6.75 bins per f_c, the room the floor beside `k = 1` needs (module
+    /// docs); four periods to a power of two gave 4 to 8 and fails here.
+    #[test]
+    fn every_f_c_gets_six_bins() {
+        let s = AnalyzeSettings::default();
+        for i in 0..400 {
+            let f_c = 0.1 * 50f64.powf(i as f64 / 399.0);
+            let mut w = Vec::new();
+            let p = plan_hires(&s, 1000.0, 10_000_000, f_c, &mut w).unwrap();
+            let bins = p.nperseg as f64 * f_c / p.fs_hz;
+            assert!((6.0..=6.75).contains(&bins), "f_c {f_c}: {bins} bins");
+            assert!(w.is_empty(), "f_c {f_c}: {w:?}");
+        }
+    }
+
     /// The smallest even 5-smooth length at or above x, against a brute
     /// force search; every f_c gets 6 to 6.75 bins per f_c above 100
     /// samples (even 5-smooth numbers lie within 12.5 % of each other
