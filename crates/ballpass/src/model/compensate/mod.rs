@@ -72,6 +72,7 @@
 
 use serde::Serialize;
 
+mod loop_model;
 mod output;
 mod rail;
 pub(crate) mod replay;
@@ -79,6 +80,7 @@ pub mod second;
 pub mod tau;
 mod travel;
 
+use loop_model::{linear, stage_of};
 use output::write_outputs;
 pub use output::CompensationTable;
 pub use rail::{RailGrid, RailTable, RAIL_LOCK_FRACTION, RECORD_OFFSET_LIMIT};
@@ -89,7 +91,7 @@ use rail::rail_grid;
 use rail::rail_table;
 
 use crate::analysis::load_cell::LoadCellCorrection;
-use crate::analysis::sync::{coefficient, SyncKey};
+use crate::analysis::sync::SyncKey;
 use crate::analysis::{analyze, Analysis, AnalyzeSettings, Signal};
 use crate::bearing::Prediction;
 use crate::error::{Error, Result};
@@ -696,50 +698,6 @@ pub(crate) fn designed(
     ))
 }
 
-/// The stage the table is designed and predicted with: the one identified
-/// from the records, else the loop gains given; its source and in words.
-fn stage_of(
-    a: &Analysis,
-    gains: Option<PdLoop>,
-    bad: &dyn Fn(String) -> Error,
-) -> Result<(PdLoop, StageSource, String)> {
-    Ok(match (&a.stage, gains) {
-        (Some(id), _) if id.identified => {
-            let (Some(m), Some(kd), Some(kp)) = (id.mass_kg, id.kkd_n_s_per_m, id.kkp_n_per_m)
-            else {
-                return Err(bad("identified stage without its parameters".into()));
-            };
-            (
-                PdLoop::from_products(m.value, kp.value, kd.value)?,
-                StageSource::Identified,
-                format!("identified from the records: {}", id.text),
-            )
-        }
-        (id, Some(g)) => (
-            g,
-            StageSource::GivenGains,
-            format!(
-                "loop gains given ({}), the stage not identified from the data{}",
-                describe(&g),
-                id.as_ref()
-                    .map(|i| format!(": {}", i.text))
-                    .unwrap_or_default()
-            ),
-        ),
-        (id, None) => {
-            return Err(Error::setting(
-                "stage",
-                format!(
-                    "the stage could not be identified from the records ({}); give the loop \
-                     gains (mass, K*KP, K*KD)",
-                    id.as_ref()
-                        .map_or("no friction and position".into(), |i| i.text.clone())
-                ),
-            ))
-        }
-    })
-}
-
 /// The replay's design of `comp` (made by [`from_analysis`] from `a` and
 /// `recs`) again, with its steps, for the validation's look inside;
 /// `guarded` false: every round and correction taken, as before the guard
@@ -763,53 +721,6 @@ pub(crate) fn design_again(
         comp.bins,
         refined,
         guarded,
-    )
-}
-
-/// The linear prediction of the periodic velocity error with `force`
-/// applied (module docs).
-struct Linear {
-    f_c_um_s: f64,
-    var_before: f64,
-    var_after: f64,
-    waveform_um_s: Vec<f64>,
-}
-
-fn linear(v_mean: &[f64], force: &[f64], stage: &PdLoop, w_c: f64) -> Linear {
-    let b = force.len();
-    let mut after = vec![0.0; b];
-    let (mut var_before, mut var_after) = (0.0, 0.0);
-    let mut f1 = (0.0, 0.0);
-    for k in 1..b / 2 {
-        let vk = coefficient(v_mean, k);
-        let uk = coefficient(force, k);
-        let g = stage.g_vf(k as f64 * w_c) * 1e6;
-        let rk = (
-            vk.0 + g.re * uk.0 - g.im * uk.1,
-            vk.1 + g.re * uk.1 + g.im * uk.0,
-        );
-        if k == 1 {
-            f1 = rk;
-        }
-        var_before += 2.0 * (vk.0 * vk.0 + vk.1 * vk.1);
-        var_after += 2.0 * (rk.0 * rk.0 + rk.1 * rk.1);
-        for (j, a) in after.iter_mut().enumerate() {
-            let th = std::f64::consts::TAU * (k * j) as f64 / b as f64;
-            *a += 2.0 * (rk.0 * th.cos() - rk.1 * th.sin());
-        }
-    }
-    Linear {
-        f_c_um_s: 2.0 * f1.0.hypot(f1.1),
-        var_before,
-        var_after,
-        waveform_um_s: after,
-    }
-}
-
-fn describe(g: &PdLoop) -> String {
-    format!(
-        "m = {:.4} kg, K·K_P = {:.4} N/m, K·K_D = {:.4} N·s/m",
-        g.mass_kg, g.stiffness_n_per_m, g.damping_n_s_per_m
     )
 }
 
