@@ -1,5 +1,5 @@
 //! The compensation table in closed loop on the simulator (issue 17); the
-//! randomized rates are measured by `benches/compensate.rs`.
+//! randomized rates are measured by `benches/compensate/`.
 
 use ballpass::model::compensate::compensate;
 use ballpass::model::stage::PdLoop;
