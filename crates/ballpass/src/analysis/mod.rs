@@ -652,6 +652,30 @@ pub(crate) fn analyze_without_passages(
     repeats::run(recs, prediction, settings, false, restored)
 }
 
+/// The stage as identified, or identified again without the check of the
+/// encoder's quantisation where that check refused it and the friction
+/// shows no harmonic above its floor (`verdict`): the staircase an
+/// undithered encoder makes of the velocity error biases the fit through
+/// the friction's ball-pass lines, and leaves broadband friction's
+/// response unbiased (`model::identify::FrictionLines`).
+pub fn stage_for_lines(
+    stage: Option<crate::model::identify::StageIdentification>,
+    spectra: Option<&crate::model::identify::StageSpectra>,
+    verdict: &Verdict,
+) -> Option<crate::model::identify::StageIdentification> {
+    use crate::model::identify::{identify_with, EncoderPhases, FrictionLines};
+    match (stage, spectra) {
+        (Some(id), Some(sp))
+            if !id.identified
+                && verdict.friction_harmonics_flagged.is_empty()
+                && sp.encoder.is_some_and(|e| EncoderPhases::undithered(&e)) =>
+        {
+            Some(identify_with(sp, FrictionLines::NotShown))
+        }
+        (stage, _) => stage,
+    }
+}
+
 /// One record's friction after the load-cell correction, and what was done
 /// (`None` for a record without friction).
 pub(crate) type Restored<'a> = Option<(std::borrow::Cow<'a, [f64]>, load_cell::DcRestoration)>;

@@ -533,6 +533,7 @@ pub(crate) fn run_staged_above(
     });
     drop(prepared);
     let verdict = verdict(pred, &findings);
+    let stage = super::stage_for_lines(stage, stage_spectra.as_ref(), &verdict);
     let position = position.and_then(|p| match p {
         Ok(p) => {
             notes.push(super::position::note(&p));

@@ -163,14 +163,35 @@ pub struct StageIdentification {
     pub text: String,
 }
 
-/// Fits the PD stage to pooled spectra (module docs).
+/// Whether the friction shows ball-pass lines, for the check of the
+/// encoder's quantisation (module `encoder`): the staircase an undithered
+/// encoder makes of the velocity error biases the fit through the
+/// friction's harmonic lines; broadband friction it leaves unbiased.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrictionLines {
+    /// Lines shown, or not known: the check applies.
+    Shown,
+    /// No harmonic of the friction stands above its floor: the check does
+    /// not refuse the stage.
+    NotShown,
+}
+
+/// Fits the PD stage to pooled spectra (module docs), refusing it where
+/// the encoder's quantisation is not spread by the motion
+/// ([`identify_with`] with [`FrictionLines::Shown`]).
 pub fn identify(s: &StageSpectra) -> StageIdentification {
+    identify_with(s, FrictionLines::Shown)
+}
+
+/// [`identify`], with the encoder's check applied only where the friction
+/// shows lines (`lines`).
+pub fn identify_with(s: &StageSpectra, lines: FrictionLines) -> StageIdentification {
     let mut out = identify_once(s);
-    if out.identified {
+    if out.identified && lines == FrictionLines::Shown {
         if let Some(e) = s.encoder.filter(EncoderPhases::undithered) {
             out.identified = false;
             out.text = format!(
-                "stage not identifiable: the encoder's quantisation is not spread by the motion (the stage advances {:.4} counts per sample, which visits only about {:.0} phases of a count, and the stage's position error stays within about a count), so the measured velocity error is a staircase of the true one that follows the friction; the fit would give f_n = {:.3} Hz, ζ = {:.3}. A speed or sampling rate at which the counts per sample are not a simple fraction avoids it",
+                "stage not identifiable: the encoder's quantisation is not spread by the motion (the stage advances {:.4} counts per sample, which visits only about {:.0} phases of a count, and the stage's position error stays within about a count), so the measured velocity error is a staircase of the true one that follows the friction, whose ball-pass lines it biases; the fit would give f_n = {:.3} Hz, ζ = {:.3}. A speed or sampling rate at which the counts per sample are not a simple fraction avoids it",
                 e.counts_per_sample,
                 1.0 / e.gap_counts,
                 out.natural_frequency_hz.map_or(f64::NAN, |f_n| f_n.value),

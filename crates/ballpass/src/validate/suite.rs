@@ -496,23 +496,26 @@ fn one_record(domain: &Domain, seed: u64) -> Result<RecordScore, String> {
         settings.load_cell,
     )
     .map_err(|e| format!("bench {seed}: {e}"))?;
-    let stage = spectra.map(|sp| identify(&sp)).and_then(|id| {
-        let (Some(fe), Some(ze)) = (id.natural_frequency_hz, id.damping_ratio) else {
-            return None;
-        };
-        if !id.identified {
-            return None;
-        }
-        let st = &s.stage;
-        let fn_t = (st.kkp_n_per_m / st.mass_kg).sqrt() / std::f64::consts::TAU;
-        let z_t = st.kkd_n_s_per_m / (2.0 * (st.mass_kg * st.kkp_n_per_m).sqrt());
-        let within = (fe.value / fn_t - 1.0).abs() <= 0.05 && (ze.value / z_t - 1.0).abs() <= 0.2;
-        Some(StageOutcome {
-            within,
-            f_n_inside_interval: (fe.value - fn_t).abs() <= fe.ci95,
-            zeta_inside_interval: (ze.value - z_t).abs() <= ze.ci95,
-        })
-    });
+    let stage = spectra
+        .and_then(|sp| crate::analysis::stage_for_lines(Some(identify(&sp)), Some(&sp), &a.verdict))
+        .and_then(|id| {
+            let (Some(fe), Some(ze)) = (id.natural_frequency_hz, id.damping_ratio) else {
+                return None;
+            };
+            if !id.identified {
+                return None;
+            }
+            let st = &s.stage;
+            let fn_t = (st.kkp_n_per_m / st.mass_kg).sqrt() / std::f64::consts::TAU;
+            let z_t = st.kkd_n_s_per_m / (2.0 * (st.mass_kg * st.kkp_n_per_m).sqrt());
+            let within =
+                (fe.value / fn_t - 1.0).abs() <= 0.05 && (ze.value / z_t - 1.0).abs() <= 0.2;
+            Some(StageOutcome {
+                within,
+                f_n_inside_interval: (fe.value - fn_t).abs() <= fe.ci95,
+                zeta_inside_interval: (ze.value - z_t).abs() <= ze.ci95,
+            })
+        });
     let fo: Vec<_> = a
         .coherence
         .iter()

@@ -709,6 +709,7 @@ pub(crate) fn analyze_stream_blocks(
         }
     });
     let verdict = verdict_of(pred, &findings);
+    let stage = super::stage_for_lines(stage, stage_spectra.as_ref(), &verdict);
     let correlation_window =
         super::CorrelationWindow::of(&correlations, settings.max_lag, pred.tau_c_s);
     let meta = src.meta();
