@@ -28,6 +28,11 @@ use crate::analysis::{analyze, AnalyzeSettings};
 use crate::model::identify::{identify, StageSpectra};
 use crate::sim::simulate;
 
+mod null_record;
+
+use null_record::null_record;
+pub use null_record::{NullRecord, NullRow};
+
 /// Schema tag of [`ValidationReport`].
 pub const VALIDATION_SCHEMA: &str = "ballpass.validation/1";
 
@@ -87,6 +92,13 @@ pub struct PeriodicityScore {
     pub too_short: usize,
     /// Records that could not be analysed, with the reason.
     pub failed: Vec<String>,
+    /// Records with at least one friction–optical coherence row
+    /// significant (with `K` rows a record passes one with probability at
+    /// most `K` times the per-row rate; rows of one record are not
+    /// independent, records are).
+    pub coherence_friction_optical_records: Rate,
+    /// Every analysed record in detail, in seed order.
+    pub records: Vec<NullRecord>,
 }
 
 /// The friction → optical phase at f_c against the truth, as a lag in
@@ -281,6 +293,11 @@ impl ValidationReport {
                 p.coherence_friction_optical,
                 p.coherence_friction_velocity_error,
                 100.0 * p.coherence_nominal
+            );
+            let _ = writeln!(
+                o,
+                "no ripple, {:>5} s records: records with a friction–optical coherence row significant {}",
+                p.duration_s, p.coherence_friction_optical_records
             );
         }
         if let Some(c) = &self.coherence_detection {
@@ -534,10 +551,18 @@ fn one_record(domain: &Domain, seed: u64) -> Result<RecordScore, String> {
     })
 }
 
-/// One ripple-free record: friction periodicity claimed, and the
-/// significant and tested coherence rows of friction–optical and
-/// friction–velocity error.
-type NullRecord = (bool, (usize, usize), (usize, usize));
+/// The periodicity part at one record length: `n` ripple-free benches of
+/// `domain`, seeds `base..base + n` (the suite's own part, callable alone
+/// for long records; `RAYON_NUM_THREADS` bounds its cores).
+pub fn periodicity_score(
+    domain: &Domain,
+    duration_s: f64,
+    base: u64,
+    n: usize,
+    progress: Progress<'_>,
+) -> PeriodicityScore {
+    periodicity(domain, duration_s, base, n, progress)
+}
 
 fn periodicity(
     domain: &Domain,
@@ -556,48 +581,7 @@ fn periodicity(
     let rows: Vec<Result<Option<NullRecord>, String>> = (0..n as u64)
         .into_par_iter()
         .map(|k| {
-            let seed = base + k;
-            let r = (|| {
-                let mut b = d.draw(seed);
-                let mut s = b.settings(&b.bearing(0, false), seed);
-                // Long records at the lowest rate of the domain keep the
-                // suite's memory and time bounded (the test's statistics
-                // depend on the record's periods, not its rate).
-                if duration_s > 300.0 {
-                    b.fs_hz = d.fs_hz.iter().copied().fold(f64::INFINITY, f64::min);
-                    s.fs_hz = b.fs_hz;
-                }
-                let sim = simulate(&s).map_err(|e| format!("bench {seed}: {e}"))?;
-                let pred = b
-                    .geometry
-                    .predict(b.velocity_mm_s, 5)
-                    .map_err(|e| format!("bench {seed}: {e}"))?;
-                // The analysis refuses a record of fewer than two periods
-                // (rightly: nothing to claim), counted apart.
-                if s.duration_s < 2.0 * pred.tau_c_s {
-                    return Ok(None);
-                }
-                let a = analyze(
-                    std::slice::from_ref(&sim.recording),
-                    &pred,
-                    &AnalyzeSettings::default(),
-                )
-                .map_err(|e| format!("bench {seed}: {e}"))?;
-                let rows = |pair: &str| {
-                    let r: Vec<bool> = a
-                        .coherence
-                        .iter()
-                        .filter(|r| r.pair == pair)
-                        .filter_map(|r| r.significant)
-                        .collect();
-                    (r.iter().filter(|&&c| c).count(), r.len())
-                };
-                Ok(Some((
-                    !a.verdict.friction_harmonics_flagged.is_empty(),
-                    rows("friction__optical"),
-                    rows("friction__velocity_error"),
-                )))
-            })();
+            let r = null_record(&d, duration_s, base + k);
             let dn = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(&part, dn, n);
             r
@@ -610,30 +594,46 @@ fn periodicity(
     let done: Vec<Option<NullRecord>> = rows.into_iter().filter_map(Result::ok).collect();
     let too_short = done.iter().filter(|c| c.is_none()).count();
     let records: Vec<NullRecord> = done.into_iter().flatten().collect();
-    let claims: Vec<bool> = records.iter().map(|r| r.0).collect();
-    let k = claims.iter().filter(|&&c| c).count();
-    let sum = |f: &dyn Fn(&NullRecord) -> (usize, usize)| {
+    let k = records.iter().filter(|r| r.friction_claimed).count();
+    // Significant and tested rows of one pair in one record.
+    let pair = |r: &NullRecord, name: &str| {
+        let mine = r.rows.iter().filter(|x| x.pair == name);
+        (mine.clone().filter(|x| x.significant).count(), mine.count())
+    };
+    let sum = |name: &str| {
         let (k, n) = records
             .iter()
-            .map(f)
+            .map(|r| pair(r, name))
             .fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
         Rate::of(k, n)
     };
+    let fo = "friction__optical";
+    let with_rows: Vec<usize> = records
+        .iter()
+        .map(|r| pair(r, fo))
+        .filter(|c| c.1 > 0)
+        .map(|c| c.0)
+        .collect();
     let nominal = 0.01;
-    let allowed = binomial_upper(claims.len(), nominal, 0.99);
+    let allowed = binomial_upper(records.len(), nominal, 0.99);
     PeriodicityScore {
         duration_s,
-        false_claims: Rate::of(k, claims.len()),
+        false_claims: Rate::of(k, records.len()),
         nominal,
         allowed,
         within_margin: k <= allowed,
-        coherence_friction_optical: sum(&|r| r.1),
-        coherence_friction_velocity_error: sum(&|r| r.2),
+        coherence_friction_optical: sum(fo),
+        coherence_friction_velocity_error: sum("friction__velocity_error"),
         coherence_nominal: crate::analysis::confidence::coherence_row_rate(
             AnalyzeSettings::default().confidence,
         ),
         too_short,
         failed,
+        coherence_friction_optical_records: Rate::of(
+            with_rows.iter().filter(|&&c| c > 0).count(),
+            with_rows.len(),
+        ),
+        records,
     }
 }
 
@@ -675,6 +675,47 @@ mod tests {
         let (err, ci) = r.lag.expect("measurable");
         eprintln!("lag error {err:.5} τc, interval ±{ci:.5} τc");
         assert!(err.abs() <= ci, "lag error {err} τc, interval ±{ci} τc");
+    }
+
+    /// The per-record detail adds up to the part's totals: rows per pair,
+    /// records with a friction–optical row, claims (three 10 s records).
+    #[test]
+    fn null_records_add_up_to_the_totals() {
+        let p = periodicity_score(&Domain::default(), 10.0, 36_400_900, 3, &|_, _, _| {});
+        assert_eq!(p.records.len() + p.too_short + p.failed.len(), 3);
+        let count = |name: &str, sig: bool| {
+            p.records
+                .iter()
+                .flat_map(|r| &r.rows)
+                .filter(|x| x.pair == name && (x.significant || !sig))
+                .count()
+        };
+        for (name, rate) in [
+            ("friction__optical", &p.coherence_friction_optical),
+            (
+                "friction__velocity_error",
+                &p.coherence_friction_velocity_error,
+            ),
+        ] {
+            assert_eq!(rate.k, count(name, true), "{name}");
+            assert_eq!(rate.n, count(name, false), "{name}");
+        }
+        assert!(p.coherence_friction_optical.n > 0);
+        let claims = p.records.iter().filter(|r| r.friction_claimed).count();
+        assert_eq!(p.false_claims.k, claims);
+        for r in &p.records {
+            assert_eq!(r.duration_s, 10.0);
+            assert!(r.hires_segments >= 1 && r.hires_resolution_hz > 0.0);
+            for x in &r.rows {
+                assert!((x.bins * r.hires_resolution_hz - x.f_hz).abs() < 1e-9 * x.f_hz);
+                assert_eq!(x.significant, x.coherence > x.threshold);
+            }
+            // The claim is Holm's first step on the smallest p-value.
+            if let Some(pm) = r.friction_p_min {
+                let alpha = 1.0 - AnalyzeSettings::default().confidence;
+                assert_eq!(r.friction_claimed, pm <= alpha / r.friction_tests as f64);
+            }
+        }
     }
 
     #[test]
