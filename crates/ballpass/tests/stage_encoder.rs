@@ -29,8 +29,14 @@ const LAB48B: &str = r#"{"fs_hz":[2000],"duration_s":41.9,"velocity_mm_s":2.34,"
 fn broadband() -> String {
     LAB48B
         .replace(r#""ripple_fraction":0.0764"#, r#""ripple_fraction":0.0"#)
-        .replace(r#""roughness_fraction":0.00131"#, r#""roughness_fraction":0.05"#)
-        .replace(r#""roughness_length_mm":1.625"#, r#""roughness_length_mm":0.5"#)
+        .replace(
+            r#""roughness_fraction":0.00131"#,
+            r#""roughness_fraction":0.05"#,
+        )
+        .replace(
+            r#""roughness_length_mm":1.625"#,
+            r#""roughness_length_mm":0.5"#,
+        )
 }
 
 /// `analyze` on record `seed` of `domain`, with the stage's truth (f_n, ζ).
@@ -103,6 +109,14 @@ fn the_check_refuses_only_where_the_friction_shows_lines() {
     let id = a.stage.expect("a stage fit");
     assert!(id.identified, "{}", id.text);
     let (fe, ze) = (id.natural_frequency_hz.unwrap(), id.damping_ratio.unwrap());
-    assert!((fe.value / f_n - 1.0).abs() <= 0.05, "f_n {} vs {f_n}", fe.value);
-    assert!((ze.value / zeta - 1.0).abs() <= 0.2, "ζ {} vs {zeta}", ze.value);
+    assert!(
+        (fe.value / f_n - 1.0).abs() <= 0.05,
+        "f_n {} vs {f_n}",
+        fe.value
+    );
+    assert!(
+        (ze.value / zeta - 1.0).abs() <= 0.2,
+        "ζ {} vs {zeta}",
+        ze.value
+    );
 }
