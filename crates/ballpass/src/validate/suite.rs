@@ -214,7 +214,7 @@ pub fn run(domain: &Domain, settings: &SuiteSettings, progress: Progress<'_>) ->
         .iter()
         .enumerate()
         .map(|(i, &t)| {
-            periodicity(
+            periodicity_score(
                 domain,
                 t,
                 base + 200_000 + 100_000 * i as u64,
@@ -555,16 +555,6 @@ fn one_record(domain: &Domain, seed: u64) -> Result<RecordScore, String> {
 /// `domain`, seeds `base..base + n` (the suite's own part, callable alone
 /// for long records; `RAYON_NUM_THREADS` bounds its cores).
 pub fn periodicity_score(
-    domain: &Domain,
-    duration_s: f64,
-    base: u64,
-    n: usize,
-    progress: Progress<'_>,
-) -> PeriodicityScore {
-    periodicity(domain, duration_s, base, n, progress)
-}
-
-fn periodicity(
     domain: &Domain,
     duration_s: f64,
     base: u64,
