@@ -316,25 +316,35 @@ fn predicted(at: &[&&RecordResult]) -> f64 {
 }
 
 /// The records' stage spectra pooled on their most common grid, and the
-/// stage identified from them.
+/// stage identified from them; the encoder's check applies when a pooled
+/// record's friction shows a harmonic above its floor
+/// ([`crate::model::identify::FrictionLines`]).
 fn pooled_stage(records: &[&RecordResult]) -> Option<crate::model::identify::StageIdentification> {
-    let spectra: Vec<&crate::model::identify::StageSpectra> = records
+    use crate::model::identify::{identify_with, FrictionLines};
+    let spectra: Vec<(&crate::model::identify::StageSpectra, bool)> = records
         .iter()
-        .filter_map(|r| r.stage_spectra.as_ref())
+        .filter_map(|r| {
+            let lines = r.friction_harmonic_significant.contains(&Some(true));
+            r.stage_spectra.as_ref().map(|s| (s, lines))
+        })
         .collect();
     // The grid most records share (same rate and segment length).
     let key = |s: &crate::model::identify::StageSpectra| (s.fs_hz.to_bits(), s.freq_hz.len());
-    let mut keys: Vec<(u64, usize)> = spectra.iter().map(|s| key(s)).collect();
+    let mut keys: Vec<(u64, usize)> = spectra.iter().map(|(s, _)| key(s)).collect();
     keys.sort_unstable();
     let best = keys
         .chunk_by(|a, b| a == b)
         .max_by_key(|c| c.len())
         .map(|c| c[0])?;
     let mut pooled = crate::model::identify::StageSpectra::default();
-    for s in spectra.into_iter().filter(|s| key(s) == best) {
+    let mut lines = FrictionLines::NotShown;
+    for (s, shown) in spectra.into_iter().filter(|(s, _)| key(s) == best) {
         pooled.add(s);
+        if shown {
+            lines = FrictionLines::Shown;
+        }
     }
-    Some(crate::model::identify::identify(&pooled))
+    Some(identify_with(&pooled, lines))
 }
 
 /// The trend fit's words, checked against the identified stage: the trend of
