@@ -663,12 +663,12 @@ pub fn stage_for_lines(
     spectra: Option<&crate::model::identify::StageSpectra>,
     verdict: &Verdict,
 ) -> Option<crate::model::identify::StageIdentification> {
-    use crate::model::identify::{identify_with, EncoderPhases, FrictionLines};
+    use crate::model::identify::{identify_with, FrictionLines};
     match (stage, spectra) {
         (Some(id), Some(sp))
             if !id.identified
                 && verdict.friction_harmonics_flagged.is_empty()
-                && sp.encoder.is_some_and(|e| EncoderPhases::undithered(&e)) =>
+                && sp.encoder.is_some_and(|e| e.undithered()) =>
         {
             Some(identify_with(sp, FrictionLines::NotShown))
         }
