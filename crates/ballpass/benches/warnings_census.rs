@@ -18,7 +18,10 @@
 //!
 //! Prints, for each kind, how many records carried it (exact 95 %
 //! binomial interval) and one example; `--list` adds one line per record
-//! with a warning. `--write` writes one bench's record and its truth
+//! with a warning. It ends with the load cell's high-pass: the phase
+//! advance left at `f_c` on the records warned of an unknown high-pass and
+//! on the others (does the warning mean something, and is it missing
+//! anywhere?). `--write` writes one bench's record and its truth
 //! (`FILE.truth.json`) for a closer look with `ballpass analyze`.
 
 use std::collections::BTreeMap;
@@ -57,6 +60,30 @@ struct Record {
     bench: String,
     warnings: Vec<String>,
     lines: Option<([Option<bool>; 3], bool)>,
+    high_pass: HighPass,
+}
+
+/// The load cell's high-pass at `f_c` on one record: what the simulator
+/// put in, and what the analysis did about it.
+struct HighPass {
+    /// Phase advance of the simulated high-pass at `f_c`, degrees (0 for a
+    /// DC-coupled sensor).
+    true_deg: f64,
+    /// Advance left after the analysis' restoration (the true advance less
+    /// the one it undid), degrees.
+    left_deg: f64,
+    /// The analysis warned of an unknown high-pass.
+    warned: bool,
+}
+
+/// Phase advance of a first-order high-pass of time constant `tau_s` at
+/// `f_hz`, degrees.
+fn advance_deg(tau_s: Option<f64>, f_hz: f64) -> f64 {
+    tau_s.map_or(0.0, |t| {
+        (1.0 / (std::f64::consts::TAU * f_hz * t))
+            .atan()
+            .to_degrees()
+    })
 }
 
 /// The signals whose `k = 1` line is counted.
@@ -94,10 +121,22 @@ fn one(domain: &Domain, seed: u64) -> Result<Record, String> {
         });
         (k1, !a.verdict.friction_harmonics_flagged.is_empty())
     });
+    let f_c = sim.truth.f_c_hz;
+    let true_deg = advance_deg(s.load_cell.time_constant_s, f_c);
+    let dc = a.load_cell.first();
+    let undone = dc
+        .filter(|d| d.applied)
+        .map_or(0.0, |d| advance_deg(d.tau_s, f_c));
+    let high_pass = HighPass {
+        true_deg,
+        left_deg: true_deg - undone,
+        warned: dc.is_some_and(|d| d.unknown_high_pass),
+    };
     Ok(Record {
         bench,
         warnings: a.warnings,
         lines,
+        high_pass,
     })
 }
 
@@ -185,5 +224,41 @@ fn main() {
     println!(
         "  friction shows f_c (claimed; every record has a ripple) {}",
         Rate::of(long.iter().filter(|l| l.1).count(), long.len())
+    );
+    high_pass_census(&rows);
+}
+
+/// Whether the unknown-high-pass warning means something: the advance the
+/// load cell left in the friction's phase at `f_c`, on the records it was
+/// raised on and on those it was not.
+fn high_pass_census(rows: &[(u64, Result<Record, String>)]) {
+    let hp: Vec<&HighPass> = rows
+        .iter()
+        .filter_map(|(_, r)| Some(&r.as_ref().ok()?.high_pass))
+        .collect();
+    let band = |warned: bool, lo: f64, hi: f64| {
+        hp.iter()
+            .filter(|h| h.warned == warned && h.left_deg.abs() >= lo && h.left_deg.abs() < hi)
+            .count()
+    };
+    for warned in [true, false] {
+        let n = hp.iter().filter(|h| h.warned == warned).count();
+        println!(
+            "{} the unknown-high-pass warning: {n}; advance left at f_c ≥ 10° {}, 2–10° {}, < 2° {}",
+            if warned { "records with" } else { "records without" },
+            Rate::of(band(warned, 10.0, f64::INFINITY), n),
+            Rate::of(band(warned, 2.0, 10.0), n),
+            Rate::of(band(warned, 0.0, 2.0), n),
+        );
+    }
+    let ac = hp.iter().filter(|h| h.true_deg > 0.0).count();
+    println!(
+        "  AC-coupled load cells: {ac}; restored (advance left < 2° where the true one was ≥ 2°) {}",
+        Rate::of(
+            hp.iter()
+                .filter(|h| h.true_deg >= 2.0 && h.left_deg.abs() < 2.0)
+                .count(),
+            hp.iter().filter(|h| h.true_deg >= 2.0).count()
+        )
     );
 }
