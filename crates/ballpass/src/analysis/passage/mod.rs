@@ -666,6 +666,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         ac,
         f_c,
         f_c_predicted,
+        tau_single_max: predicted.as_ref().map(|p| 1.0 / p.f_single_spacing_low_hz),
         withheld_bend: baseline_bend.filter(|_| widths_withheld == Some(Withheld::Bend)),
         withheld_scatter_se: width_scatter_se
             .filter(|_| widths_withheld == Some(Withheld::Scatter)),
