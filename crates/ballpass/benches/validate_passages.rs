@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7|fresh8|fresh9|fresh10] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7|fresh8|fresh9|fresh10|fresh12] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width] [--velocity-factor K]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -20,7 +20,9 @@
 //! was frozen; `fresh8`, 15_300_001+, never looked at before session 15's
 //! rule was frozen; `fresh9`, 15_400_001+, never looked at before session
 //! 16, which scored session 15's rule on it again, unchanged; `fresh10`,
-//! 15_500_001+, never looked at before session 17's rule was frozen). Prints the
+//! 15_500_001+, never looked at before session 17's rule was frozen;
+//! `fresh12`, 37_100_001+, never looked at before session 20's missed-gap
+//! rule was frozen). Prints the
 //! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %; `--json` prints every record's score instead of the
@@ -35,9 +37,17 @@
 //! pulses), the FWHM of one pulse the second column. `--recorded-width`
 //! prints, per record, the analysis' width error against the FWHM of one
 //! pulse and against the width at half prominence, and the ratio of the two
-//! truths.
+//! truths. `--velocity-factor K` gives the analysis a tracking velocity
+//! `K` times the record's (a real period mismatch: a wrong velocity, or
+//! equally a wrong `d_avg`, since `f_c = v / (2 d_avg)`), to score the
+//! period-mismatch and missed-passage conditions where the prediction is
+//! wrong.
 
-use ballpass::validate::passages::{score_and_recorded_width, summarize, PassageScore};
+use ballpass::analysis::PassageSettings;
+use ballpass::sim::simulate;
+use ballpass::validate::passages::{
+    score_and_recorded_width, score_simulation, summarize, PassageScore,
+};
 use ballpass::validate::Domain;
 use rayon::prelude::*;
 
@@ -62,9 +72,10 @@ fn main() {
         "fresh8" => 15_300_001,
         "fresh9" => 15_400_001,
         "fresh10" => 15_500_001,
+        "fresh12" => 37_100_001,
         other => {
             eprintln!(
-                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6, fresh7, fresh8, fresh9 or fresh10"
+                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6, fresh7, fresh8, fresh9, fresh10 or fresh12"
             );
             std::process::exit(2);
         }
@@ -92,6 +103,11 @@ fn main() {
     // prominence of the same pulses (SciPy's `peak_widths` on the bench
     // simulated again without noise, drift, coupling or interference).
     let recorded = args.iter().any(|a| a == "--recorded-width");
+    let velocity_factor: Option<f64> = args
+        .iter()
+        .position(|a| a == "--velocity-factor")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|a| a.parse().ok());
     let scored: Vec<(PassageScore, Option<f64>)> = seeds
         .into_par_iter()
         .map(|seed| {
@@ -105,6 +121,19 @@ fn main() {
             }
             if let Some(r) = fwhm {
                 bench.optical.width_ratio = r;
+            }
+            if let Some(k) = velocity_factor {
+                // The analysis told a wrong velocity (no recorded-width ratio).
+                let sim = simulate(&bench.settings(&bench.bearing(0, false), seed))
+                    .expect("the default domain draws valid benches");
+                let settings = PassageSettings {
+                    geometry: Some(bench.geometry),
+                    velocity_mm_s: sim.recording.meta.velocity_mm_s.map(|v| k * v),
+                    ..PassageSettings::default()
+                };
+                let mut s = score_simulation(&sim, &settings);
+                s.bench.bench_seed = bench.seed;
+                return (s, None);
             }
             score_and_recorded_width(&bench, seed).expect("the default domain draws valid benches")
         })

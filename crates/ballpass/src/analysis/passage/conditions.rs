@@ -25,6 +25,10 @@ pub(super) struct Inputs<'a> {
     /// Measured and predicted ball-pass frequencies, Hz.
     pub f_c: f64,
     pub f_c_predicted: Option<f64>,
+    /// The longest period one ball spacing can give (all the race's free
+    /// space in one gap: `(d + d_ext) / (v/2)`), s, when the velocity and
+    /// geometry are known.
+    pub tau_single_max: Option<f64>,
     /// The widths were withheld: the median bend of the baseline under a
     /// pulse, in pulse heights (`withhold.rs`).
     pub withheld_bend: Option<f64>,
@@ -40,6 +44,57 @@ pub(super) struct Inputs<'a> {
 /// which reads as a coupling of `T` ten or more periods long; that small a
 /// dip moves the widths by less than 0.5 %, and is not worth a warning.
 pub(super) const AC_DIP_REPORTED: f64 = 0.02;
+
+/// How far from a whole number of predicted periods a gap may be and
+/// still count as that many periods (`missed_against_prediction`). A
+/// gap of one passage's period varies with the balls' spacing (from the
+/// ball diameter to it plus the free space, around `d_avg`) and the
+/// stage's velocity ripple, by a few percent; a quarter period keeps the
+/// multiples apart (a gap halfway between two is neither).
+const MULTIPLE_TOLERANCE: f64 = 0.25;
+
+const MISSED_ADVICE: &str = "weak passages fall below the threshold: lower min_snr only if the noise allows; fading pulses with a laser source are the interference of thesis Fig. 32 (use an LED)";
+
+/// Passages missed, judged against the period `tau_predicted` that the
+/// velocity and geometry predict rather than the median of the gaps found
+/// (which, from two or three gaps, is no period): `(gaps, passages
+/// missed)` when every gap lies within [`MULTIPLE_TOLERANCE`] of a whole
+/// number `n ≥ 1` of predicted periods, some `n ≥ 2`, and not every `n`
+/// the same. The last clause keeps a wrong velocity or geometry out: a
+/// train whose every gap is `n` predicted periods is a prediction `n`
+/// times off as much as every `n`-th passage missed, which the period
+/// mismatch reports; gaps of different whole numbers of periods are not
+/// one period, whatever the scale. A gap that one ball spacing could give
+/// (at most `tau_single_max`: all the free space in one gap) is never
+/// counted as two or more periods; the rule then abstains.
+fn missed_against_prediction(
+    tau_c_all: &[f64],
+    tau_predicted: f64,
+    tau_single_max: Option<f64>,
+) -> Option<(usize, f64)> {
+    if !(tau_predicted.is_finite() && tau_predicted > 0.0) {
+        return None;
+    }
+    let mut multiples = Vec::with_capacity(tau_c_all.len());
+    for &t in tau_c_all {
+        let r = t / tau_predicted;
+        let n = r.round();
+        if n < 1.0 || (r - n).abs() > MULTIPLE_TOLERANCE {
+            return None;
+        }
+        if n >= 2.0 && tau_single_max.is_some_and(|m| t <= m) {
+            return None;
+        }
+        multiples.push(n);
+    }
+    let first = *multiples.first()?;
+    if multiples.iter().all(|&n| n == first) {
+        return None;
+    }
+    let long = multiples.iter().filter(|&&n| n >= 2.0).count();
+    let missing: f64 = multiples.iter().map(|n| n - 1.0).sum();
+    (long > 0).then_some((long, missing))
+}
 
 /// Baseline wander reported above this fraction of the median pulse.
 const DRIFT_FRACTION: f64 = 0.2;
@@ -122,23 +177,38 @@ pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
         });
     }
 
-    let long: Vec<f64> = c
-        .tau_c_all
-        .iter()
-        .copied()
-        .filter(|t| *t >= 1.6 * c.med_tau)
-        .collect();
-    if !long.is_empty() {
-        let missing: f64 = long.iter().map(|t| (t / c.med_tau).round() - 1.0).sum();
+    let tau_predicted = c.f_c_predicted.map(|p| 1.0 / p);
+    if let Some(((n_long, missing), tau_p)) = tau_predicted
+        .and_then(|t| missed_against_prediction(c.tau_c_all, t, c.tau_single_max))
+        .zip(tau_predicted)
+    {
         out.push(Condition {
             kind: ConditionKind::MissedPassages,
             measure: missing,
             message: format!(
-                "{} gap(s) of 1.6 periods or more: about {missing:.0} passage(s) too weak to detect",
-                long.len()
+                "{n_long} gap(s) of two or more of the periods the velocity and geometry predict ({tau_p:.4} s), every gap a whole number of them: about {missing:.0} passage(s) too weak to detect"
             ),
-            advice: "weak passages fall below the threshold: lower min_snr only if the noise allows; fading pulses with a laser source are the interference of thesis Fig. 32 (use an LED)".into(),
+            advice: MISSED_ADVICE.into(),
         });
+    } else {
+        let long: Vec<f64> = c
+            .tau_c_all
+            .iter()
+            .copied()
+            .filter(|t| *t >= 1.6 * c.med_tau)
+            .collect();
+        if !long.is_empty() {
+            let missing: f64 = long.iter().map(|t| (t / c.med_tau).round() - 1.0).sum();
+            out.push(Condition {
+                kind: ConditionKind::MissedPassages,
+                measure: missing,
+                message: format!(
+                    "{} gap(s) of 1.6 periods or more: about {missing:.0} passage(s) too weak to detect",
+                    long.len()
+                ),
+                advice: MISSED_ADVICE.into(),
+            });
+        }
     }
 
     if let Some(p) = c.f_c_predicted {
@@ -207,6 +277,7 @@ mod tests {
             f_c: 1.0,
             // Predicted 1.4 Hz: the measured period is 40 % long.
             f_c_predicted: Some(1.4),
+            tau_single_max: None,
             withheld_bend: None,
             withheld_scatter_se: None,
         });
@@ -233,5 +304,98 @@ mod tests {
         let mut gaps = ones.clone();
         gaps[3] = 2.0;
         assert!(mismatch_advice(&clean, &gaps).contains("fix the optical signal first"));
+    }
+
+    fn kinds(tau_c_all: &[f64], f_c: f64, f_c_predicted: f64) -> Vec<Condition> {
+        kinds_max(tau_c_all, f_c, f_c_predicted, 1.45)
+    }
+
+    fn kinds_max(
+        tau_c_all: &[f64],
+        f_c: f64,
+        f_c_predicted: f64,
+        tau_single_max: f64,
+    ) -> Vec<Condition> {
+        let passages: Vec<Passage> = (0..=tau_c_all.len()).map(|i| passage(i, 1)).collect();
+        let baseline = vec![0.0; 100];
+        let mut sorted = tau_c_all.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let n = sorted.len();
+        let med_tau = 0.5 * (sorted[(n - 1) / 2] + sorted[n / 2]);
+        conditions(&Inputs {
+            passages: &passages,
+            tau_c_all,
+            med_tau,
+            baseline: &baseline,
+            blocks_per_period: 10.0,
+            med_amp: 0.5,
+            block_noise: 0.01,
+            ac: None,
+            f_c,
+            f_c_predicted: Some(f_c_predicted),
+            tau_single_max: Some(tau_single_max),
+            withheld_bend: None,
+            withheld_scatter_se: None,
+        })
+    }
+
+    /// Two gaps of 5.9 and 2.0 predicted periods (fresh10's record
+    /// 15 500 028: 3 of 18 passages found): their median is no period,
+    /// so the long one is not 1.6 medians; against the prediction both are
+    /// whole numbers of periods, different ones, and the passages missed
+    /// are reported, with the period mismatch's advice at the optical
+    /// signal, not at the velocity.
+    #[test]
+    fn gaps_of_whole_predicted_periods_are_missed_passages() {
+        let out = kinds(&[5.9, 2.0], 1.0 / 3.95, 1.0);
+        let missed = out
+            .iter()
+            .find(|c| c.kind == ConditionKind::MissedPassages)
+            .expect("missed passages reported");
+        assert_eq!(missed.measure, 6.0);
+        let m = out
+            .iter()
+            .find(|c| c.kind == ConditionKind::PeriodMismatch)
+            .expect("the mismatch is still reported");
+        assert!(m.advice.contains("fix the optical signal first"));
+    }
+
+    /// Every gap the same whole number of predicted periods: a velocity or
+    /// geometry that many times off as much as passages missed; the period
+    /// mismatch points at the velocity, as before. A gap between two whole
+    /// numbers keeps the prediction out too.
+    #[test]
+    fn a_train_uniformly_off_the_prediction_is_a_period_mismatch() {
+        for gaps in [&[2.02, 1.97, 2.05, 1.99][..], &[3.1, 2.9], &[2.0, 1.5, 1.0]] {
+            let f_c = gaps.len() as f64 / gaps.iter().sum::<f64>();
+            let out = kinds(gaps, f_c, 1.0);
+            assert!(
+                !out.iter().any(|c| c.kind == ConditionKind::MissedPassages),
+                "{gaps:?}"
+            );
+            let m = out
+                .iter()
+                .find(|c| c.kind == ConditionKind::PeriodMismatch)
+                .expect("mismatch");
+            assert!(
+                m.advice.starts_with("check the tracking velocity"),
+                "{gaps:?}"
+            );
+        }
+        // A gap one ball spacing can give (all the free space in one gap)
+        // is not two periods, whatever the prediction says: the rule
+        // abstains (and two gaps have no median to judge by).
+        let out = kinds_max(&[1.0, 1.8], 2.0 / 2.8, 1.0, 1.85);
+        assert!(!out.iter().any(|c| c.kind == ConditionKind::MissedPassages));
+        let out = kinds_max(&[1.0, 1.8], 2.0 / 2.8, 1.0, 1.45);
+        assert!(out.iter().any(|c| c.kind == ConditionKind::MissedPassages));
+        // A train a predicted period apart with one passage missed: the
+        // same count either way.
+        let out = kinds(&[1.0, 1.02, 2.01, 0.98], 1.0, 1.0);
+        let missed = out
+            .iter()
+            .find(|c| c.kind == ConditionKind::MissedPassages)
+            .expect("missed");
+        assert_eq!(missed.measure, 1.0);
     }
 }

@@ -92,7 +92,12 @@
 //!   (thesis Fig. 38).
 //! - [`ConditionKind::InvertedPulses`]: pulses pointing down, the signature of
 //!   interference with a coherent source (thesis Fig. 32, §5.2).
-//! - [`ConditionKind::MissedPassages`]: gaps longer than 1.6 τ_c.
+//! - [`ConditionKind::MissedPassages`]: gaps longer than 1.6 τ_c (their
+//!   median); or, when the velocity and geometry predict the period, every
+//!   gap within a quarter of a whole number of predicted periods, some of
+//!   two or more (longer than one ball spacing can make) and not all the
+//!   same number (a few passages found far apart have no median period;
+//!   a train uniformly `n` periods apart is left to the period mismatch).
 //! - [`ConditionKind::PeriodMismatch`]: measured `τ_c` far from the prediction.
 //! - [`ConditionKind::WidthsWithheld`]: the baseline bends under the pulses
 //!   by more than 15 % of a pulse (median over the pulses): a drift as fast
@@ -666,6 +671,7 @@ pub fn detect_passages(rec: &Recording, settings: &PassageSettings) -> Result<Pa
         ac,
         f_c,
         f_c_predicted,
+        tau_single_max: predicted.as_ref().map(|p| 1.0 / p.f_single_spacing_low_hz),
         withheld_bend: baseline_bend.filter(|_| widths_withheld == Some(Withheld::Bend)),
         withheld_scatter_se: width_scatter_se
             .filter(|_| widths_withheld == Some(Withheld::Scatter)),
