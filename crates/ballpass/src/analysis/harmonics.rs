@@ -125,6 +125,91 @@ pub(crate) fn harmonic_value(
     accurate: bool,
     ctx: Option<TestContext>,
 ) -> Option<HarmonicValue> {
+    harmonic_value_with(s, psd, f_hz, f_c_hz, accurate, ctx, Variant::default()).map(|v| v.0)
+}
+
+/// Switches of the harmonic test for the calibration bench only
+/// (`benches/harmonic_null.rs`): each, when set, takes one part of the
+/// p-value out. The default is the product's test, bit for bit.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Variant {
+    /// No floor-misfit term (`m² = 0`).
+    pub no_misfit: bool,
+    /// The misfit term only where it scales the leverage (no `+ m²` of
+    /// the tested bin's own roughness).
+    pub misfit_leverage_only: bool,
+    /// The misfit term only when `s²/ψ'(ν/2)` exceeds the `q` quantile of
+    /// `χ²_d/d` (`d` the fit's residual degrees of freedom): a test that
+    /// the spectrum is rougher than χ² noise before crediting it.
+    pub misfit_gate: Option<f64>,
+    /// No neighbour-correlation inflation of the leverage term (`c = 1`).
+    pub no_inflation: bool,
+    /// No floor uncertainty at all (`σ² = 0`: the floor taken as exact).
+    pub exact_floor: bool,
+    /// Test only the bin nearest the frequency (`n_b = 1`).
+    pub centre_bin_only: bool,
+    /// The max over the tested bins with this many independent bins in the
+    /// tail instead of their count.
+    pub n_b_tail: Option<usize>,
+    /// The floor polynomial's degree instead of 1 or 2 by bin count.
+    pub degree: Option<usize>,
+}
+
+/// What a [`Variant`] test saw besides its value.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy)]
+pub struct VariantDiag {
+    /// Floor bins.
+    pub floor_bins: usize,
+    /// Floor polynomial degree.
+    pub degree: usize,
+    /// Residual variance of the fit over `ψ'(ν/2)`.
+    pub s2_over_vchi: f64,
+    /// The misfit term `m²`.
+    pub misfit: f64,
+    /// Leverage at the largest-ratio bin.
+    pub leverage: f64,
+    /// Variance of the floor's log error.
+    pub var: f64,
+    /// Equivalent degrees of freedom.
+    pub nu: f64,
+    /// Neighbour-correlation inflation.
+    pub inflation: f64,
+}
+
+/// Every predicted-frequency harmonic test of `signal` in `s` under
+/// `variant` (calibration bench only): `(k, value, diagnostics)`.
+#[doc(hidden)]
+pub fn predicted_tests_with(
+    s: &Spectra,
+    signal: Signal,
+    f_pred: f64,
+    settings: &AnalyzeSettings,
+    variant: Variant,
+) -> Vec<(usize, HarmonicValue, Option<VariantDiag>)> {
+    let ctx = TestContext::new(s, settings);
+    let Some(psd) = s.auto_of(signal) else {
+        return Vec::new();
+    };
+    (1..=settings.harmonics)
+        .filter_map(|k| {
+            let f = k as f64 * f_pred;
+            harmonic_value_with(s, psd, f, f_pred, false, ctx, variant).map(|(v, d)| (k, v, d))
+        })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn harmonic_value_with(
+    s: &Spectra,
+    psd: &[f64],
+    f_hz: f64,
+    f_c_hz: f64,
+    accurate: bool,
+    ctx: Option<TestContext>,
+    variant: Variant,
+) -> Option<(HarmonicValue, Option<VariantDiag>)> {
     let df = s.info.resolution_hz;
     let i = s.nearest_bin(f_hz)?;
     if i < 2 || i + 2 >= psd.len() {
@@ -137,6 +222,8 @@ pub(crate) fn harmonic_value(
         } else {
             vec![lo, lo + 1]
         }
+    } else if variant.centre_bin_only {
+        vec![i]
     } else {
         vec![i - 1, i, i + 1]
     };
@@ -174,14 +261,16 @@ pub(crate) fn harmonic_value(
         value_at(j, None)
     };
     let Some(ctx) = ctx else {
-        return Some(fallback());
+        return Some((fallback(), None));
     };
     if bins.len() < 5 {
-        return Some(fallback());
+        return Some((fallback(), None));
     }
     let x: Vec<f64> = bins.iter().map(|&j| s.freq_hz[j].ln()).collect();
     let y: Vec<f64> = bins.iter().map(|&j| psd[j].ln()).collect();
-    let degree = if bins.len() >= 12 { 2 } else { 1 };
+    let degree = variant
+        .degree
+        .unwrap_or(if bins.len() >= 12 { 2 } else { 1 });
     let Some(PolyFit {
         centre: xc,
         scale: sc,
@@ -189,7 +278,7 @@ pub(crate) fn harmonic_value(
         inv,
     }) = poly_fit(&x, &y, degree)
     else {
-        return Some(fallback());
+        return Some((fallback(), None));
     };
     let eval = |xv: f64| {
         let u = (xv - xc) / sc;
@@ -211,7 +300,15 @@ pub(crate) fn harmonic_value(
     let dof_res = bins.len() as f64 - coef.len() as f64;
     let s2 = rss / dof_res.max(1.0);
     let v_chi = trigamma(0.5 * ctx.nu);
-    let misfit = (s2 - v_chi).max(0.0);
+    let gated = variant.misfit_gate.is_some_and(|q| {
+        let d = dof_res.max(1.0);
+        s2 / v_chi <= crate::stats::chi2_ppf(q, d) / d
+    });
+    let misfit = if variant.no_misfit || gated {
+        0.0
+    } else {
+        (s2 - v_chi).max(0.0)
+    };
     let mu = digamma(0.5 * ctx.nu) - (0.5 * ctx.nu).ln();
     // The largest ratio over the tested bins.
     let (j, ratio, lev) = tested
@@ -222,17 +319,45 @@ pub(crate) fn harmonic_value(
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .expect("tested bins");
-    let var = (v_chi + misfit) * lev * ctx.inflation + misfit;
-    let p = ctx.tail(ratio, tested.len(), var);
-    let thr = ctx.threshold(tested.len(), var);
+    let inflation = if variant.no_inflation {
+        1.0
+    } else {
+        ctx.inflation
+    };
+    let var = if variant.exact_floor {
+        0.0
+    } else {
+        let own = if variant.misfit_leverage_only {
+            0.0
+        } else {
+            misfit
+        };
+        (v_chi + misfit) * lev * inflation + own
+    };
+    let n_b = variant.n_b_tail.unwrap_or(tested.len());
+    let p = ctx.tail(ratio, n_b, var);
+    let thr = ctx.threshold(n_b, var);
     let floor = psd[j] / ratio;
-    Some(HarmonicValue {
-        ratio_db: Some(10.0 * ratio.log10()),
-        threshold_db: Some(10.0 * thr.log10()),
-        p_value: Some(p),
-        significant: Some(p < ctx.alpha),
-        ..value_at(j, Some(floor))
-    })
+    let diag = VariantDiag {
+        floor_bins: bins.len(),
+        degree,
+        s2_over_vchi: s2 / v_chi,
+        misfit,
+        leverage: lev,
+        var,
+        nu: ctx.nu,
+        inflation,
+    };
+    Some((
+        HarmonicValue {
+            ratio_db: Some(10.0 * ratio.log10()),
+            threshold_db: Some(10.0 * thr.log10()),
+            p_value: Some(p),
+            significant: Some(p < ctx.alpha),
+            ..value_at(j, Some(floor))
+        },
+        Some(diag),
+    ))
 }
 
 /// Harmonic table for every auto-spectrum. `f_meas`: the measured `f_c`
