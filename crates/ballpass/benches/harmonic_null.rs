@@ -2,8 +2,13 @@
 //! the p-value makes it conservative (a measurement, not a product path).
 //!
 //! ```text
-//! cargo bench -p ballpass --bench harmonic_null -- FIRST_SEED N DURATION_S
+//! cargo bench -p ballpass --bench harmonic_null -- FIRST_SEED N DURATION_S [--ripple]
 //! ```
+//!
+//! `--ripple` keeps the domain's friction ripple (0–10 % of the Coulomb
+//! level) instead of switching it off: the fractions at small `p` and `u`
+//! are then each variant's detection of a real ripple, not its false-alarm
+//! rate.
 //!
 //! Seeds `FIRST_SEED..FIRST_SEED + N`, each a bench of `Domain::default()`
 //! with the ripple off and the duration fixed, drawn, simulated and
@@ -208,13 +213,19 @@ fn main() {
         .collect();
     let num = |i: usize| args.get(i).and_then(|a| a.parse::<f64>().ok());
     let (Some(first), Some(n), Some(duration)) = (num(0), num(1), num(2)) else {
-        eprintln!("usage: harmonic_null FIRST_SEED N DURATION_S");
+        eprintln!("usage: harmonic_null FIRST_SEED N DURATION_S [--ripple]");
         std::process::exit(2);
     };
+    let ripple = args.iter().any(|a| a == "--ripple");
+    let base = Domain::default();
     let d = Domain {
         duration_s: Range::fixed(duration),
-        ripple_fraction: Range::fixed(0.0),
-        ..Domain::default()
+        ripple_fraction: if ripple {
+            base.ripple_fraction
+        } else {
+            Range::fixed(0.0)
+        },
+        ..base
     };
     let vs = variants();
     let recs: Vec<Rec> = (0..n as u64)
@@ -222,9 +233,14 @@ fn main() {
         .filter_map(|k| record(&d, first as u64 + k, &vs))
         .collect();
     println!(
-        "seeds {}..{} at {duration} s: {} records analysed",
+        "seeds {}..{} at {duration} s{}: {} records analysed",
         first as u64,
         first as u64 + n as u64,
+        if ripple {
+            ", with the domain's ripple"
+        } else {
+            ", no ripple"
+        },
         recs.len()
     );
     println!(
