@@ -88,6 +88,8 @@ use crate::stats::chi2_ppf;
 use std::f64::consts::TAU;
 
 mod line_tail;
+#[cfg(test)]
+mod reference;
 
 /// A PSD's confidence band as multipliers of the estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -190,26 +192,32 @@ pub fn coherence_row_level(
     let corr = step.map(|st| line_tail::overlap_correlations(w, st, k));
     let turn = |d: f64| step.map_or(0.0, |st| TAU * d * st as f64 / info.nperseg as f64);
     let exact = k <= line_tail::EXACT_MAX_SEGMENTS;
-    // Per bin: ln of its tail at x = ln(1 − c).
-    let bins: Vec<(f64, f64)> = [offset_bins + 1.0, offset_bins, offset_bins - 1.0]
-        .iter()
-        .map(|&d| {
-            let n_line = match step {
-                Some(st) => r as f64 * super::phase::line_segments_turned(w, st, k, turn(d)),
-                None => n_power,
-            };
-            (d, n_line)
-        })
-        .collect();
-    let tail = |x: f64| -> f64 {
+    // Per bin: the line's equivalent count and its exact tail (which keeps
+    // its last root to start the next level's search from).
+    let mut bins: Vec<(f64, Option<line_tail::LineTail>)> =
+        [offset_bins + 1.0, offset_bins, offset_bins - 1.0]
+            .iter()
+            .map(|&d| {
+                let n_line = match step {
+                    Some(st) => r as f64 * super::phase::line_segments_turned(w, st, k, turn(d)),
+                    None => n_power,
+                };
+                let exact = corr
+                    .as_ref()
+                    .filter(|_| exact)
+                    .map(|corr| line_tail::LineTail::new(corr, k, r, turn(d)));
+                (n_line, exact)
+            })
+            .collect();
+    // The three bins' tails summed at x = ln(1 − c).
+    let mut tail = |x: f64| -> f64 {
         let c = -x.exp_m1();
-        bins.iter()
-            .map(|&(d, n_line)| {
+        bins.iter_mut()
+            .map(|(n_line, exact)| {
                 let noise = ((n_power - 1.0) * x).exp();
-                let line = match (&corr, exact) {
-                    (Some(corr), true) => line_tail::line_tail(corr, k, r, turn(d), c)
-                        .unwrap_or_else(|| ((n_line - 1.0) * x).exp()),
-                    _ => ((n_line.max(1.0) - 1.0) * x).exp(),
+                let line = match exact {
+                    Some(t) => t.tail(c).unwrap_or_else(|| ((*n_line - 1.0) * x).exp()),
+                    None => ((n_line.max(1.0) - 1.0) * x).exp(),
                 };
                 noise.max(line)
             })
@@ -218,7 +226,7 @@ pub fn coherence_row_level(
     // Solve ln tail(x) = ln a for x = ln(1 − c) < 0 (tail falls from 3 at
     // x = 0; Carter's tails are straight lines in x, the exact ones nearly
     // so): bracket, then Illinois false position on ln tail.
-    let phi = |x: f64| tail(x).ln() - a.ln();
+    let mut phi = |x: f64| tail(x).ln() - a.ln();
     let (mut hi, mut f_hi) = (0.0, phi(0.0));
     let mut lo = a.ln() / (n_power - 1.0);
     let mut f_lo = phi(lo);
@@ -469,5 +477,63 @@ mod tests {
             let got = coherence_row_level(&info, &w, d, 0.99).unwrap();
             assert!((got - want).abs() < 1e-9, "K={k} δ={d}: {got} vs {want}");
         }
+    }
+
+    /// The row level of session 20 (each bin's tail with a kept root and
+    /// the factor's fixed row, `line_tail::LineTail`) against session 19's
+    /// (kept in `reference`) over windows, overlaps, segment counts from 2
+    /// to past `EXACT_MAX_SEGMENTS`, 1 to 3 records, offsets and two
+    /// confidences. Tolerance: 1e-12 relative (the roots are solved to
+    /// ~1e-12 in ln tail) plus the level's own rounding in both: a bin's
+    /// tail is known to `(n − 1) ε/(c(1 − c))` relative (`line_tail`'s
+    /// test), its logarithm falls by `(n − 1)/(1 − c)` per unit of `c`, so
+    /// the level is known to `ε/c` absolute, `ε/c²` relative; 8 times that.
+    #[test]
+    fn coherence_row_level_equals_session_19s() {
+        let boxcar = vec![1.0; 64];
+        let w = hann(64);
+        let mut worst = 0.0f64;
+        let mut ks: Vec<usize> = (2..=24).collect();
+        ks.extend([31, 58, 100, 150, 301, 512, 513, 700]);
+        for (name, win, noverlap) in [
+            ("hann 50 %", &w, 32usize),
+            ("hann 75 %", &w, 48),
+            ("hann 25 %", &w, 16),
+            ("boxcar 50 %", &boxcar, 32),
+            ("hann, no overlap", &w, 0),
+        ] {
+            for &k in &ks {
+                for r in [1usize, 3] {
+                    let info = SpectrumInfo {
+                        nperseg: 64,
+                        noverlap,
+                        n_segments: k,
+                        n_records: r,
+                        dof: r as f64 * welch_dof(win, 64 - noverlap, k),
+                        ..Default::default()
+                    };
+                    for d in [0.0, 0.13, -0.37, 0.5] {
+                        for conf in [0.99, 0.95] {
+                            let got = coherence_row_level(&info, win, d, conf);
+                            let want = reference::coherence_row_level(&info, win, d, conf);
+                            match (got, want) {
+                                (Some(g), Some(h)) => {
+                                    let err = (g - h).abs() / h;
+                                    let tol = 1e-12 + 8.0 * f64::EPSILON / (h * h);
+                                    worst = worst.max(err / tol);
+                                    assert!(
+                                        err <= tol,
+                                        "{name} K={k} R={r} δ={d} {conf}: {g} vs {h}"
+                                    );
+                                }
+                                (None, None) => {}
+                                _ => panic!("{name} K={k} R={r} δ={d}: {got:?} vs {want:?}"),
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        eprintln!("row level: worst difference over its tolerance {worst:.3}");
     }
 }

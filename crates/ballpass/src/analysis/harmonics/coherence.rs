@@ -49,8 +49,11 @@ pub(crate) fn coherence_rows(
     let w = settings.window.to_dsp().values(s.info.nperseg).ok();
     let df = s.info.resolution_hz;
     let mut rows = Vec::new();
+    // A level depends on the harmonic only (its offset from its bin), not
+    // on the pair: computed once per harmonic, for the first pair.
+    let mut levels: Vec<Option<Option<f64>>> = vec![None; settings.harmonics + 1];
     for c in &s.cross {
-        for k in 1..=settings.harmonics {
+        for (k, level) in levels.iter_mut().enumerate().skip(1) {
             let f = k as f64 * f_c;
             let Some(i) = s
                 .nearest_bin(f)
@@ -60,13 +63,15 @@ pub(crate) fn coherence_rows(
             };
             // The row's level depends on where the line falls between the
             // three bins (module docs of `confidence`).
-            let threshold = w.as_ref().and_then(|w| {
-                super::super::confidence::coherence_row_level(
-                    &s.info,
-                    w,
-                    (f - s.freq_hz[i]) / df,
-                    settings.confidence,
-                )
+            let threshold = *level.get_or_insert_with(|| {
+                w.as_ref().and_then(|w| {
+                    super::super::confidence::coherence_row_level(
+                        &s.info,
+                        w,
+                        (f - s.freq_hz[i]) / df,
+                        settings.confidence,
+                    )
+                })
             });
             let (_, v) = max_near(&c.coherence, i);
             rows.push(CoherenceRow {
