@@ -210,7 +210,7 @@ pub fn coherence_row_level(
             })
             .collect();
     // The three bins' tails summed at x = ln(1 − c).
-    let mut tail = |x: f64| -> f64 {
+    let tail = |x: f64| -> f64 {
         let c = -x.exp_m1();
         bins.iter_mut()
             .map(|(n_line, exact)| {
@@ -223,9 +223,15 @@ pub fn coherence_row_level(
             })
             .sum()
     };
-    // Solve ln tail(x) = ln a for x = ln(1 − c) < 0 (tail falls from 3 at
-    // x = 0; Carter's tails are straight lines in x, the exact ones nearly
-    // so): bracket, then Illinois false position on ln tail.
+    level_of_tail(tail, a, n_power)
+}
+
+/// The level `c` at which a falling tail reaches `a`: solves
+/// `ln tail(x) = ln a` for `x = ln(1 − c) < 0` (the tail falls from 3 at
+/// `x = 0`; Carter's tails are straight lines in `x`, the exact ones nearly
+/// so) by bracketing from `ln a / (n_power − 1)`, then Illinois false
+/// position on `ln tail`. `None` when no bracket is found.
+pub(super) fn level_of_tail(mut tail: impl FnMut(f64) -> f64, a: f64, n_power: f64) -> Option<f64> {
     let mut phi = |x: f64| tail(x).ln() - a.ln();
     let (mut hi, mut f_hi) = (0.0, phi(0.0));
     let mut lo = a.ln() / (n_power - 1.0);

@@ -172,42 +172,6 @@ pub(super) fn coherence_row_level(
             })
             .sum()
     };
-    // Solve ln tail(x) = ln a for x = ln(1 − c) < 0 (tail falls from 3 at
-    // x = 0; Carter's tails are straight lines in x, the exact ones nearly
-    // so): bracket, then Illinois false position on ln tail.
-    let phi = |x: f64| tail(x).ln() - a.ln();
-    let (mut hi, mut f_hi) = (0.0, phi(0.0));
-    let mut lo = a.ln() / (n_power - 1.0);
-    let mut f_lo = phi(lo);
-    while f_lo > 0.0 {
-        (hi, f_hi) = (lo, f_lo);
-        lo *= 2.0;
-        f_lo = phi(lo);
-        if lo < -1e4 {
-            return None;
-        }
-    }
-    let mut side = 0i8;
-    for _ in 0..100 {
-        let x = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-        let f = phi(x);
-        if f.abs() < 1e-12 || (hi - lo).abs() < 1e-14 * lo.abs() {
-            lo = x;
-            break;
-        }
-        if f > 0.0 {
-            (hi, f_hi) = (x, f);
-            if side == 1 {
-                f_lo *= 0.5;
-            }
-            side = 1;
-        } else {
-            (lo, f_lo) = (x, f);
-            if side == -1 {
-                f_hi *= 0.5;
-            }
-            side = -1;
-        }
-    }
-    Some(-lo.exp_m1())
+    // The same root search as the product's (only the tails differ).
+    super::level_of_tail(tail, a, n_power)
 }
