@@ -177,38 +177,44 @@ pub(super) fn conditions(c: &Inputs) -> Vec<Condition> {
         });
     }
 
-    let tau_predicted = c.f_c_predicted.map(|p| 1.0 / p);
-    if let Some(((n_long, missing), tau_p)) = tau_predicted
-        .and_then(|t| missed_against_prediction(c.tau_c_all, t, c.tau_single_max))
-        .zip(tau_predicted)
-    {
-        out.push(Condition {
-            kind: ConditionKind::MissedPassages,
-            measure: missing,
-            message: format!(
+    // Missed passages: against the predicted period where it tells, else
+    // against the median gap found.
+    let against_prediction = c.f_c_predicted.and_then(|p| {
+        let tau_p = 1.0 / p;
+        let (n_long, missing) =
+            missed_against_prediction(c.tau_c_all, tau_p, c.tau_single_max)?;
+        Some((
+            missing,
+            format!(
                 "{n_long} gap(s) of two or more of the periods the velocity and geometry predict ({tau_p:.4} s), every gap a whole number of them: about {missing:.0} passage(s) too weak to detect"
             ),
-            advice: MISSED_ADVICE.into(),
-        });
-    } else {
+        ))
+    });
+    let missed = against_prediction.or_else(|| {
         let long: Vec<f64> = c
             .tau_c_all
             .iter()
             .copied()
             .filter(|t| *t >= 1.6 * c.med_tau)
             .collect();
-        if !long.is_empty() {
-            let missing: f64 = long.iter().map(|t| (t / c.med_tau).round() - 1.0).sum();
-            out.push(Condition {
-                kind: ConditionKind::MissedPassages,
-                measure: missing,
-                message: format!(
+        let missing: f64 = long.iter().map(|t| (t / c.med_tau).round() - 1.0).sum();
+        (!long.is_empty()).then(|| {
+            (
+                missing,
+                format!(
                     "{} gap(s) of 1.6 periods or more: about {missing:.0} passage(s) too weak to detect",
                     long.len()
                 ),
-                advice: MISSED_ADVICE.into(),
-            });
-        }
+            )
+        })
+    });
+    if let Some((missing, message)) = missed {
+        out.push(Condition {
+            kind: ConditionKind::MissedPassages,
+            measure: missing,
+            message,
+            advice: MISSED_ADVICE.into(),
+        });
     }
 
     if let Some(p) = c.f_c_predicted {
