@@ -3,8 +3,10 @@
 //! pulses the seeds missed (and of either polarity), until the set of
 //! pulses stops changing (module docs of [`super`], "Method").
 
+use super::coupling::{ac_plausible, ac_rate, with_mean_ramp};
+use super::edges::{ghosts, EdgeSearch};
 use super::gaps::gap_lines;
-use super::lsq::{Problem, Solution, Splines};
+use super::lsq::{Problem, Splines};
 use super::pulse_fit::{fit_pulse, PulseFit};
 use super::scan::{scan, Seeds};
 use super::signal::{box_decimate, running_integral};
@@ -38,9 +40,6 @@ const TAIL_PASSES: usize = 3;
 
 /// Longest tail continued past the core support, in periods from the peak.
 const TAIL_REACH_PERIODS: f64 = 1.5;
-
-/// Fastest AC coupling looked for: `T = τ_c / 50`.
-const AC_MAX_RATE_PER_PERIOD: f64 = 50.0;
 
 /// What the loop measured, in blocks of `q` samples.
 pub(super) struct Measurement {
@@ -436,25 +435,6 @@ pub(super) fn measure(
     Err("the pulse search did not settle".into())
 }
 
-/// `baseline` plus `κ (∫z dt − ∫(z − mean z) dt)`, the integrals from
-/// block 0 to block `i`: `κ × mean × i dt`.
-///
-/// The least squares restore `z + κ ∫(z − mean) dt`
-/// ([`running_integral`]), whose baseline is the restored signal's less
-/// `κ mean t`: a ramp that holds nothing of the light (an AC-coupled
-/// record's mean is what its ends happen to leave, `T Δ(x − y) /
-/// duration`; 0.008 V over 30 s at 1 mm/s, `T` = 1 s: a 0.23 V ramp,
-/// a third of the pulse). The splines take it, so the pulses are the same
-/// either way; the baseline reported gets it back.
-fn with_mean_ramp(baseline: &[f64], z: &[f64], kappa: f64, dt: f64) -> Vec<f64> {
-    let rate = kappa * z.iter().sum::<f64>() / z.len().max(1) as f64;
-    baseline
-        .iter()
-        .enumerate()
-        .map(|(i, b)| b + rate * i as f64 * dt)
-        .collect()
-}
-
 /// Centred running mean over `period` blocks (rounded; shorter at the
 /// ends): zero at the frequency `1/period` and its harmonics.
 fn period_mean(x: &[f64], period: f64) -> Vec<f64> {
@@ -474,161 +454,6 @@ fn period_mean(x: &[f64], period: f64) -> Vec<f64> {
         })
         .collect()
 }
-
-/// The pulses one period (the median spacing of the pulses found) before
-/// the first and after the last, when their core support reaches into the
-/// record. Outside the record, their tails are in it; left out, the
-/// baseline and the template would take them. Inside (close to the start
-/// or end), they hold the baseline's free end off a pulse not yet found,
-/// which the search then finds. Amplitudes: `amps` (the last fit), or 0
-/// before the first fit (a pulse assumed where the record holds none
-/// would bend the baseline at the record's end).
-fn ghosts(pulses: &[Pulse], nd: usize, grid: &Template, amps: [f64; 2]) -> [Option<Pulse>; 2] {
-    if pulses.is_empty() {
-        return [None, None];
-    }
-    let gaps: Vec<f64> = pulses.windows(2).map(|w| w[1].c - w[0].c).collect();
-    if gaps.is_empty() {
-        return [None, None];
-    }
-    let spacing = super::signal::median(&gaps);
-    let amp = |k: usize| if amps[k].is_finite() { amps[k] } else { 0.0 };
-    let first = pulses[0].c - spacing;
-    let last = pulses[pulses.len() - 1].c + spacing;
-    let end = (nd - 1) as f64;
-    [
-        (first + grid.right() > 0.0).then(|| Pulse {
-            c: first,
-            a: amp(0),
-            s: 1.0,
-        }),
-        (last + grid.left() < end).then(|| Pulse {
-            c: last,
-            a: amp(1),
-            s: 1.0,
-        }),
-    ]
-}
-
-/// The rate `κ = 1/T` of a first-order AC coupling: the `κ` whose
-/// restored template `h_z + κ h_I` (`h_z`, `h_I`: the templates of the
-/// blocks and of their running integral, same pulses) ends where it
-/// starts, `κ = −Δh_z / Δh_I` with `Δ` the mean of the last
-/// [`END_POINTS`] grid points less that of the first. A pulse of light
-/// starts and ends at the level around it; an AC coupling pulls the level
-/// after each pulse down by `κ_true` × its area, which `h_I` (a step of
-/// the pulse's area) measures. 0 unless the step of `h_z` is down by more
-/// than `max(0.5 %, 3 standard errors)` of the peak (standard error of an
-/// end's mean: `block_noise / √(3 Σ a_k² dx)`, the step's `√2` that), or
-/// when `κ` exceeds `50 / τ_c`, or leaves no pulse shape. (A dip after the
-/// pulse is no measure: a skewed pulse's long tail fills it, and a rate
-/// that merely removes it is short of the true one.) With `κ`, the restored
-/// template's peak.
-fn ac_rate(
-    hz: &Solution,
-    hi: &Solution,
-    pulses: &[Pulse],
-    block_noise: f64,
-    tau_c_s: f64,
-) -> Option<(f64, f64)> {
-    let (tz, ti) = (&hz.template, &hi.template);
-    let g = tz.h.len();
-    if g < 2 * END_POINTS + 1 || ti.h.len() != g {
-        return None;
-    }
-    let sh = tz.shape()?;
-    let step = |h: &[f64]| -> f64 {
-        let k = END_POINTS as f64;
-        h[g - END_POINTS..].iter().sum::<f64>() / k - h[..END_POINTS].iter().sum::<f64>() / k
-    };
-    let (dz, di) = (step(&tz.h), step(&ti.h));
-    if di.is_nan() || di <= 0.0 {
-        return None;
-    }
-    // Standard error of an end's mean over `END_POINTS` grid points
-    // (each point the least-squares estimate from every pulse), and of the
-    // step, their difference.
-    let a2: f64 = pulses.iter().map(|p| p.a * p.a).sum();
-    let se_end = block_noise
-        / (END_POINTS as f64 * a2 * tz.dx)
-            .max(f64::MIN_POSITIVE)
-            .sqrt();
-    let se_step = std::f64::consts::SQRT_2 * se_end;
-    if dz >= -(AC_LOBE * sh.peak).max(3.0 * se_step) {
-        return None;
-    }
-    let kappa = -dz / di;
-    if kappa > AC_MAX_RATE_PER_PERIOD / tau_c_s {
-        return None;
-    }
-    let mut t = tz.clone();
-    for (v, w) in t.h.iter_mut().zip(&ti.h) {
-        *v += kappa * w;
-    }
-    Some((kappa, t.shape()?.peak))
-}
-
-/// Whether undoing an AC coupling of rate `kappa` leaves a light level a
-/// photodetector could have seen.
-///
-/// A first-order coupling removes the light's running mean over `T`, so the
-/// recorded signal's mean over the record is the change of that running
-/// mean between its ends: the light's drift between them, and at most the
-/// pulses' own mean (under half a pulse) while the coupling settles. The
-/// level restored is the least squares' baseline `b` (of `z + κ ∫(z − mean)
-/// dt`) plus the ramp `κ × mean(z) × t` ([`with_mean_ramp`]). A coupling
-/// read off a DC-coupled record (the step of wide pulses' tails, say)
-/// turns the record's DC level into a ramp of `duration / T` times that
-/// level, which no drift seen in `b` explains. The coupling is plausible
-/// when the ramp exceeds the range of `b` by less than
-/// [`AC_RAMP_EXCESS`] pulse heights.
-///
-/// `peak`: the restored template's peak (pulse amplitudes are in its
-/// units); `mean_ramp`: the record's mean of `z` times its duration, V s.
-fn ac_plausible(
-    (kappa, peak): (f64, f64),
-    hz: &Solution,
-    hi: &Solution,
-    pulses: &[Pulse],
-    fast: &[f64],
-    splines: &Splines,
-    mean_ramp: f64,
-) -> bool {
-    let nd = fast.len();
-    let amps: Vec<f64> = pulses.iter().map(|p| p.a.abs()).collect();
-    let height = super::signal::median(&amps) * peak;
-    if height.is_nan() || height <= 0.0 || nd == 0 {
-        return true;
-    }
-    let beta: Vec<f64> = hz
-        .beta
-        .iter()
-        .zip(&hi.beta)
-        .map(|(a, b)| a + kappa * b)
-        .collect();
-    let b = splines.eval(&beta, nd);
-    let (lo, hi_b) = b
-        .iter()
-        .zip(fast)
-        .map(|(a, f)| a + f)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    let ramp = (kappa * mean_ramp).abs();
-    ramp - (hi_b - lo) < AC_RAMP_EXCESS * height
-}
-
-/// Largest excess, in pulse heights, of the restored level's mean ramp over
-/// the baseline's own range for an AC coupling to be kept
-/// ([`ac_plausible`]): twice the most the pulses' mean can explain.
-const AC_RAMP_EXCESS: f64 = 1.0;
-
-/// Grid points averaged at each end of the template for its step.
-const END_POINTS: usize = 3;
-
-/// Smallest step down across the template, in pulse heights, that counts as
-/// an AC coupling's (at least; three standard errors when more).
-const AC_LOBE: f64 = 0.005;
 
 /// The pulses of `found` (matched-filter detections), each keeping the
 /// fitted parameters of a pulse within `tol` blocks of it; whether the set
@@ -663,113 +488,4 @@ fn merge(pulses: &[Pulse], found: &[super::scan::Found], tol: f64) -> (Vec<Pulse
     }
     out.sort_by(|a, b| a.c.total_cmp(&b.c));
     (out, changed)
-}
-
-/// Periods from the outermost pulse to the record's end within which that
-/// end is searched as in [`EdgeSearch`].
-const EDGE_PERIODS: f64 = 1.5;
-
-/// The search's view of the record's ends. Past the outermost pulses'
-/// support the baseline splines are held by nothing but the data, and bend
-/// to take a pulse the search has not found yet (one cut by the record's
-/// start or end, with the ghost there too weak to hold them off). There
-/// the search sees the signal against the baseline continued in a straight
-/// line from the half period before, and keeps a pulse only where the next
-/// one is due: within a quarter period of the ghost's centre, which must
-/// lie inside the record.
-struct EdgeSearch {
-    /// The baseline-removed signal, the ends against the straight baseline.
-    signal: Vec<f64>,
-    /// Blocks before `lo` and after `hi` are the ends.
-    lo: f64,
-    hi: f64,
-    /// Where a pulse is due at each end (`None`: no ghost inside the record).
-    due: [Option<f64>; 2],
-    /// Tolerance on `due`, blocks.
-    tol: f64,
-}
-
-impl EdgeSearch {
-    fn new(
-        d: &[f64],
-        baseline: &[f64],
-        pulses: &[Pulse],
-        ghosts: &[Option<Pulse>],
-        core: (f64, f64),
-        pd: f64,
-    ) -> Self {
-        let nd = d.len();
-        let end = nd.saturating_sub(1) as f64;
-        let mut signal = d.to_vec();
-        let (Some(first), Some(last)) = (pulses.first(), pulses.last()) else {
-            return Self {
-                signal,
-                lo: f64::NEG_INFINITY,
-                hi: f64::INFINITY,
-                due: [None, None],
-                tol: 0.0,
-            };
-        };
-        let lo = first.c + core.0;
-        let hi = last.c + core.1;
-        let inside = |g: &Option<Pulse>| g.map(|g| g.c).filter(|c| (0.0..=end).contains(c));
-        // Only where the record ends within one and a half periods of the
-        // outermost pulse: further out, pulses are missing (the seeds found
-        // part of the record), and the search is left as it is.
-        let due = [
-            ghosts
-                .first()
-                .and_then(inside)
-                .filter(|c| *c < first.c && first.c <= EDGE_PERIODS * pd),
-            ghosts
-                .get(1)
-                .and_then(inside)
-                .filter(|c| *c > last.c && end - last.c <= EDGE_PERIODS * pd),
-        ];
-        let span = (0.5 * pd).max(4.0);
-        // Least-squares line through the baseline over `a..=b` (blocks).
-        let line = |a: f64, b: f64| -> Option<(f64, f64)> {
-            let a = a.max(0.0).ceil() as usize;
-            let b = (b.min(end).floor().max(0.0)) as usize;
-            if b < a + 2 || b >= nd {
-                return None;
-            }
-            let xs: Vec<f64> = (a..=b).map(|i| i as f64).collect();
-            let fit = crate::stats::linear_fit(&xs, &baseline[a..=b])?;
-            Some((fit.intercept, fit.slope))
-        };
-        if due[1].is_some() {
-            if let Some((c0, c1)) = line(hi - span, hi) {
-                let from = hi.max(0.0).ceil() as usize;
-                for i in from.min(nd)..nd {
-                    signal[i] = d[i] + baseline[i] - (c0 + c1 * i as f64);
-                }
-            }
-        }
-        if due[0].is_some() {
-            if let Some((c0, c1)) = line(lo, lo + span) {
-                let to = (lo.floor().max(-1.0) + 1.0) as usize;
-                for i in 0..to.min(nd) {
-                    signal[i] = d[i] + baseline[i] - (c0 + c1 * i as f64);
-                }
-            }
-        }
-        Self {
-            signal,
-            lo,
-            hi,
-            due,
-            tol: 0.25 * pd,
-        }
-    }
-
-    /// Whether a pulse found at `c` is kept.
-    fn keeps(&self, c: f64) -> bool {
-        let near = |g: f64| (c - g).abs() <= self.tol;
-        match (c < self.lo, c > self.hi) {
-            (true, _) => self.due[0].is_none_or(near),
-            (_, true) => self.due[1].is_none_or(near),
-            _ => true,
-        }
-    }
 }

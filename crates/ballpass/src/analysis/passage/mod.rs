@@ -120,6 +120,8 @@ use crate::recording::{Channel, Recording};
 use crate::stats::MeanStd;
 
 mod conditions;
+mod coupling;
+mod edges;
 mod fits;
 mod gaps;
 mod lsq;
