@@ -3,7 +3,7 @@
 //! domain, one record each, scored against the simulator's truth.
 //!
 //! ```text
-//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7|fresh8|fresh9|fresh10|fresh12] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width] [--velocity-factor K]
+//! cargo bench -p ballpass --bench validate_passages -- [train|fresh|fresh2|fresh3|fresh4|fresh5|fresh6|fresh7|fresh8|fresh9|fresh10|fresh11|fresh12] [N] [--list] [--json] [--clean] [--fwhm R] [--seeds a,b,...] [--recorded-width] [--velocity-factor K]
 //! ```
 //!
 //! `train` draws bench seeds 1..=N (the seeds the rules were designed on),
@@ -22,7 +22,8 @@
 //! 16, which scored session 15's rule on it again, unchanged; `fresh10`,
 //! 15_500_001+, never looked at before session 17's rule was frozen;
 //! `fresh12`, 37_100_001+, never looked at before session 20's missed-gap
-//! rule was frozen). Prints the
+//! rule was frozen; `fresh11`, 15_600_001+, kept unused until session 21,
+//! which scored its merged passage rules on it once). Prints the
 //! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %; `--json` prints every record's score instead of the
@@ -72,10 +73,11 @@ fn main() {
         "fresh8" => 15_300_001,
         "fresh9" => 15_400_001,
         "fresh10" => 15_500_001,
+        "fresh11" => 15_600_001,
         "fresh12" => 37_100_001,
         other => {
             eprintln!(
-                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6, fresh7, fresh8, fresh9, fresh10 or fresh12"
+                "unknown set {other}: train, fresh, fresh2, fresh3, fresh4, fresh5, fresh6, fresh7, fresh8, fresh9, fresh10, fresh11 or fresh12"
             );
             std::process::exit(2);
         }
