@@ -191,8 +191,9 @@ pub struct Variant {
     pub gate_union: bool,
     /// The misfit soft-thresholded at `z` standard errors of `s²` under χ²
     /// noise: `m² = max(0, s² − ψ'(1 + z √(2/d)))`, crediting only the
-    /// excess beyond the estimate's own spread (which scales with `ψ'`, so
-    /// it matters on short records and fades on long ones).
+    /// excess beyond the estimate's own spread (it changes the windows
+    /// whose `s²` is within a few `ψ'` of `ψ'`; on the design records that
+    /// is as many at 2 min as at 10 s).
     pub misfit_soft: Option<f64>,
 }
 
