@@ -2,8 +2,13 @@
 //! the p-value makes it conservative (a measurement, not a product path).
 //!
 //! ```text
-//! cargo bench -p ballpass --bench harmonic_null -- FIRST_SEED N DURATION_S [--ripple]
+//! cargo bench -p ballpass --bench harmonic_null -- FIRST_SEED N DURATION_S [--ripple] [--all]
 //! ```
+//!
+//! The variants are the session-21 candidates for the floor-misfit term;
+//! `--all` gives the session-20 list instead (each part of the test
+//! switched off in turn). `--dump FILE` writes every p-value as CSV
+//! (`seed,variant,test,p`; `test` counts the record's tests that have one).
 //!
 //! `--ripple` keeps the domain's friction ripple (0–10 % of the Coulomb
 //! level) instead of switching it off: the fractions at small `p` and `u`
@@ -33,6 +38,146 @@ use rayon::prelude::*;
 
 const LEVELS: [f64; 4] = [0.01, 0.05, 0.1, 0.5];
 
+/// The session-21 candidates for the misfit term (the default list).
+fn candidates() -> Vec<(&'static str, Variant)> {
+    let v = Variant::default;
+    vec![
+        ("today", v()),
+        (
+            "a: no misfit",
+            Variant {
+                no_misfit: true,
+                ..v()
+            },
+        ),
+        (
+            "a4: misfit gated 0.99",
+            Variant {
+                misfit_gate: Some(0.99),
+                ..v()
+            },
+        ),
+        (
+            "f1: pooled misfit",
+            Variant {
+                misfit_pooled: true,
+                ..v()
+            },
+        ),
+        (
+            "h1: pooled predictive",
+            Variant {
+                misfit_pooled: true,
+                misfit_predictive: Some(1.0),
+                ..v()
+            },
+        ),
+        (
+            "p1: pooled gate .99",
+            Variant {
+                misfit_pooled_gate: Some(0.99),
+                ..v()
+            },
+        ),
+        (
+            "p2: pooled gate .95",
+            Variant {
+                misfit_pooled_gate: Some(0.95),
+                ..v()
+            },
+        ),
+        (
+            "p3: pooled gate .99, D/2",
+            Variant {
+                misfit_pooled_gate: Some(0.99),
+                pooled_dof_scale: Some(0.5),
+                ..v()
+            },
+        ),
+        (
+            "p4: pooled gate .9",
+            Variant {
+                misfit_pooled_gate: Some(0.9),
+                ..v()
+            },
+        ),
+        (
+            "p5: p1, pooled amount",
+            Variant {
+                misfit_pooled_gate: Some(0.99),
+                misfit_pooled: true,
+                ..v()
+            },
+        ),
+        (
+            "u1: a4 or p2",
+            Variant {
+                misfit_gate: Some(0.99),
+                misfit_pooled_gate: Some(0.95),
+                gate_union: true,
+                ..v()
+            },
+        ),
+        (
+            "u2: a4 or p1",
+            Variant {
+                misfit_gate: Some(0.99),
+                misfit_pooled_gate: Some(0.99),
+                gate_union: true,
+                ..v()
+            },
+        ),
+        (
+            "u3: a3 or p2",
+            Variant {
+                misfit_gate: Some(0.95),
+                misfit_pooled_gate: Some(0.95),
+                gate_union: true,
+                ..v()
+            },
+        ),
+        (
+            "u4: a4 or p4",
+            Variant {
+                misfit_gate: Some(0.99),
+                misfit_pooled_gate: Some(0.9),
+                gate_union: true,
+                ..v()
+            },
+        ),
+        (
+            "s1: soft 1 s.e.",
+            Variant {
+                misfit_soft: Some(1.0),
+                ..v()
+            },
+        ),
+        (
+            "s2: soft 2 s.e.",
+            Variant {
+                misfit_soft: Some(2.0),
+                ..v()
+            },
+        ),
+        (
+            "s3: soft 1 s.e. pooled",
+            Variant {
+                misfit_soft: Some(1.0),
+                misfit_pooled: true,
+                ..v()
+            },
+        ),
+        (
+            "s4: soft 0.5 s.e.",
+            Variant {
+                misfit_soft: Some(0.5),
+                ..v()
+            },
+        ),
+    ]
+}
+
+/// Every part of the test switched off at a time (session 20; `--all`).
 fn variants() -> Vec<(&'static str, Variant)> {
     let v = Variant::default;
     vec![
@@ -152,6 +297,7 @@ fn variants() -> Vec<(&'static str, Variant)> {
 /// One record: per variant, its predicted tests' p-values; and today's
 /// diagnostics.
 struct Rec {
+    seed: u64,
     p: Vec<Vec<f64>>,
     diag: Vec<VariantDiag>,
 }
@@ -193,7 +339,7 @@ fn record(d: &Domain, seed: u64, vs: &[(&str, Variant)]) -> Option<Rec> {
         }
         p.push(rows.iter().filter_map(|r| r.1.p_value).collect());
     }
-    Some(Rec { p, diag })
+    Some(Rec { seed, p, diag })
 }
 
 fn frac(k: usize, n: usize) -> String {
@@ -213,7 +359,7 @@ fn main() {
         .collect();
     let num = |i: usize| args.get(i).and_then(|a| a.parse::<f64>().ok());
     let (Some(first), Some(n), Some(duration)) = (num(0), num(1), num(2)) else {
-        eprintln!("usage: harmonic_null FIRST_SEED N DURATION_S [--ripple]");
+        eprintln!("usage: harmonic_null FIRST_SEED N DURATION_S [--ripple] [--all]");
         std::process::exit(2);
     };
     let ripple = args.iter().any(|a| a == "--ripple");
@@ -227,7 +373,11 @@ fn main() {
         },
         ..base
     };
-    let vs = variants();
+    let vs = if args.iter().any(|a| a == "--all") {
+        variants()
+    } else {
+        candidates()
+    };
     let recs: Vec<Rec> = (0..n as u64)
         .into_par_iter()
         .filter_map(|k| record(&d, first as u64 + k, &vs))
@@ -274,6 +424,24 @@ fn main() {
             .map(|&l| frac(u.iter().filter(|&&p| p <= l).count(), u.len()))
             .collect();
         println!("{:<26} {:>6}  {}", name, u.len(), cells.join(" "));
+    }
+    // Every p-value, for other statistics of the same records.
+    if let Some(path) = args
+        .iter()
+        .position(|a| a == "--dump")
+        .and_then(|i| args.get(i + 1))
+    {
+        let mut out = String::from("seed,variant,test,p\n");
+        for r in &recs {
+            for (i, (name, _)) in vs.iter().enumerate() {
+                for (k, p) in r.p[i].iter().enumerate() {
+                    out.push_str(&format!("{},\"{}\",{},{:e}\n", r.seed, name, k + 1, p));
+                }
+            }
+        }
+        if let Err(e) = std::fs::write(path, out) {
+            eprintln!("{path}: {e}");
+        }
     }
     // Diagnostics of today's floor fits.
     let diag: Vec<&VariantDiag> = recs.iter().flat_map(|r| r.diag.iter()).collect();

@@ -125,7 +125,17 @@ pub(crate) fn harmonic_value(
     accurate: bool,
     ctx: Option<TestContext>,
 ) -> Option<HarmonicValue> {
-    harmonic_value_with(s, psd, f_hz, f_c_hz, accurate, ctx, Variant::default()).map(|v| v.0)
+    harmonic_value_with(
+        s,
+        psd,
+        f_hz,
+        f_c_hz,
+        accurate,
+        ctx,
+        Variant::default(),
+        None,
+    )
+    .map(|v| v.0)
 }
 
 /// Switches of the harmonic test for the calibration bench only
@@ -154,6 +164,37 @@ pub struct Variant {
     pub n_b_tail: Option<usize>,
     /// The floor polynomial's degree instead of 1 or 2 by bin count.
     pub degree: Option<usize>,
+    /// The misfit term from the residual variance pooled over the signal's
+    /// `K` floor fits at the same `f_c` (`s² = Σ rss / Σ d`) instead of this
+    /// test's own fit: one roughness per spectrum, from several times the
+    /// bins.
+    pub misfit_pooled: bool,
+    /// The p-value averaged over the posterior of `m²` given `s²`
+    /// (`d s²/(ψ' + m²) ~ χ²_d`, prior `∝ (ψ' + m²)^{−b}` on `m² ≥ 0`:
+    /// `b = 0` flat in `m²`, `b = 1` Jeffreys in `ψ' + m²`) instead of the
+    /// plug-in `max(0, s² − ψ')`: `Some(b)`. With [`Variant::misfit_pooled`],
+    /// the pooled `s²` and `d` scaled by `pooled_dof_scale`.
+    pub misfit_predictive: Option<f64>,
+    /// Scale of the pooled residual degrees of freedom in the predictive
+    /// p-value and the pooled gate (overlapping windows share bins): `None`
+    /// is 1.
+    pub pooled_dof_scale: Option<f64>,
+    /// The misfit term only when the pooled `s²/ψ'(ν/2)` (see
+    /// [`Variant::misfit_pooled`]) exceeds the `q` quantile of `χ²_D/D`,
+    /// `D` the pooled residual degrees of freedom (times
+    /// `pooled_dof_scale`): a test that the spectrum is rougher than χ²
+    /// noise on all its floor bins; the amount is still this fit's own
+    /// `max(0, s² − ψ')` unless `misfit_pooled`.
+    pub misfit_pooled_gate: Option<f64>,
+    /// With both gates set, the term when either finds the spectrum rough
+    /// (this fit's `s²` or the pooled one), instead of only when both do.
+    pub gate_union: bool,
+    /// The misfit soft-thresholded at `z` standard errors of `s²` under χ²
+    /// noise: `m² = max(0, s² − ψ'(1 + z √(2/d)))`, crediting only the
+    /// excess beyond the estimate's own spread (it changes the windows
+    /// whose `s²` is within a few `ψ'` of `ψ'`; on the design records that
+    /// is as many at 2 min as at 10 s).
+    pub misfit_soft: Option<f64>,
 }
 
 /// What a [`Variant`] test saw besides its value.
@@ -176,6 +217,10 @@ pub struct VariantDiag {
     pub nu: f64,
     /// Neighbour-correlation inflation.
     pub inflation: f64,
+    /// Residual sum of squares of the floor fit.
+    pub rss: f64,
+    /// Its residual degrees of freedom.
+    pub dof_res: f64,
 }
 
 /// Every predicted-frequency harmonic test of `signal` in `s` under
@@ -192,10 +237,28 @@ pub fn predicted_tests_with(
     let Some(psd) = s.auto_of(signal) else {
         return Vec::new();
     };
+    let pooled = if variant.misfit_pooled || variant.misfit_pooled_gate.is_some() {
+        let plain = Variant {
+            misfit_pooled: false,
+            misfit_predictive: None,
+            misfit_pooled_gate: None,
+            ..variant
+        };
+        let (rss, dof) = (1..=settings.harmonics)
+            .filter_map(|k| {
+                let f = k as f64 * f_pred;
+                harmonic_value_with(s, psd, f, f_pred, false, ctx, plain, None)?.1
+            })
+            .fold((0.0, 0.0), |(r, d), g| (r + g.rss, d + g.dof_res));
+        (dof > 0.0).then_some((rss / dof, dof))
+    } else {
+        None
+    };
     (1..=settings.harmonics)
         .filter_map(|k| {
             let f = k as f64 * f_pred;
-            harmonic_value_with(s, psd, f, f_pred, false, ctx, variant).map(|(v, d)| (k, v, d))
+            harmonic_value_with(s, psd, f, f_pred, false, ctx, variant, pooled)
+                .map(|(v, d)| (k, v, d))
         })
         .collect()
 }
@@ -209,6 +272,7 @@ fn harmonic_value_with(
     accurate: bool,
     ctx: Option<TestContext>,
     variant: Variant,
+    pooled: Option<(f64, f64)>,
 ) -> Option<(HarmonicValue, Option<VariantDiag>)> {
     let df = s.info.resolution_hz;
     let i = s.nearest_bin(f_hz)?;
@@ -304,10 +368,27 @@ fn harmonic_value_with(
         let d = dof_res.max(1.0);
         s2 / v_chi <= crate::stats::chi2_ppf(q, d) / d
     });
+    // The residual variance the misfit is judged from, and its dof.
+    let pooled = pooled.map(|(s2p, dp)| (s2p, dp * variant.pooled_dof_scale.unwrap_or(1.0)));
+    let (s2_m, d_m) = match pooled {
+        Some(sd) if variant.misfit_pooled => sd,
+        _ => (s2, dof_res.max(1.0)),
+    };
+    let pooled_gated = variant
+        .misfit_pooled_gate
+        .zip(pooled)
+        .is_some_and(|(q, (s2p, dp))| s2p / v_chi <= crate::stats::chi2_ppf(q, dp) / dp);
+    let gated = if variant.gate_union {
+        gated && pooled_gated
+    } else {
+        gated || pooled_gated
+    };
     let misfit = if variant.no_misfit || gated {
         0.0
+    } else if let Some(z) = variant.misfit_soft {
+        (s2_m - v_chi * (1.0 + z * (2.0 / d_m).sqrt())).max(0.0)
     } else {
-        (s2 - v_chi).max(0.0)
+        (s2_m - v_chi).max(0.0)
     };
     let mu = digamma(0.5 * ctx.nu) - (0.5 * ctx.nu).ln();
     // The largest ratio over the tested bins.
@@ -324,18 +405,26 @@ fn harmonic_value_with(
     } else {
         ctx.inflation
     };
-    let var = if variant.exact_floor {
-        0.0
-    } else {
-        let own = if variant.misfit_leverage_only {
+    let var_of = |misfit: f64| {
+        if variant.exact_floor {
             0.0
         } else {
-            misfit
-        };
-        (v_chi + misfit) * lev * inflation + own
+            let own = if variant.misfit_leverage_only {
+                0.0
+            } else {
+                misfit
+            };
+            (v_chi + misfit) * lev * inflation + own
+        }
     };
+    let var = var_of(misfit);
     let n_b = variant.n_b_tail.unwrap_or(tested.len());
-    let p = ctx.tail(ratio, n_b, var);
+    let p = match variant.misfit_predictive {
+        Some(b) if !variant.no_misfit => {
+            predictive_tail(s2_m, d_m, v_chi, b, |m2| ctx.tail(ratio, n_b, var_of(m2)))
+        }
+        _ => ctx.tail(ratio, n_b, var),
+    };
     let thr = ctx.threshold(n_b, var);
     let floor = psd[j] / ratio;
     let diag = VariantDiag {
@@ -347,6 +436,8 @@ fn harmonic_value_with(
         var,
         nu: ctx.nu,
         inflation,
+        rss,
+        dof_res,
     };
     Some((
         HarmonicValue {
@@ -358,6 +449,37 @@ fn harmonic_value_with(
         },
         Some(diag),
     ))
+}
+
+/// `E[tail(m²)]` over the posterior of the excess log-variance `m² ≥ 0`
+/// given a residual variance `s2` on `d` degrees of freedom, with
+/// `d s2 / (v_chi + m²) ~ χ²_d` and a prior `∝ (v_chi + m²)^{−b}`: then
+/// `g = 1/(v_chi + m²)` is Gamma(`d/2 + b − 1`, rate `d s2 / 2`) truncated
+/// to `g ≤ 1/v_chi`. Midpoint rule on 32 quantiles of that law.
+fn predictive_tail(s2: f64, d: f64, v_chi: f64, b: f64, tail: impl Fn(f64) -> f64) -> f64 {
+    const J: usize = 32;
+    let dof = 2.0 * (0.5 * d + b - 1.0);
+    if !(dof > 0.0 && s2 > 0.0 && v_chi > 0.0) {
+        return tail((s2 - v_chi).max(0.0));
+    }
+    let x_max = d * s2 / v_chi;
+    let f_max = crate::stats::chi2_cdf(x_max, dof);
+    if f_max.is_nan() || f_max <= 0.0 {
+        return tail(0.0);
+    }
+    (0..J)
+        .map(|j| {
+            let q = (j as f64 + 0.5) / J as f64 * f_max;
+            let x = crate::stats::chi2_ppf(q, dof);
+            let m2 = if x > 0.0 {
+                (d * s2 / x - v_chi).max(0.0)
+            } else {
+                0.0
+            };
+            tail(m2)
+        })
+        .sum::<f64>()
+        / J as f64
 }
 
 /// Harmonic table for every auto-spectrum. `f_meas`: the measured `f_c`
