@@ -174,6 +174,21 @@ fn candidates() -> Vec<(&'static str, Variant)> {
                 ..v()
             },
         ),
+        (
+            "g1: floor guard 1",
+            Variant {
+                floor_guard: Some(1),
+                ..v()
+            },
+        ),
+        (
+            "g1n: floor guard 1, no misfit",
+            Variant {
+                floor_guard: Some(1),
+                no_misfit: true,
+                ..v()
+            },
+        ),
     ]
 }
 

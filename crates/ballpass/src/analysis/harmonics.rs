@@ -195,6 +195,11 @@ pub struct Variant {
     /// whose `s²` is within a few `ψ'` of `ψ'`; on the design records that
     /// is as many at 2 min as at 10 s).
     pub misfit_soft: Option<f64>,
+    /// Bins left out of the floor on each side of the tested bins, beyond
+    /// the harmonic's own ±1.5 bins: `Some(g)`. A Hann spectrum's
+    /// neighbouring bins are correlated by 0.45, so a floor bin next to a
+    /// tested bin shares its excess (`tools/harmonic_floor_null.py`).
+    pub floor_guard: Option<usize>,
 }
 
 /// What a [`Variant`] test saw besides its value.
@@ -304,7 +309,12 @@ fn harmonic_value_with(
     let lo = ((lo_f / df).ceil() as usize).max(2);
     let hi = ((hi_f / df).floor() as usize).min(psd.len() - 2);
     let bins: Vec<usize> = (lo..=hi)
-        .filter(|&j| !near_harmonic(j) && !tested.contains(&j) && psd[j] > 0.0)
+        .filter(|&j| {
+            let guarded = variant
+                .floor_guard
+                .is_some_and(|g| tested.iter().any(|&t| j.abs_diff(t) <= g));
+            !near_harmonic(j) && !tested.contains(&j) && !guarded && psd[j] > 0.0
+        })
         .collect();
     let value_at = |j: usize, floor: Option<f64>| HarmonicValue {
         f_hz,
