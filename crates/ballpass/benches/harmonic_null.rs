@@ -2,7 +2,7 @@
 //! the p-value makes it conservative (a measurement, not a product path).
 //!
 //! ```text
-//! cargo bench -p ballpass --bench harmonic_null -- FIRST_SEED N DURATION_S [--ripple] [--all]
+//! cargo bench -p ballpass --bench harmonic_null -- FIRST_SEED N DURATION_S [--ripple] [--all] [--dump FILE]
 //! ```
 //!
 //! The variants are the session-21 candidates for the floor-misfit term;
@@ -374,7 +374,7 @@ fn main() {
         .collect();
     let num = |i: usize| args.get(i).and_then(|a| a.parse::<f64>().ok());
     let (Some(first), Some(n), Some(duration)) = (num(0), num(1), num(2)) else {
-        eprintln!("usage: harmonic_null FIRST_SEED N DURATION_S [--ripple] [--all]");
+        eprintln!("usage: harmonic_null FIRST_SEED N DURATION_S [--ripple] [--all] [--dump FILE]");
         std::process::exit(2);
     };
     let ripple = args.iter().any(|a| a == "--ripple");
@@ -454,8 +454,11 @@ fn main() {
                 }
             }
         }
-        if let Err(e) = std::fs::write(path, out) {
-            eprintln!("{path}: {e}");
+        // Written beside and renamed, so an interrupted run leaves no
+        // half-written file.
+        if let Err(e) = ballpass::fsutil::write_atomic(std::path::Path::new(path), out.as_bytes()) {
+            eprintln!("{e}");
+            std::process::exit(1);
         }
     }
     // Diagnostics of today's floor fits.

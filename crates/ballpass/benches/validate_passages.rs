@@ -23,7 +23,7 @@
 //! 15_500_001+, never looked at before session 17's rule was frozen;
 //! `fresh12`, 37_100_001+, never looked at before session 20's missed-gap
 //! rule was frozen; `fresh11`, 15_600_001+, kept unused until session 21,
-//! which scored its merged passage rules on it once). Prints the
+//! which scored the release's rules on it once, unchanged since session 20). Prints the
 //! Markdown tables of the report; `--list` also
 //! prints one line per record that is not exact or whose width is off by
 //! more than 3 %; `--json` prints every record's score instead of the
